@@ -1,0 +1,307 @@
+"""Read, validate and write one case; derive the effective moduli and scales."""
+
+from __future__ import annotations
+
+import csv
+import math
+import tomllib
+from dataclasses import dataclass, field, fields, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import CaseError
+from .schema import (PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS, SECTIONS,
+                     CompareSettings, Counterface, FEMSettings, Indenter, Loading,
+                     MDRSettings, Sliding, Stages, Wear, _fmt, build_section,
+                     section_fields)
+
+
+@dataclass(frozen=True)
+class Case:
+    """One validated case. Every solver and command reads this, nothing else."""
+
+    indenter: Indenter
+    counterface: Counterface
+    loading: Loading
+    wear: Wear
+    sliding: Sliding
+    stages: Stages
+    mdr: MDRSettings
+    fem: FEMSettings
+    compare: CompareSettings
+    source: str = ""
+    #: tabulated profile (r, f) in metres when indenter.profile == "table"
+    table: tuple[np.ndarray, np.ndarray] | None = field(default=None, compare=False, repr=False)
+    #: non-fatal remarks on the case (e.g. elastic similarity violated)
+    warnings: tuple[str, ...] = ()
+
+    # -- derived material constants (paper Eqs. 5-7) ------------------------
+    @property
+    def E_star(self) -> float:
+        """Effective modulus, 1/E* = (1-ν1²)/E1 + (1-ν2²)/E2 (paper Eq. 5)."""
+        return effective_moduli(self.indenter, self.counterface)[0]
+
+    @property
+    def G_star(self) -> float:
+        """Effective shear modulus, 1/G* = (2-ν1)/4G1 + (2-ν2)/4G2 (paper Eq. 6)."""
+        return effective_moduli(self.indenter, self.counterface)[1]
+
+    @property
+    def wear_rate(self) -> float:
+        """k_wear μ / σ0 [1/Pa]: wear depth per unit pressure and sliding distance."""
+        return self.wear.k * self.wear.mu / self.wear.hardness
+
+    def replace(self, **sections) -> "Case":
+        return replace(self, **sections)
+
+
+def _compliance(rigid: bool, E, nu):
+    """(1-ν²)/E and (2-ν)/4G for one body; zero when rigid."""
+    if rigid:
+        return 0.0, 0.0
+    G = E / (2.0 * (1.0 + nu))
+    return (1.0 - nu**2) / E, (2.0 - nu) / (4.0 * G)
+
+
+def effective_moduli(indenter: Indenter, counterface: Counterface) -> tuple[float, float]:
+    c1, s1 = _compliance(indenter.rigid, indenter.youngs_modulus, indenter.poisson_ratio)
+    c2, s2 = _compliance(counterface.rigid, counterface.youngs_modulus, counterface.poisson_ratio)
+    return 1.0 / (c1 + c2), 1.0 / (s1 + s2)
+
+
+def dundurs_beta(indenter: Indenter, counterface: Counterface) -> float:
+    """Dundurs' second parameter β; zero exactly under elastic similarity (paper Eq. 7)."""
+    def parts(rigid, E, nu):
+        if rigid:
+            return 0.0, 0.0
+        G = E / (2.0 * (1.0 + nu))
+        return (1.0 - 2.0 * nu) / G, (1.0 - nu) / G
+    a1, b1 = parts(indenter.rigid, indenter.youngs_modulus, indenter.poisson_ratio)
+    a2, b2 = parts(counterface.rigid, counterface.youngs_modulus, counterface.poisson_ratio)
+    return 0.5 * (a1 - a2) / (b1 + b2)
+
+
+# --------------------------------------------------------------------------
+# Reading
+
+def parse_override(text: str) -> tuple[str, str, Any]:
+    """Parse ``section.key=value``; the value in TOML syntax, or a bare string."""
+    if "=" not in text:
+        raise CaseError(f"override '{text}': expected section.key=value")
+    name, _, value = text.partition("=")
+    name = name.strip()
+    if name.count(".") != 1 or not all(name.split(".")):
+        raise CaseError(f"override '{text}': the key must be section.key, e.g. loading.depth")
+    section, k = name.split(".")
+    if section not in SECTIONS:
+        raise CaseError(f"override '{text}': unknown section '{section}'; allowed: "
+                        + ", ".join(SECTIONS))
+    value = value.strip()
+    try:
+        parsed = tomllib.loads(f"v = {value}")["v"]
+    except tomllib.TOMLDecodeError:
+        parsed = value  # bare word such as loading.control=force
+    return section, k, parsed
+
+
+def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Case:
+    """Read a case file, apply ``section.key=value`` overrides, validate."""
+    path = Path(path)
+    if not path.is_file():
+        raise CaseError(f"case file '{path}' does not exist")
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError(f"case file '{path}': TOML syntax error: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise CaseError(f"case file '{path}' is not UTF-8 text: {exc}") from None
+    return from_dict(raw, source=path, overrides=overrides)
+
+
+def from_dict(raw: dict, source: str | Path = "<dict>",
+              overrides: list[str] | tuple[str, ...] = ()) -> Case:
+    """Validate a case given as nested dicts (as TOML reads it)."""
+    raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in raw.items()}
+    unknown = sorted(set(raw) - set(SECTIONS))
+    if unknown:
+        raise CaseError(f"unknown section [{unknown[0]}]; allowed: " + ", ".join(SECTIONS))
+    for text in overrides:
+        section, k, value = parse_override(text)
+        raw.setdefault(section, {})
+        if not isinstance(raw[section], dict):
+            raise CaseError(f"'{section}' must be a table [{section}]")
+        raw[section][k] = value
+    for section in REQUIRED_SECTIONS:
+        if section not in raw:
+            raise CaseError(f"missing section [{section}]")
+    built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS}
+    base = Path(source).parent if source != "<dict>" else Path.cwd()
+    built, table = _check_indenter(built, base)
+    _check_materials(built)
+    _check_programme(built)
+    case = Case(**built, source=str(source), table=table)
+    return replace(case, warnings=_warnings(case))
+
+
+def _check_indenter(built, base: Path):
+    ind: Indenter = built["indenter"]
+    allowed, needed = PROFILE_KEYS[ind.profile], PROFILE_REQUIRED[ind.profile]
+    geometry = ("radius", "flat_radius", "slope_angle", "coefficient", "exponent", "file")
+    for name in geometry:
+        given = getattr(ind, name) is not None
+        if given and name not in allowed:
+            raise CaseError(f"key 'indenter.{name}' does not apply to profile "
+                            f"\"{ind.profile}\"; it takes: " + ", ".join(sorted(allowed)))
+        if not given and name in needed:
+            raise CaseError(f"missing key 'indenter.{name}', required by profile \"{ind.profile}\"")
+    if ind.profile == "truncated_paraboloid" and ind.flat_radius >= ind.radius:
+        raise CaseError(f"key 'indenter.flat_radius' = {ind.flat_radius!r}: must be smaller "
+                        f"than indenter.radius = {ind.radius!r}")
+    table = None
+    if ind.profile == "table":
+        file = Path(ind.file)
+        if not file.is_absolute():
+            file = (base / file).resolve()
+        table = read_profile_table(file)
+        built["indenter"] = replace(ind, file=str(file))
+    return built, table
+
+
+def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Read a tabulated profile: two columns r, f in metres."""
+    name = "indenter.file"
+    if not file.is_file():
+        raise CaseError(f"key '{name}' = \"{file}\": file does not exist")
+    rows = []
+    with open(file, newline="", encoding="utf-8") as fh:
+        for lineno, row in enumerate(csv.reader(fh), start=1):
+            row = [c.strip() for c in row if c.strip()]
+            if not row or row[0].startswith("#"):
+                continue
+            try:
+                values = [float(c) for c in row]
+            except ValueError:
+                if not rows and lineno == 1:
+                    continue  # header line
+                raise CaseError(f"key '{name}' = \"{file}\": line {lineno} is not two numbers: "
+                                f"{','.join(row)}") from None
+            if len(values) != 2:
+                raise CaseError(f"key '{name}' = \"{file}\": line {lineno} has {len(values)} "
+                                "columns; expected 2 (r, f)")
+            rows.append(values)
+    if len(rows) < 3:
+        raise CaseError(f"key '{name}' = \"{file}\": needs at least 3 rows (r, f), got {len(rows)}")
+    data = np.array(rows)
+    r, f = data[:, 0], data[:, 1]
+    if not np.all(np.isfinite(data)):
+        raise CaseError(f"key '{name}' = \"{file}\": contains NaN or inf")
+    if r[0] != 0.0:
+        raise CaseError(f"key '{name}' = \"{file}\": the first radius must be 0, got {r[0]!r}")
+    if np.any(np.diff(r) <= 0):
+        i = int(np.argmax(np.diff(r) <= 0))
+        raise CaseError(f"key '{name}' = \"{file}\": radii must increase strictly; "
+                        f"row {i + 2} has r = {r[i + 1]!r} after r = {r[i]!r}")
+    if f[0] != 0.0:
+        raise CaseError(f"key '{name}' = \"{file}\": the profile must start at f(0) = 0 "
+                        f"(the unworn tip), got {f[0]!r}")
+    if np.any(f[1:] <= 0):
+        raise CaseError(f"key '{name}' = \"{file}\": f must be positive for r > 0 "
+                        "(the tip at r = 0 touches first)")
+    return r, f
+
+
+def _check_materials(built):
+    ind, cf = built["indenter"], built["counterface"]
+    for sec, body in (("indenter", ind), ("counterface", cf)):
+        if body.rigid:
+            for name in ("youngs_modulus", "poisson_ratio"):
+                if getattr(body, name) is not None:
+                    raise CaseError(f"key '{sec}.{name}' given but '{sec}.rigid' = true")
+        else:
+            for name in ("youngs_modulus", "poisson_ratio"):
+                if getattr(body, name) is None:
+                    raise CaseError(f"missing key '{sec}.{name}' (or set '{sec}.rigid = true')")
+    if ind.rigid and cf.rigid:
+        raise CaseError("indenter.rigid = true and counterface.rigid = true: at least one body "
+                        "must be elastic")
+
+
+def _check_programme(built):
+    ld: Loading = built["loading"]
+    sl: Sliding = built["sliding"]
+    other = "force" if ld.control == "depth" else "depth"
+    if getattr(ld, ld.control) is None:
+        raise CaseError(f"missing key 'loading.{ld.control}', required by loading.control = "
+                        f"\"{ld.control}\"")
+    if getattr(ld, other) is not None:
+        raise CaseError(f"key 'loading.{other}' given but loading.control = \"{ld.control}\"; "
+                        f"remove it or set loading.control = \"{other}\"")
+    if sl.until == "distance" and sl.distance is None:
+        raise CaseError("missing key 'sliding.distance', required by sliding.until = \"distance\"")
+    if sl.until == "force_fraction" and sl.distance is not None:
+        raise CaseError("key 'sliding.distance' given but sliding.until = \"force_fraction\"; "
+                        "set sliding.until = \"distance\" to stop at a distance")
+    if sl.until == "force_fraction" and ld.control == "force":
+        raise CaseError("sliding.until = \"force_fraction\" cannot end a force-controlled run "
+                        "(the force does not fall); use sliding.until = \"distance\"")
+    s = built["stages"].s_hat
+    if any(b <= a for a, b in zip(s, s[1:])):
+        raise CaseError(f"key 'stages.s_hat' = {list(s)}: must increase strictly")
+
+
+def _warnings(case: Case) -> tuple[str, ...]:
+    out = []
+    beta = dundurs_beta(case.indenter, case.counterface)
+    if abs(beta) > 1e-9:
+        out.append(
+            f"elastic similarity (paper Eq. 7) does not hold: Dundurs' beta = {beta:.4f} "
+            "(0 when similar). The normal and tangential problems are coupled in reality; "
+            "they are treated as uncoupled here"
+            + (", and the tangential correction is approximate" if case.wear.tangential_correction
+               else "") + ".")
+    return tuple(out)
+
+
+# --------------------------------------------------------------------------
+# Writing
+
+def to_toml(case: Case) -> str:
+    """The resolved case, every default filled in, as TOML text."""
+    lines = [f"# resolved case, read from {case.source}"]
+    for section in SECTIONS:
+        obj = getattr(case, section)
+        lines.append(f"\n[{section}]")
+        for name, f in section_fields(section):
+            value = getattr(obj, name)
+            if value is None:
+                continue
+            if isinstance(value, tuple):
+                text = "[" + ", ".join(repr(v) for v in value) + "]"
+            else:
+                text = _fmt(value)
+            unit = f.metadata["unit"]
+            lines.append(f"{name} = {text}" + (f"  # {unit}" if unit and unit != "1" else ""))
+    return "\n".join(lines) + "\n"
+
+
+def key_reference() -> str:
+    """A Markdown table of every key (used for the README)."""
+    rows = ["| key | unit | default | meaning |", "|---|---|---|---|"]
+    for section in SECTIONS:
+        for name, f in section_fields(section):
+            meta = f.metadata
+            if meta["required"]:
+                default = "required"
+            elif f.default is None:
+                default = "—"
+            elif isinstance(f.default, tuple):
+                default = "`[" + ", ".join(repr(v) for v in f.default) + "]`"
+            else:
+                default = f"`{_fmt(f.default)}`"
+            doc = meta["doc"]
+            if meta["choices"]:
+                doc += " (" + " \\| ".join(f"`{c}`" for c in meta["choices"]) + ")"
+            rows.append(f"| `{section}.{name}` | {meta['unit'] or ''} | {default} | {doc} |")
+    return "\n".join(rows)

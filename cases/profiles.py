@@ -1,0 +1,67 @@
+"""The unworn indenter profile f(r) and its slope, as the case defines them.
+
+Both solvers evaluate the geometry through these two functions, so that the
+case means the same shape to each of them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.interpolate import PchipInterpolator
+
+from .schema import Indenter
+
+
+def _table_interpolant(table):
+    r, f = table
+    return PchipInterpolator(r, f, extrapolate=True)
+
+
+def height(indenter: Indenter, r, table=None) -> np.ndarray:
+    """Unworn profile height f(r) [m], f(0) = 0."""
+    r = np.abs(np.asarray(r, dtype=float))
+    kind = indenter.profile
+    if kind == "paraboloid":
+        return r**2 / (2.0 * indenter.radius)
+    if kind == "sphere":
+        R = indenter.radius
+        rr = np.minimum(r, R)
+        return R - np.sqrt(R**2 - rr**2)
+    if kind == "truncated_paraboloid":
+        b, R = indenter.flat_radius, indenter.radius
+        return np.where(r < b, 0.0, (r**2 - b**2) / (2.0 * R))
+    if kind == "cone":
+        return r * np.tan(indenter.slope_angle)
+    if kind == "power_law":
+        return indenter.coefficient * r**indenter.exponent
+    if kind == "table":
+        rt, ft = table
+        out = _table_interpolant(table)(np.minimum(r, rt[-1]))
+        # beyond the table: continue with the last slope (the profile keeps rising)
+        slope_end = _table_interpolant(table).derivative()(rt[-1])
+        return np.where(r > rt[-1], ft[-1] + slope_end * (r - rt[-1]), out)
+    raise ValueError(f"unknown profile {kind!r}")
+
+
+def slope(indenter: Indenter, r, table=None) -> np.ndarray:
+    """Slope f'(r) of the unworn profile."""
+    r = np.abs(np.asarray(r, dtype=float))
+    kind = indenter.profile
+    if kind == "paraboloid":
+        return r / indenter.radius
+    if kind == "sphere":
+        R = indenter.radius
+        rr = np.minimum(r, R * (1 - 1e-15))
+        return rr / np.sqrt(R**2 - rr**2)
+    if kind == "truncated_paraboloid":
+        return np.where(r < indenter.flat_radius, 0.0, r / indenter.radius)
+    if kind == "cone":
+        return np.full_like(r, np.tan(indenter.slope_angle))
+    if kind == "power_law":
+        n = indenter.exponent
+        return indenter.coefficient * n * r ** (n - 1.0)
+    if kind == "table":
+        rt, _ = table
+        d = _table_interpolant(table).derivative()
+        return d(np.minimum(r, rt[-1]))
+    raise ValueError(f"unknown profile {kind!r}")

@@ -1,0 +1,205 @@
+"""Analytic reference solutions of axisymmetric frictionless contact.
+
+Closed forms (Hertz, truncated paraboloid, cone, power law, exact sphere) and
+adaptive quadrature where no closed form exists. These share no code with the
+solvers; tests and comparisons measure both solvers against them. Each function
+takes SI values and returns SI values.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import integrate, optimize, special
+
+from .errors import CaseError
+from .profiles import slope
+
+
+# -- Hertz (paraboloid f = r^2 / 2R) ---------------------------------------
+
+def hertz(E_star, R, depth=None, force=None):
+    """Contact radius, depth and force of a paraboloid; give depth or force."""
+    if depth is not None:
+        a = math.sqrt(R * depth)
+    else:
+        a = (3.0 * force * R / (4.0 * E_star)) ** (1.0 / 3.0)
+    d = a**2 / R
+    return dict(contact_radius=a, depth=d, force=4.0 / 3.0 * E_star * math.sqrt(R) * d**1.5)
+
+
+def hertz_pressure(r, E_star, R, contact_radius):
+    """p(r) = (2E*/(πR)) sqrt(a² - r²) inside the contact, 0 outside."""
+    r = np.asarray(r, dtype=float)
+    a = contact_radius
+    return 2.0 * E_star / (math.pi * R) * np.sqrt(np.clip(a**2 - r**2, 0.0, None))
+
+
+# -- truncated ("flattened") paraboloid, paper Eqs. 17-19 -------------------
+
+def truncated_paraboloid(E_star, R, b, depth=None, force=None):
+    """Contact radius, depth and force of f = 0 (r<b), (r²-b²)/2R (r>=b)."""
+    if depth is not None:
+        a = math.sqrt(0.5 * (b**2 + math.sqrt(b**4 + 4.0 * R**2 * depth**2)))
+    else:
+        def excess(a):
+            return 2 * E_star / (3 * R) * math.sqrt(a**2 - b**2) * (2 * a**2 + b**2) - force
+        hi = 2 * b + (3 * force * R / (4 * E_star)) ** (1 / 3)
+        a = optimize.brentq(excess, b, hi, xtol=1e-15 * hi, rtol=1e-14)
+    d = a / R * math.sqrt(a**2 - b**2)
+    F = 2.0 * E_star / (3.0 * R) * math.sqrt(a**2 - b**2) * (2.0 * a**2 + b**2)
+    return dict(contact_radius=a, depth=d, force=F)
+
+
+def truncated_paraboloid_pressure(r, E_star, R, b, contact_radius):
+    """p(r) by adaptive quadrature of paper Eq. 13 with Eq. 19.
+
+    p(r) = (E*/(πR)) ∫_{max(r,b)}^a (2x² - b²) / (sqrt(x²-b²) sqrt(x²-r²)) dx.
+    The substitutions x² = b² + t² (r < b) or x² = r² + u² (r > b) remove the
+    inverse-square-root end singularity; p is infinite (logarithmically) at r = b.
+    """
+    a = contact_radius
+    out = np.zeros(np.shape(r))
+    for i, ri in np.ndenumerate(np.asarray(r, dtype=float)):
+        if ri >= a:
+            continue
+        if ri == b:
+            out[i] = np.inf
+        elif ri < b:
+            def g(t):
+                x = math.sqrt(b * b + t * t)
+                return (2 * x * x - b * b) / (x * math.sqrt(x * x - ri * ri))
+            val, _ = integrate.quad(g, 0.0, math.sqrt(a * a - b * b), epsabs=0, epsrel=1e-12,
+                                    limit=200)
+            out[i] = val
+        else:
+            def h(u):
+                x = math.sqrt(ri * ri + u * u)
+                return (2 * x * x - b * b) / (x * math.sqrt(x * x - b * b))
+            val, _ = integrate.quad(h, 0.0, math.sqrt(a * a - ri * ri), epsabs=0, epsrel=1e-12,
+                                    limit=200)
+            out[i] = val
+    return E_star / (math.pi * R) * out
+
+
+# -- other profiles --------------------------------------------------------
+
+def sphere(E_star, R, depth=None, force=None):
+    """Exact sphere f = R - sqrt(R² - r²): g(x) = x atanh(x/R) (MDR, paper Eq. 2)."""
+    def d_of(a):
+        return a * math.atanh(a / R)
+
+    def F_of(a):
+        return E_star * ((a**2 + R**2) * math.atanh(a / R) - R * a)
+
+    if depth is not None:
+        a = optimize.brentq(lambda a: d_of(a) - depth, 0.0, R * (1 - 1e-15),
+                            xtol=1e-16 * R, rtol=1e-14)
+    else:
+        a = optimize.brentq(lambda a: F_of(a) - force, 0.0, R * (1 - 1e-15),
+                            xtol=1e-16 * R, rtol=1e-14)
+    return dict(contact_radius=a, depth=d_of(a), force=F_of(a))
+
+
+def cone(E_star, slope_angle, depth=None, force=None):
+    """Cone f = r tan θ: g = (π/2)|x| tan θ, F = (2/π) E* d² / tan θ."""
+    t = math.tan(slope_angle)
+    if depth is None:
+        depth = math.sqrt(force * math.pi * t / (2.0 * E_star))
+    a = 2.0 * depth / (math.pi * t)
+    return dict(contact_radius=a, depth=depth, force=E_star * a * depth)
+
+
+def power_law_factor(n):
+    """κ(n) in g(x) = κ c |x|^n for f = c r^n (MDR stretch factor)."""
+    return math.sqrt(math.pi) * special.gamma(n / 2 + 1) / special.gamma(n / 2 + 0.5)
+
+
+def power_law(E_star, c, n, depth=None, force=None):
+    """f = c r^n: a = (d/(κc))^(1/n), F = 2E* a d n/(n+1)."""
+    k = power_law_factor(n) * c
+    if depth is None:
+        # F = 2E* n/(n+1) κc a^(n+1)
+        a = (force * (n + 1) / (2 * E_star * n * k)) ** (1.0 / (n + 1))
+        depth = k * a**n
+    a = (depth / k) ** (1.0 / n)
+    return dict(contact_radius=a, depth=depth, force=2 * E_star * a * depth * n / (n + 1))
+
+
+def mdr_transform_quad(indenter, x, table=None):
+    """g(x) = x ∫_0^x f'(r)/sqrt(x²-r²) dr by quadrature (r = x sin φ makes it smooth)."""
+    x = float(x)
+    if x == 0.0:
+        return 0.0
+    val, _ = integrate.quad(lambda p: float(slope(indenter, x * math.sin(p), table)),
+                            0.0, math.pi / 2, epsabs=0, epsrel=1e-11, limit=200)
+    return x * val
+
+
+def general(E_star, indenter, table, depth=None, force=None):
+    """Any profile with a monotonic g(x), by quadrature and root finding."""
+    def g(x):
+        return mdr_transform_quad(indenter, x, table)
+
+    def F_of(a):
+        d = g(a)
+        val, _ = integrate.quad(lambda x: d - g(x), 0.0, a, epsabs=0, epsrel=1e-10, limit=200)
+        return 2.0 * E_star * val
+
+    rmax = table[0][-1] if table is not None else 1.0
+    hi = rmax
+    if depth is not None:
+        if g(hi) < depth:
+            raise CaseError(f"key 'loading.depth' = {depth!r}: deeper than the tabulated profile "
+                            f"reaches (g at its last radius is {g(hi):.4g} m)")
+        a = optimize.brentq(lambda x: g(x) - depth, 0.0, hi, xtol=1e-14 * hi, rtol=1e-12)
+    else:
+        if F_of(hi) < force:
+            raise CaseError(f"key 'loading.force' = {force!r}: larger than the tabulated profile "
+                            "can carry within its last radius")
+        a = optimize.brentq(lambda x: F_of(x) - force, 0.0, hi, xtol=1e-14 * hi, rtol=1e-12)
+    return dict(contact_radius=a, depth=g(a), force=F_of(a))
+
+
+def unworn_contact(case):
+    """Contact radius, depth and force of the unworn profile under the case's load."""
+    ind, E = case.indenter, case.E_star
+    load = {case.loading.control: getattr(case.loading, case.loading.control)}
+    kind = ind.profile
+    if kind == "paraboloid":
+        return hertz(E, ind.radius, **load)
+    if kind == "sphere":
+        return sphere(E, ind.radius, **load)
+    if kind == "truncated_paraboloid":
+        return truncated_paraboloid(E, ind.radius, ind.flat_radius, **load)
+    if kind == "cone":
+        return cone(E, ind.slope_angle, **load)
+    if kind == "power_law":
+        return power_law(E, ind.coefficient, ind.exponent, **load)
+    return general(E, ind, case.table, **load)
+
+
+def scales(case) -> dict:
+    """Natural scales of a case (physics.md §3), from its unworn contact.
+
+    a0, d0, F0: contact radius, depth, force of the unworn profile (Hertz's for
+    the paraboloid); p0 = 3 F0 / (2π a0²), Hertz's maximum pressure;
+    ŝ = s_hat_per_m · s = k μ E* s / (σ0 a0).
+    """
+    c = unworn_contact(case)
+    a0, F0 = c["contact_radius"], c["force"]
+    return dict(
+        E_star=case.E_star,
+        G_star=case.G_star,
+        a0=a0,
+        d0=c["depth"],
+        F0=F0,
+        p0=3.0 * F0 / (2.0 * math.pi * a0**2),
+        s_hat_per_m=case.wear_rate * case.E_star / a0,
+    )
+
+
+def complete_wear_profile(r, R, depth):
+    """Fixed-depth limit of a worn paraboloid: max(r²/2R, d) (physics.md §5)."""
+    return np.maximum(np.asarray(r, dtype=float) ** 2 / (2.0 * R), depth)

@@ -1,0 +1,303 @@
+"""The case definition: typed, frozen sections read from one TOML file.
+
+Every key is declared once, as a dataclass field whose metadata holds its unit,
+its check and its documentation. Reading, validation, ``--set`` overrides, the
+resolved ``case.toml`` and the README's key reference all derive from these
+declarations.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import types
+import typing
+from dataclasses import dataclass, field
+from typing import Any
+
+from .errors import CaseError
+
+REQUIRED = object()
+
+
+def key(default=REQUIRED, *, unit="", doc="", choices=None, positive=False,
+        minimum=None, maximum=None, open_minimum=False, open_maximum=False):
+    """Declare one case key as a dataclass field."""
+    meta = dict(unit=unit, doc=doc, choices=choices, positive=positive,
+                minimum=minimum, maximum=maximum, open_minimum=open_minimum,
+                open_maximum=open_maximum, required=default is REQUIRED)
+    if default is REQUIRED:
+        return field(default=None, metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+# --------------------------------------------------------------------------
+# Sections.  Order of fields is the order of the resolved case file.
+
+PROFILES = ("paraboloid", "sphere", "truncated_paraboloid", "cone", "power_law", "table")
+
+# which optional geometry keys each profile takes (besides `profile`)
+PROFILE_KEYS = {
+    "paraboloid": {"radius"},
+    "sphere": {"radius"},
+    "truncated_paraboloid": {"radius", "flat_radius"},
+    "cone": {"slope_angle", "radius"},
+    "power_law": {"coefficient", "exponent", "radius"},
+    "table": {"file", "radius"},
+}
+PROFILE_REQUIRED = {
+    "paraboloid": {"radius"},
+    "sphere": {"radius"},
+    "truncated_paraboloid": {"radius", "flat_radius"},
+    "cone": {"slope_angle"},
+    "power_law": {"coefficient", "exponent"},
+    "table": {"file"},
+}
+
+
+@dataclass(frozen=True)
+class Indenter:
+    """The worn body: a body of revolution z = f(r), f(0) = 0 unworn."""
+
+    profile: str = key(doc="shape of the unworn profile f(r)", choices=PROFILES)
+    radius: float | None = key(None, unit="m", positive=True,
+                               doc="radius of curvature R (paraboloid f = r^2/2R, sphere, "
+                                   "truncated paraboloid); for other profiles the radius of "
+                                   "the FEM body")
+    flat_radius: float | None = key(None, unit="m", positive=True,
+                                    doc="radius b of the flat tip of a truncated paraboloid "
+                                        "(paper Eq. 17)")
+    slope_angle: float | None = key(None, unit="rad", minimum=0.0, maximum=math.pi / 2,
+                                    open_minimum=True, open_maximum=True,
+                                    doc="cone: angle θ between its flank and the plane, f = r tan θ")
+    coefficient: float | None = key(None, unit="m^(1-n)", positive=True,
+                                    doc="power law f = coefficient * r^exponent")
+    exponent: float | None = key(None, positive=True, doc="power law exponent n")
+    file: str | None = key(None,
+                           doc="CSV with columns r, f in metres (header optional), r sorted, "
+                               "starting at 0; relative to the case file")
+    rigid: bool = key(False, doc="the indenter does not deform (1/E = 0)")
+    youngs_modulus: float | None = key(None, unit="Pa", positive=True, doc="Young's modulus E1")
+    poisson_ratio: float | None = key(None, minimum=-1.0, maximum=0.5, open_minimum=True,
+                                      doc="Poisson ratio ν1, in (-1, 0.5]")
+
+
+@dataclass(frozen=True)
+class Counterface:
+    """The flat counter-body (half-space in MDR, rigid plane in FEM)."""
+
+    rigid: bool = key(True, doc="the counterface does not deform (1/E = 0)")
+    youngs_modulus: float | None = key(None, unit="Pa", positive=True, doc="Young's modulus E2")
+    poisson_ratio: float | None = key(None, minimum=-1.0, maximum=0.5, open_minimum=True,
+                                      doc="Poisson ratio ν2, in (-1, 0.5]")
+
+
+@dataclass(frozen=True)
+class Loading:
+    control: str = key(doc="hold the indentation depth or the normal force fixed",
+                       choices=("depth", "force"))
+    depth: float | None = key(None, unit="m", positive=True,
+                              doc="indentation depth d (control = depth), measured from "
+                                  "first touch of the unworn profile")
+    force: float | None = key(None, unit="N", positive=True,
+                              doc="normal force F (control = force)")
+
+
+@dataclass(frozen=True)
+class Wear:
+    k: float = key(unit="1", positive=True, doc="dimensionless wear coefficient k_wear (paper Eq. 1)")
+    mu: float = key(unit="1", positive=True, doc="coefficient of friction μ, τ = μ p (paper Eq. 14)")
+    hardness: float = key(unit="Pa", positive=True, doc="hardness σ0 of the worn indenter")
+    tangential_correction: bool = key(False,
+                                      doc="subtract the elastic tangential displacement of the "
+                                          "surface from the slip (paper Eqs. 15-16)")
+
+
+@dataclass(frozen=True)
+class Sliding:
+    until: str = key("force_fraction", choices=("force_fraction", "distance"),
+                     doc="stop when the force has fallen below a fraction of its start, "
+                         "or after a total sliding distance")
+    force_fraction: float = key(0.01, minimum=0.0, maximum=1.0, open_minimum=True,
+                                open_maximum=True,
+                                doc="until = force_fraction: stop once F < force_fraction * F(0)")
+    distance: float | None = key(None, unit="m", minimum=0.0,
+                                 doc="until = distance: total sliding distance s (0: no sliding, "
+                                     "the unworn contact only)")
+    scheme: str = key("implicit", choices=("implicit", "explicit"),
+                      doc="time scheme: implicit (backward) Euler, unconditionally stable, or "
+                          "explicit (forward) Euler as in the paper, stable below a step limit")
+    step_hat: float | str = key("auto", positive=True,
+                                doc="sliding step in units of the dimensionless sliding "
+                                    "ŝ = k μ E* s / (σ0 a0), or \"auto\": the solver's "
+                                    "default (explicit: half its stability limit)")
+
+
+@dataclass(frozen=True)
+class Stages:
+    s_hat: tuple[float, ...] = key((0.0,), minimum=0.0,
+                                   doc="dimensionless sliding distances ŝ at which profiles "
+                                       "and pressures are kept (increasing); stages after "
+                                       "the end of the run are not reached")
+
+
+@dataclass(frozen=True)
+class MDRSettings:
+    elements: int = key(800, minimum=2, doc="number N of 1D springs (elements) on 0 <= x <= domain")
+    domain_factor: float = key(1.25, minimum=1.0, open_minimum=True,
+                               doc="radius of the simulated domain as a multiple of √2·a0, "
+                                   "the contact radius reached at complete wear under "
+                                   "depth control")
+
+
+@dataclass(frozen=True)
+class FEMSettings:
+    contact_nodes: int = key(250, minimum=2,
+                             doc="number of nodes on the candidate contact arc")
+    contact_factor: float = key(1.25, minimum=1.0, open_minimum=True,
+                                doc="extent of the candidate contact arc as a multiple of √2·a0")
+    element_order: int = key(2, minimum=1, maximum=2, doc="1: linear, 2: quadratic triangles")
+    pressure_recovery: str = key("lumped", choices=("lumped", "consistent"),
+                                 doc="nodal pressure = nodal force / lumped 2πr-weighted area, "
+                                     "or a consistent boundary-mass recovery")
+
+
+@dataclass(frozen=True)
+class CompareSettings:
+    profile_tolerance: float = key(0.01, positive=True,
+                                   doc="max profile difference allowed, relative to the depth d")
+    force_tolerance: float = key(0.01, positive=True,
+                                 doc="max force difference allowed, relative to F0")
+    pressure_tolerance: float = key(0.02, positive=True,
+                                    doc="max pressure difference allowed away from the contact "
+                                        "edge, relative to p0")
+    contact_radius_tolerance: float = key(0.02, positive=True,
+                                          doc="max contact-radius difference allowed, relative to a0")
+    edge_band: float = key(0.1, minimum=0.0, maximum=1.0, open_maximum=True,
+                           doc="width of the band at the contact edge, as a fraction of the "
+                               "contact radius, whose pressure is reported separately")
+
+
+SECTIONS: dict[str, type] = {
+    "indenter": Indenter,
+    "counterface": Counterface,
+    "loading": Loading,
+    "wear": Wear,
+    "sliding": Sliding,
+    "stages": Stages,
+    "mdr": MDRSettings,
+    "fem": FEMSettings,
+    "compare": CompareSettings,
+}
+REQUIRED_SECTIONS = ("indenter", "loading", "wear")
+
+
+# --------------------------------------------------------------------------
+# Key conversion and checks.
+
+def _type_name(tp) -> str:
+    if tp is float:
+        return "a number"
+    if tp is int:
+        return "an integer"
+    if tp is bool:
+        return "true or false"
+    if tp is str:
+        return "a string"
+    return str(tp)
+
+
+def _base_types(annotation) -> tuple:
+    """The non-None types a field's annotation allows."""
+    tp = eval(annotation, vars(typing)) if isinstance(annotation, str) else annotation
+    if isinstance(tp, types.UnionType) or typing.get_origin(tp) is typing.Union:
+        return tuple(t for t in typing.get_args(tp) if t is not type(None))
+    return (tp,)
+
+
+def _fmt(value) -> str:
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    return repr(value)
+
+
+def _check_number(name, value, meta):
+    if not math.isfinite(value):
+        raise CaseError(f"key '{name}' = {value!r}: must be a finite number")
+    unit = f" {meta['unit']}" if meta["unit"] and meta["unit"] != "1" else ""
+    if meta["positive"] and not value > 0:
+        raise CaseError(f"key '{name}' = {_fmt(value)}: must be > 0{unit}")
+    lo, hi = meta["minimum"], meta["maximum"]
+    if lo is not None and (value < lo or (meta["open_minimum"] and value == lo)):
+        lb = "(" if meta["open_minimum"] else "["
+        rb = ")" if meta["open_maximum"] else "]"
+        allowed = f"{lb}{lo:g}, {hi:g}{rb}" if hi is not None else f"{'>' if meta['open_minimum'] else '>='} {lo:g}"
+        raise CaseError(f"key '{name}' = {_fmt(value)}: must be in {allowed}{unit}")
+    if hi is not None and (value > hi or (meta["open_maximum"] and value == hi)):
+        lb = "(" if meta["open_minimum"] else "["
+        rb = ")" if meta["open_maximum"] else "]"
+        allowed = f"{lb}{lo:g}, {hi:g}{rb}" if lo is not None else f"{'<' if meta['open_maximum'] else '<='} {hi:g}"
+        raise CaseError(f"key '{name}' = {_fmt(value)}: must be in {allowed}{unit}")
+    return value
+
+
+def convert(name: str, f: dataclasses.Field, value: Any):
+    """Check one raw TOML value against its declaration; return the typed value."""
+    meta = f.metadata
+    allowed = _base_types(f.type)
+    origin = [typing.get_origin(t) for t in allowed]
+    if tuple in origin:  # list of numbers
+        if not isinstance(value, (list, tuple)) or not value:
+            raise CaseError(f"key '{name}' = {_fmt(value)}: must be a non-empty list of numbers")
+        out = []
+        for v in value:
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise CaseError(f"key '{name}' = {_fmt(value)}: every entry must be a number")
+            out.append(_check_number(name, float(v), meta))
+        return tuple(out)
+    if isinstance(value, bool):
+        if bool in allowed:
+            return value
+    elif isinstance(value, int) and int in allowed:
+        return int(_check_number(name, value, meta))
+    elif isinstance(value, (int, float)) and float in allowed:
+        return _check_number(name, float(value), meta)
+    elif isinstance(value, str) and str in allowed:
+        choices = meta["choices"]
+        if float in allowed and value != "auto":  # a number or "auto"
+            raise CaseError(f"key '{name}' = {_fmt(value)}: must be a number or \"auto\"")
+        if choices is not None and value not in choices:
+            raise CaseError(f"key '{name}' = {_fmt(value)}: must be one of "
+                            + ", ".join(f'"{c}"' for c in choices))
+        return value
+    want = " or ".join(_type_name(t) for t in allowed)
+    if float in allowed and str in allowed:
+        want = 'a number or "auto"'
+    raise CaseError(f"key '{name}' = {_fmt(value)}: must be {want}")
+
+
+def build_section(section: str, raw: dict) -> Any:
+    """Build one section from its raw TOML table; unknown and missing keys are errors."""
+    cls = SECTIONS[section]
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    if not isinstance(raw, dict):
+        raise CaseError(f"'{section}' must be a table [{section}], got {_fmt(raw)}")
+    unknown = sorted(set(raw) - set(fields))
+    if unknown:
+        raise CaseError(f"unknown key '{section}.{unknown[0]}'; allowed in [{section}]: "
+                        + ", ".join(fields))
+    values = {}
+    for name, f in fields.items():
+        full = f"{section}.{name}"
+        if name in raw:
+            values[name] = convert(full, f, raw[name])
+        elif f.metadata["required"]:
+            raise CaseError(f"missing key '{full}' ({f.metadata['doc']})")
+    return cls(**values)
+
+
+def section_fields(section: str):
+    """(name, Field) pairs of a section, in declaration order."""
+    return [(f.name, f) for f in dataclasses.fields(SECTIONS[section])]

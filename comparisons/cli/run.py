@@ -1,0 +1,44 @@
+"""``wearcheck run CASE.toml --solver mdr|fem --out DIR``: one solver, one run directory."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..progress import ProgressBar
+from ..runio import atomic_directory, write_run_files
+from ..solvers import SOLVERS, solve
+from ._common import add_case_arguments, load_case
+
+
+def add_parser(sub):
+    p = sub.add_parser("run", help="run one solver on a case and write a run directory",
+                       description=__doc__)
+    add_case_arguments(p)
+    p.add_argument("--solver", choices=SOLVERS, default="mdr", help="which solver (default: mdr)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="output directory (default: runs/<case name>-<solver>)")
+    p.add_argument("--vtk", action="store_true", help="also write ParaView files into DIR/vtk")
+    p.add_argument("--revolve", type=int, default=0, metavar="N_SEGMENTS",
+                   help="with --vtk: also revolve the FEM fields into a 3D solid")
+    return p
+
+
+def main(args) -> int:
+    case = load_case(args)
+    out = args.out or Path("runs") / f"{args.case.stem}-{args.solver}"
+    bar = ProgressBar(f"{args.solver}", quiet=args.quiet)
+    try:
+        result = solve(case, args.solver, progress=bar)
+    finally:
+        bar.close()
+    with atomic_directory(out) as tmp:
+        write_run_files(tmp, case, result, args.solver)
+        if args.vtk:
+            from ..vtk import export_run
+            export_run(tmp, revolve=args.revolve)
+    if not args.quiet:
+        print(f"{args.solver}: {len(result.history['s']) - 1} steps, "
+              f"{len(result.stage_s)} stages, solve {result.solve_seconds:.3g} s -> {out}",
+              file=sys.stderr)
+    return 0

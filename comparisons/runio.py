@@ -1,0 +1,193 @@
+"""Run directories: atomic writing, provenance, and reading back.
+
+A run directory holds ``case.toml``, ``history.csv``, ``stages.npz`` and
+``meta.json`` (and ``fields.npz`` when the solver provides fields). It is
+built in a hidden sibling directory and renamed into place only when complete,
+so an interrupted or failed run leaves nothing that looks complete and never
+damages an earlier complete run at the same path.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.metadata
+import json
+import os
+import platform
+import shlex
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import cases
+from cases import reference
+from cases.result import HISTORY_COLUMNS, RunResult
+
+DEPENDENCIES = ("numpy", "scipy", "scikit-fem", "meshio", "gmsh", "pyvista", "matplotlib",
+                "dask", "distributed")
+
+
+@contextlib.contextmanager
+def atomic_directory(path: str | Path):
+    """Yield a fresh temporary directory that replaces ``path`` on success.
+
+    On an exception (or interrupt) the temporary directory is removed and
+    ``path`` is left as it was.
+    """
+    path = Path(path).absolute()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
+    try:
+        yield tmp
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    old = None
+    if path.exists():
+        old = Path(tempfile.mkdtemp(prefix=f".{path.name}.old-", dir=path.parent))
+        os.rename(path, old / path.name)
+    os.rename(tmp, path)
+    if old is not None:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def write_text_atomic(path: str | Path, text: str) -> None:
+    """Write a single file atomically (temporary file, then rename)."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+
+
+def versions() -> dict:
+    out = {"python": platform.python_version()}
+    for name in ("wearcheck",) + DEPENDENCIES:
+        try:
+            out[name] = importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            out[name] = None
+    return out
+
+
+def git_revision() -> str | None:
+    """The git revision of the source tree, with '-dirty' if it has changes."""
+    here = Path(__file__).resolve().parent
+    try:
+        rev = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True,
+                             text=True, timeout=5)
+        if rev.returncode != 0:
+            return None
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                               cwd=here, capture_output=True, text=True, timeout=5)
+        return rev.stdout.strip() + ("-dirty" if dirty.stdout.strip() else "")
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
+def provenance(argv=None) -> dict:
+    """What every output directory records: versions, command line, revision, time."""
+    argv = sys.argv if argv is None else argv
+    return dict(
+        command=shlex.join([Path(argv[0]).name] + list(argv[1:])) if argv else "",
+        cwd=os.getcwd(),
+        git_revision=git_revision(),
+        versions=versions(),
+        created=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        host=platform.node(),
+    )
+
+
+def _jsonable(obj):
+    if isinstance(obj, dict):
+        return {str(k): _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return obj
+
+
+def write_json(path: Path, data: dict) -> None:
+    Path(path).write_text(json.dumps(_jsonable(data), indent=2, allow_nan=True) + "\n",
+                          encoding="utf-8")
+
+
+def history_csv_text(history: dict) -> str:
+    names = list(HISTORY_COLUMNS) + [k for k in history if k not in HISTORY_COLUMNS]
+    cols = np.column_stack([np.asarray(history[k], dtype=float) for k in names])
+    lines = [",".join(names)]
+    lines += [",".join(f"{v:.12e}" for v in row) for row in cols]
+    return "\n".join(lines) + "\n"
+
+
+def write_run_files(directory: Path, case: cases.Case, result: RunResult, solver: str,
+                    argv=None, extra_meta: dict | None = None) -> None:
+    """Write one run's files into an (already temporary) directory."""
+    directory = Path(directory)
+    scales = reference.scales(case)
+    (directory / "case.toml").write_text(cases.to_toml(case), encoding="utf-8")
+    (directory / "history.csv").write_text(history_csv_text(result.history), encoding="utf-8")
+    np.savez(directory / "stages.npz", s=np.asarray(result.stage_s, float),
+             s_hat=np.asarray(result.stage_s, float) * scales["s_hat_per_m"],
+             r=np.asarray(result.r, float), f=np.asarray(result.f, float),
+             p=np.asarray(result.p, float))
+    if result.fields:
+        np.savez(directory / "fields.npz", **result.fields)
+    meta = dict(solver=solver, scales=scales, solve_seconds=result.solve_seconds,
+                stages_requested_s_hat=list(case.stages.s_hat),
+                stages_reached=len(result.stage_s), warnings=list(case.warnings),
+                info=result.info)
+    meta.update(provenance(argv))
+    if extra_meta:
+        meta.update(extra_meta)
+    write_json(directory / "meta.json", meta)
+
+
+def write_run(out: str | Path, case: cases.Case, result: RunResult, solver: str,
+              argv=None, extra_meta: dict | None = None) -> Path:
+    """Write a complete run directory at ``out`` atomically."""
+    with atomic_directory(out) as tmp:
+        write_run_files(tmp, case, result, solver, argv, extra_meta)
+    return Path(out)
+
+
+# -- reading back ----------------------------------------------------------
+
+class Run:
+    """A run directory read back: case, history, stages, meta."""
+
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        meta = self.path / "meta.json"
+        if not meta.is_file():
+            raise cases.WearcheckError(f"'{self.path}' is not a complete run directory "
+                                       "(no meta.json)")
+        self.meta = json.loads(meta.read_text(encoding="utf-8"))
+        self.case = cases.load(self.path / "case.toml")
+        data = np.genfromtxt(self.path / "history.csv", delimiter=",", names=True)
+        self.history = {n: np.atleast_1d(data[n]) for n in data.dtype.names}
+        with np.load(self.path / "stages.npz") as z:
+            self.stages = {k: z[k] for k in z.files}
+        fields = self.path / "fields.npz"
+        self.fields = dict(np.load(fields)) if fields.is_file() else None
+
+    @property
+    def scales(self) -> dict:
+        return self.meta["scales"]
+
+    @property
+    def solver(self) -> str:
+        return self.meta["solver"]

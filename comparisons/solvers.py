@@ -1,0 +1,18 @@
+"""Dispatch a case to one of the two independent solvers."""
+
+from __future__ import annotations
+
+from cases import Case, CaseError, RunResult
+
+SOLVERS = ("mdr", "fem")
+
+
+def solve(case: Case, solver: str, progress=None) -> RunResult:
+    """Run ``solver`` ("mdr" or "fem") on ``case``."""
+    if solver == "mdr":
+        import mdr
+        return mdr.solve(case, progress=progress)
+    if solver == "fem":
+        import fem
+        return fem.solve(case, progress=progress)
+    raise CaseError(f"solver '{solver}': must be one of " + ", ".join(SOLVERS))
