@@ -1,0 +1,198 @@
+"""The case definition: shipped cases, overrides, and every class of bad input."""
+
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import cases
+from cases import CaseError
+
+BASE = {
+    "indenter": {"profile": "paraboloid", "radius": 0.01, "youngs_modulus": 210e9,
+                 "poisson_ratio": 0.3},
+    "counterface": {"rigid": True},
+    "loading": {"control": "depth", "depth": 1e-6},
+    "wear": {"k": 1e-4, "mu": 0.3, "hardness": 2e9},
+}
+
+
+def with_(section, **keys):
+    raw = {s: dict(v) for s, v in BASE.items()}
+    raw.setdefault(section, {}).update(keys)
+    return raw
+
+
+def test_shipped_cases_load():
+    for name in ("hertz", "truncated", "paper"):
+        case = cases.load(cases.shipped(name))
+        assert case.E_star > 0
+
+
+def test_paper_case_meets_issue_requirements():
+    case = cases.load(cases.shipped("paper"))
+    from cases.reference import scales
+    sc = scales(case)
+    assert case.loading.control == "depth"
+    assert case.sliding.until == "force_fraction" and case.sliding.force_fraction == 0.01
+    assert case.mdr.elements == 800
+    assert len(case.stages.s_hat) >= 6
+    assert sc["a0"] / case.indenter.radius <= 0.01 + 1e-12
+    assert case.counterface.rigid and not case.indenter.rigid
+
+
+def test_effective_moduli_against_paper_eqs_5_6():
+    raw = with_("counterface", rigid=False, youngs_modulus=70e9, poisson_ratio=0.33)
+    case = cases.from_dict(raw)
+    E1, n1, E2, n2 = 210e9, 0.3, 70e9, 0.33
+    G1, G2 = E1 / (2 * (1 + n1)), E2 / (2 * (1 + n2))
+    assert case.E_star == pytest.approx(1 / ((1 - n1**2) / E1 + (1 - n2**2) / E2), rel=1e-14)
+    assert case.G_star == pytest.approx(1 / ((2 - n1) / (4 * G1) + (2 - n2) / (4 * G2)), rel=1e-14)
+
+
+def test_elastic_similarity_warning_quantifies_mismatch():
+    # two identical materials are elastically similar: no warning
+    same = with_("counterface", rigid=False, youngs_modulus=210e9, poisson_ratio=0.3)
+    assert cases.from_dict(same).warnings == ()
+    # steel on a rigid plane: beta = (1-2ν)/(2(1-ν)) = 0.4/1.4
+    case = cases.from_dict(BASE)
+    assert len(case.warnings) == 1
+    assert f"{0.4 / 1.4:.4f}" in case.warnings[0]
+
+
+def test_override_changes_and_is_validated():
+    case = cases.from_dict(BASE, overrides=["loading.depth=2e-6", "sliding.scheme=explicit",
+                                            "stages.s_hat=[0, 1, 2]"])
+    assert case.loading.depth == 2e-6
+    assert case.sliding.scheme == "explicit"
+    assert case.stages.s_hat == (0.0, 1.0, 2.0)
+    with pytest.raises(CaseError, match=r"loading\.depth.*-1.*> 0"):
+        cases.from_dict(BASE, overrides=["loading.depth=-1"])
+    with pytest.raises(CaseError, match=r"unknown key 'loading\.dept'"):
+        cases.from_dict(BASE, overrides=["loading.dept=1e-6"])
+    with pytest.raises(CaseError, match="section.key"):
+        cases.from_dict(BASE, overrides=["depth=1e-6"])
+
+
+def test_resolved_case_round_trips(tmp_path):
+    case = cases.load(cases.shipped("paper"))
+    path = tmp_path / "case.toml"
+    path.write_text(cases.to_toml(case))
+    again = cases.load(path)
+    for section in ("indenter", "counterface", "loading", "wear", "sliding", "stages", "mdr",
+                    "fem", "compare"):
+        assert getattr(again, section) == getattr(case, section)
+
+
+@pytest.mark.parametrize("raw, pattern", [
+    (with_("loading", dept=1e-6), r"unknown key 'loading\.dept'"),
+    ({**BASE, "lodaing": {}}, r"unknown section \[lodaing\]"),
+    ({k: v for k, v in BASE.items() if k != "wear"}, r"missing section \[wear\]"),
+    (with_("wear", k=None) | {"wear": {"mu": 0.3, "hardness": 2e9}}, r"missing key 'wear\.k'"),
+    (with_("loading", depth="deep"), r"loading\.depth.*\"deep\".*number"),
+    (with_("mdr", elements=800.5), r"mdr\.elements.*800\.5.*integer"),
+    (with_("wear", tangential_correction=1), r"wear\.tangential_correction.*true or false"),
+    (with_("loading", depth=float("nan")), r"loading\.depth.*nan.*finite"),
+    (with_("wear", hardness=float("inf")), r"wear\.hardness.*inf.*finite"),
+    (with_("indenter", youngs_modulus=0.0), r"indenter\.youngs_modulus.*0\.0.*> 0"),
+    (with_("indenter", radius=-0.01), r"indenter\.radius.*-0\.01.*> 0"),
+    (with_("loading", depth=-1e-6), r"loading\.depth.*> 0"),
+    ({**with_("loading", control="force", force=-1.0), "loading": {"control": "force",
+                                                                   "force": -1.0}},
+     r"loading\.force.*-1\.0.*> 0"),
+    (with_("wear", hardness=0), r"wear\.hardness.*> 0"),
+    (with_("indenter", poisson_ratio=0.6), r"indenter\.poisson_ratio.*0\.6.*\(-1, 0\.5\]"),
+    (with_("indenter", poisson_ratio=-1.0), r"indenter\.poisson_ratio.*\(-1, 0\.5\]"),
+    (with_("loading", control="speed"), r"loading\.control.*\"speed\".*\"depth\", \"force\""),
+    (with_("indenter", flat_radius=1e-5), r"indenter\.flat_radius.*does not apply"),
+    (with_("indenter", profile="cone"), r"indenter\.slope_angle.*required by profile"),
+    (with_("loading", force=3.0), r"loading\.force.*given but loading\.control"),
+    (with_("counterface", rigid=False), r"counterface\.youngs_modulus"),
+    (with_("indenter", rigid=True), r"indenter\.youngs_modulus.*given but"),
+    (with_("stages", s_hat=[0.0, 2.0, 1.0]), r"stages\.s_hat.*increase"),
+    (with_("sliding", step_hat="fast"), r"sliding\.step_hat.*number or \"auto\""),
+    (with_("sliding", until="distance"), r"sliding\.distance.*required"),
+    ({**BASE, "loading": {"control": "force", "force": 3.0}}, r"force_fraction.*cannot end"),
+])
+def test_bad_input_names_key_value_and_allowed(raw, pattern):
+    with pytest.raises(CaseError, match=pattern):
+        cases.from_dict(raw)
+
+
+def _table_case(tmp_path, text):
+    csv = tmp_path / "profile.csv"
+    if text is not None:
+        csv.write_text(text)
+    case = tmp_path / "case.toml"
+    case.write_text("""
+[indenter]
+profile = "table"
+file = "profile.csv"
+youngs_modulus = 210e9
+poisson_ratio = 0.3
+[loading]
+control = "depth"
+depth = 1e-6
+[wear]
+k = 1e-4
+mu = 0.3
+hardness = 2e9
+""")
+    return case
+
+
+def test_table_profile_reads_relative_to_case(tmp_path):
+    r = np.linspace(0, 4e-4, 41)
+    text = "r,f\n" + "\n".join(f"{float(a)!r},{float(a * a / 0.02)!r}" for a in r)
+    case = cases.load(_table_case(tmp_path, text))
+    from cases.profiles import height
+    # PCHIP reproduces a parabola to interpolation accuracy (h = 1e-5, f'' = 1/R)
+    rr = np.linspace(0, 4e-4, 333)
+    assert np.max(np.abs(height(case.indenter, rr, case.table) - rr**2 / 0.02)) < 1e-3 * 1e-6
+
+
+@pytest.mark.parametrize("text, pattern", [
+    (None, r"indenter\.file.*does not exist"),
+    ("0,0\n2e-4,1e-6\n1e-4,2e-7\n", r"indenter\.file.*increase strictly"),
+    ("1e-5,0\n1e-4,1e-7\n2e-4,1e-6\n", r"indenter\.file.*first radius must be 0"),
+    ("0,0\n1e-4,abc\n2e-4,1e-6\n", r"indenter\.file.*line 2"),
+    ("0,0\n1e-4\n2e-4,1e-6\n", r"indenter\.file.*line 2 has 1 columns"),
+])
+def test_bad_table_profile(tmp_path, text, pattern):
+    with pytest.raises(CaseError, match=pattern):
+        cases.load(_table_case(tmp_path, text))
+
+
+def test_toml_syntax_error_reports_line(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text("[indenter]\nprofile = \"sphere\"\nradius = = 0.01\n")
+    with pytest.raises(CaseError, match=r"TOML syntax error.*line 3"):
+        cases.load(path)
+
+
+def test_missing_case_file():
+    with pytest.raises(CaseError, match="does not exist"):
+        cases.load("no/such/case.toml")
+
+
+def test_cli_bad_input_is_one_clear_line_without_traceback(tmp_path):
+    path = tmp_path / "case.toml"
+    path.write_text(cases.shipped("hertz").read_text().replace("depth = 1e-6", "depth = -1e-6"))
+    out = subprocess.run([sys.executable, "-m", "comparisons.cli", "run", str(path),
+                          "--out", str(tmp_path / "run")], capture_output=True, text=True,
+                         cwd=Path(__file__).parents[1])
+    assert out.returncode == 2
+    assert "Traceback" not in out.stderr
+    assert "loading.depth" in out.stderr and "-1e-06" in out.stderr
+    assert not (tmp_path / "run").exists()
+
+
+def test_readme_documents_every_key():
+    readme = (Path(__file__).parents[1] / "README.md").read_text()
+    from cases.schema import SECTIONS, section_fields
+    for section in SECTIONS:
+        for name, _ in section_fields(section):
+            assert f"`{section}.{name}`" in readme, f"{section}.{name} missing from README"
