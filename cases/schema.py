@@ -176,10 +176,6 @@ class CompareSettings:
     edge_band: float = key(0.1, minimum=0.0, maximum=1.0, open_maximum=True,
                            doc="width of the band at the contact edge, as a fraction of the "
                                "contact radius, whose pressure is reported separately")
-    singularity_band: float = key(0.1, minimum=0.0, maximum=1.0, open_maximum=True,
-                                  doc="truncated paraboloid: half-width of the band around the "
-                                      "pressure singularity at r = b left out of the pressure "
-                                      "differences, as a fraction of the contact radius")
 
 
 SECTIONS: dict[str, type] = {
