@@ -1,0 +1,62 @@
+"""``wearcheck compare CASE.toml [--out DIR]``: MDR against FEM, figures, metrics, report.
+
+Exit code 0 when every check is within the case's [compare] tolerances, 1 when
+the comparison fails (DIR is still written, with the failing verdict).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from ..compare import SPHERE_RATIOS, compare, print_summary
+from ._common import add_case_arguments, load_case
+
+
+def _ratios(text):
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        raise SystemExit(f"wearcheck compare: --sphere-ratios '{text}': expected numbers "
+                         "separated by commas, e.g. 0.005,0.01,0.02")
+    if not values or any(not 0 < v < 1 for v in values):
+        raise SystemExit(f"wearcheck compare: --sphere-ratios '{text}': each a0/R must be in (0, 1)")
+    return values
+
+
+def add_parser(sub):
+    p = sub.add_parser("compare", help="run MDR and FEM on a case and compare them",
+                       description=__doc__)
+    add_case_arguments(p)
+    p.add_argument("--out", type=Path, default=None,
+                   help="output directory (default: runs/<case name>)")
+    p.add_argument("--edge-study", action="store_true",
+                   help="also run both solvers on a coarser and a finer grid and a smaller "
+                        "step, and say whether the edge pressure peak is converged")
+    p.add_argument("--sphere-sweep", action="store_true",
+                   help="also run the FEM unworn at several a0/R and compare its force with "
+                        "the half-space value")
+    p.add_argument("--sphere-ratios", type=_ratios, default=SPHERE_RATIOS, metavar="R1,R2,...",
+                   help="a0/R of the sphere sweep (default: "
+                        + ",".join(f"{v:g}" for v in SPHERE_RATIOS) + ")")
+    p.add_argument("--no-render", action="store_true",
+                   help="do not call comparisons.render on the run directories")
+    return p
+
+
+def main(args) -> int:
+    case = load_case(args)
+    out = args.out or Path("runs") / args.case.stem
+    m = compare(case, out, edge=args.edge_study, sphere=args.sphere_sweep,
+                sphere_ratios=args.sphere_ratios, quiet=args.quiet,
+                render=not args.no_render)
+    if not args.quiet:
+        print_summary(m, out)
+        for note in m.get("render_notes", []):
+            print(f"note: {note}", file=sys.stderr)
+        if "edge_study" in m:
+            print(f"edge peak: {m['edge_study']['summary']}", file=sys.stderr)
+    if not m["passed"]:
+        print(f"wearcheck compare: the comparison FAILED (see {out}/report.md)", file=sys.stderr)
+        return 1
+    return 0

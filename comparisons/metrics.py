@@ -1,0 +1,172 @@
+"""Differences between the MDR and the FEM result of one case (pure: arrays in, numbers out).
+
+The two solvers store their stages on different radii (MDR: its uniform grid;
+FEM: the contact-node radii). Differences are taken on the FEM radii, with the
+MDR fields linearly interpolated onto them. Every difference is made
+dimensionless with the case's natural scales: profiles by the depth d,
+pressures by p0, forces by F0, contact radii by a0.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+#: checks that decide the verdict, with the tolerance key that bounds each
+CHECKS = (
+    ("profile_max", "profile_tolerance"),
+    ("force", "force_tolerance"),
+    ("pressure_interior_max", "pressure_tolerance"),
+    ("contact_radius", "contact_radius_tolerance"),
+)
+
+
+def to_grid(r_src, y_src, r_dst) -> np.ndarray:
+    """Linear interpolation of y(r_src) onto r_dst; NaN outside the range of r_src."""
+    return np.interp(np.asarray(r_dst, float), np.asarray(r_src, float),
+                     np.asarray(y_src, float), left=np.nan, right=np.nan)
+
+
+def max_rms(diff) -> tuple[float, float, int]:
+    """Max |diff|, RMS of diff over its finite entries, and their count (NaN, NaN, 0 if none)."""
+    d = np.asarray(diff, float)
+    d = d[np.isfinite(d)]
+    if d.size == 0:
+        return math.nan, math.nan, 0
+    return float(np.max(np.abs(d))), float(np.sqrt(np.mean(d**2))), int(d.size)
+
+
+def at_stages(history_s, values, stage_s) -> np.ndarray:
+    """A history column (one value per step) read at the stage distances, linearly."""
+    return np.interp(np.asarray(stage_s, float), np.asarray(history_s, float),
+                     np.asarray(values, float))
+
+
+def edge_masks(r, a_1, a_2, edge_band):
+    """Masks of the contact interior and of its edge band on the radii r.
+
+    Interior: r < (1 - edge_band) min(a_1, a_2), away from both solvers' edges.
+    Edge band: (1 - edge_band) min(a_1, a_2) <= r <= (1 + edge_band) max(a_1, a_2).
+    """
+    r = np.asarray(r, float)
+    inner = (1.0 - edge_band) * min(a_1, a_2)
+    outer = (1.0 + edge_band) * max(a_1, a_2)
+    return r < inner, (r >= inner) & (r <= outer)
+
+
+def stage_differences(r, f_1, f_2, p_1, p_2, a_1, a_2, *, depth, p0, edge_band,
+                      exclude=None) -> dict:
+    """Profile and pressure differences of one stage, both given on the radii r.
+
+    Parameters
+    ----------
+    r : (M,) radii [m]; f_*, p_* : (M,) profiles [m] and pressures [Pa] of the two
+        solvers on r (NaN where one is not defined); a_* : contact radii [m].
+    depth, p0 : the scales of profile and pressure.
+    edge_band : fraction of the contact radius reported separately at the edge.
+    exclude : optional (M,) mask of radii left out of the pressure interior
+        (e.g. around a known singularity).
+
+    Returns
+    -------
+    dict of max and RMS differences: profile (over all r) relative to depth,
+    pressure in the interior and in the edge band relative to p0.
+    """
+    df = (np.asarray(f_1, float) - np.asarray(f_2, float)) / depth
+    dp = (np.asarray(p_1, float) - np.asarray(p_2, float)) / p0
+    interior, edge = edge_masks(r, a_1, a_2, edge_band)
+    if exclude is not None:
+        interior = interior & ~np.asarray(exclude, bool)
+    out = {}
+    out["profile_max"], out["profile_rms"], out["profile_points"] = max_rms(df)
+    (out["pressure_interior_max"], out["pressure_interior_rms"],
+     out["pressure_interior_points"]) = max_rms(dp[interior])
+    out["pressure_edge_max"], out["pressure_edge_rms"], out["pressure_edge_points"] = \
+        max_rms(dp[edge])
+    return out
+
+
+def verdict(stage: dict, tolerances: dict) -> dict:
+    """Each check of one stage against its tolerance: {name: {value, tolerance, passed}}.
+
+    A NaN value (nothing to compare) fails: a check that compared nothing passes nothing.
+    """
+    out = {}
+    for name, tol_key in CHECKS:
+        value = stage[name]
+        tol = tolerances[tol_key]
+        out[name] = dict(value=value, tolerance=tol,
+                         passed=bool(np.isfinite(value) and value <= tol))
+    return out
+
+
+def compare_results(mdr, fem, *, s_hat_per_m, a0, F0, p0, depth, tolerances, edge_band,
+                    exclude_radius=None, exclude_width=0.0) -> dict:
+    """Compare two results (``cases.RunResult``-like) stage by stage.
+
+    Stage k of one result is the k-th requested ŝ; the stages both reached are
+    compared. Forces and contact radii at a stage are the history values read
+    at the stage's sliding distance.
+
+    Parameters
+    ----------
+    mdr, fem : objects with history (dict), stage_s, r, f, p.
+    s_hat_per_m, a0, F0, p0 : scales (``cases.reference.scales``).
+    depth : profile scale d (the held depth, or the unworn depth d0 under force control).
+    tolerances : the ``[compare]`` tolerances as a dict.
+    edge_band : fraction of the contact radius treated as edge.
+    exclude_radius, exclude_width : optionally leave |r - exclude_radius| <
+        exclude_width out of the pressure interior (a singularity at r = b).
+
+    Returns
+    -------
+    dict with ``stages`` (list of per-stage dicts), ``history`` (force and
+    contact radius over the common sliding range) and ``passed``.
+    """
+    K = min(len(mdr.stage_s), len(fem.stage_s))
+    a_m = at_stages(mdr.history["s"], mdr.history["contact_radius"], mdr.stage_s)
+    a_f = at_stages(fem.history["s"], fem.history["contact_radius"], fem.stage_s)
+    F_m = at_stages(mdr.history["s"], mdr.history["force"], mdr.stage_s)
+    F_f = at_stages(fem.history["s"], fem.history["force"], fem.stage_s)
+    r = np.asarray(fem.r, float)
+    stages = []
+    for k in range(K):
+        f_m = to_grid(mdr.r, mdr.f[k], r)
+        p_m = to_grid(mdr.r, mdr.p[k], r)
+        exclude = None
+        if exclude_radius is not None:
+            exclude = np.abs(r - exclude_radius) < exclude_width
+        st = dict(index=k,
+                  s_hat_mdr=float(mdr.stage_s[k] * s_hat_per_m),
+                  s_hat_fem=float(fem.stage_s[k] * s_hat_per_m),
+                  force_mdr=float(F_m[k] / F0), force_fem=float(F_f[k] / F0),
+                  contact_radius_mdr=float(a_m[k] / a0),
+                  contact_radius_fem=float(a_f[k] / a0))
+        st["force"] = abs(st["force_mdr"] - st["force_fem"])
+        st["contact_radius"] = abs(st["contact_radius_mdr"] - st["contact_radius_fem"])
+        st.update(stage_differences(r, f_m, fem.f[k], p_m, fem.p[k], a_m[k], a_f[k],
+                                    depth=depth, p0=p0, edge_band=edge_band, exclude=exclude))
+        st["checks"] = verdict(st, tolerances)
+        st["passed"] = all(c["passed"] for c in st["checks"].values())
+        stages.append(st)
+    hist = history_differences(mdr.history, fem.history, F0=F0, a0=a0)
+    return dict(stages=stages, stages_compared=K,
+                stages_reached=dict(mdr=len(mdr.stage_s), fem=len(fem.stage_s)),
+                history=hist,
+                passed=bool(K > 0 and all(st["passed"] for st in stages)))
+
+
+def history_differences(h_1, h_2, *, F0, a0) -> dict:
+    """Max differences of force (/F0) and contact radius (/a0) over the common sliding range.
+
+    The second history is interpolated linearly onto the sliding distances of
+    the first that lie inside its range.
+    """
+    s1, s2 = np.asarray(h_1["s"], float), np.asarray(h_2["s"], float)
+    keep = (s1 >= s2.min()) & (s1 <= s2.max())
+    out = dict(s_common_max=float(s1[keep].max()) if keep.any() else math.nan)
+    for name, scale in (("force", F0), ("contact_radius", a0)):
+        d = (np.asarray(h_1[name], float)[keep] - np.interp(s1[keep], s2, h_2[name])) / scale
+        out[f"{name}_max"], out[f"{name}_rms"], _ = max_rms(d)
+    return out
