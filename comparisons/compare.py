@@ -45,8 +45,9 @@ def _progress(label, quiet):
     return ProgressBar(label, quiet=quiet)
 
 
-def run_both(case, *, solve=solve_case, quiet=True, label="") -> dict:
+def run_both(case, *, solve=None, quiet=True, label="") -> dict:
     """Run MDR and FEM on ``case``: {"mdr": RunResult, "fem": RunResult}."""
+    solve = solve or solve_case
     out = {}
     for name in ("mdr", "fem"):
         bar = _progress(f"{name}{label}", quiet)
@@ -179,12 +180,13 @@ def edge_levels(case, results, sc) -> dict:
     return out
 
 
-def edge_study(case, results, *, solve=solve_case, quiet=True) -> dict:
+def edge_study(case, results, *, solve=None, quiet=True) -> dict:
     """Edge peaks of MDR and FEM at the case's resolution and at coarser/finer grids and steps.
 
     Returns the study as written to metrics.json, with the extra runs under
     ``runs`` (label -> (solver, case, RunResult or error text)).
     """
+    solve = solve or solve_case
     sc = reference.scales(case)
     toml = cases.to_toml(case)
     out = dict(solvers={}, runs={})
@@ -241,8 +243,9 @@ def sphere_case(case, ratio):
         stages=dataclasses.replace(case.stages, s_hat=(0.0,)))
 
 
-def sphere_sweep(case, ratios=SPHERE_RATIOS, *, solve=solve_case, quiet=True) -> dict:
+def sphere_sweep(case, ratios=SPHERE_RATIOS, *, solve=None, quiet=True) -> dict:
     """FEM force and contact radius at given approach against the half-space values."""
+    solve = solve or solve_case
     rows = []
     for ratio in ratios:
         c = sphere_case(case, ratio)
@@ -636,12 +639,13 @@ def _sphere_blocks(sw) -> list:
 # -- the whole comparison ---------------------------------------------------
 
 def compare(case, out, *, argv=None, edge=False, sphere=False, sphere_ratios=SPHERE_RATIOS,
-            solve=solve_case, quiet=True, render=True) -> dict:
+            solve=None, quiet=True, render=True) -> dict:
     """Run both solvers on ``case`` and write the comparison directory ``out`` atomically.
 
     Returns the metrics (as in metrics.json); ``passed`` is the verdict.
     """
     t0 = time.perf_counter()
+    solve = solve or solve_case
     results = run_both(case, solve=solve, quiet=quiet)
     m = analyse(case, results)
     study = None

@@ -74,7 +74,8 @@ def stage_figure(stem, stages, *, ylabel, title="", reference=(), vlines=(), xli
     if ylim is not None:
         ax.set_ylim(*ylim)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2, loc="best")
+    # outside the axes: with many stages a legend inside hides the curves
+    ax.legend(fontsize=7, ncol=1, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     out = _save(fig, stem, formats)
     plt.close(fig)
     return out

@@ -55,6 +55,11 @@ def fmt(value, digits=3) -> str:
 
 # -- writers ---------------------------------------------------------------
 
+def _md_cell(value) -> str:
+    """A Markdown table cell: a literal '|' would end the cell."""
+    return str(value).replace("|", "\\|")
+
+
 def to_markdown(blocks) -> str:
     out = []
     for b in blocks:
@@ -65,9 +70,10 @@ def to_markdown(blocks) -> str:
             out.append(b[1])
         elif kind == "table":
             header, rows = b[1], b[2]
-            out.append("| " + " | ".join(header) + " |")
+            cell = _md_cell
+            out.append("| " + " | ".join(cell(h) for h in header) + " |")
             out.append("|" + "---|" * len(header))
-            out.extend("| " + " | ".join(str(c) for c in row) + " |" for row in rows)
+            out.extend("| " + " | ".join(cell(c) for c in row) + " |" for row in rows)
         elif kind == "img":
             out.append(f"![{b[2]}]({b[1]})\n\n*{b[2]}*")
         elif kind == "code":
