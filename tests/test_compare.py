@@ -1,0 +1,135 @@
+"""``wearcheck compare`` end to end: on analytic stand-in solvers (the layer itself) and
+on the real MDR and FEM solvers (a small case)."""
+
+import base64
+import json
+import math
+import re
+
+import numpy as np
+import pytest
+
+import cases
+from cases import RunResult, profiles, reference
+from comparisons import compare as compare_mod
+from comparisons import runio
+from comparisons.cli import main as cli_main
+
+HERTZ = str(cases.shipped("hertz"))
+TRUNCATED = str(cases.shipped("truncated"))
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def analytic_solver(pressure_factor=1.0):
+    """A stand-in for both solvers: the unworn analytic contact at every stage.
+
+    "mdr" answers on a uniform grid of mdr.elements + 1 radii, "fem" on
+    fem.contact_nodes radii (offset, so that no node sits on r = b), the FEM's
+    pressure scaled by ``pressure_factor``.
+    """
+    def solve(case, name, progress=None):
+        sc = reference.scales(case)
+        a0 = sc["a0"]
+        if name == "mdr":
+            r = np.linspace(0, case.mdr.domain_factor * math.sqrt(2) * a0, case.mdr.elements + 1)
+        else:
+            n = case.fem.contact_nodes
+            r = np.linspace(0, case.fem.contact_factor * math.sqrt(2) * a0, n) + 0.37 * a0 / n
+            r[0] = 0.0
+        ind = case.indenter
+        if ind.profile == "truncated_paraboloid":
+            p = reference.truncated_paraboloid_pressure(r, case.E_star, ind.radius,
+                                                        ind.flat_radius, a0)
+        else:
+            p = reference.hertz_pressure(r, case.E_star, ind.radius, a0)
+        if name == "fem":
+            p = p * pressure_factor
+        s = np.asarray(case.stages.s_hat) / sc["s_hat_per_m"]
+        K = len(s)
+        hist = dict(s=s, force=np.full(K, sc["F0"]), depth=np.full(K, sc["d0"]),
+                    contact_radius=np.full(K, a0), wear_center=np.zeros(K),
+                    wear_volume=np.zeros(K))
+        f = profiles.height(ind, r)
+        return RunResult(history=hist, stage_s=s, r=r, f=np.tile(f, (K, 1)),
+                         p=np.tile(p, (K, 1)), solve_seconds=0.0, info={"stand_in": True})
+    return solve
+
+
+STAGES = ["--set", "stages.s_hat=[0.0, 0.5, 1.0]", "--set", "mdr.elements=200",
+          "--set", "fem.contact_nodes=60"]
+
+
+def _png_ok(path):
+    data = path.read_bytes()
+    # a real plot with axes, curves and text is tens of kB; an empty canvas is ~2-5 kB
+    return data[:8] == PNG_MAGIC and len(data) > 15_000
+
+
+def test_compare_writes_the_complete_directory(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(compare_mod, "solve_case", analytic_solver())
+    out = tmp_path / "cmp"
+    code = cli_main(["compare", HERTZ, "--out", str(out), "--no-render"] + STAGES)
+    assert code == 0
+    for name in ("fig2_profiles", "fig2_pressure", "force_vs_sliding"):
+        assert _png_ok(out / f"{name}.png"), name
+        assert (out / f"{name}.pdf").stat().st_size > 5_000
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["passed"] and m["stages_compared"] == 3
+    # both run directories read back as runs of the same case
+    for solver in ("mdr", "fem"):
+        run = runio.Run(out / solver)
+        assert run.solver == solver and run.stages["f"].shape[0] == 3
+    assert "compare" in m["provenance"]["command"]
+    md = (out / "report.md").read_text()
+    html = (out / "report.html").read_text()
+    # every stage has its row in the metrics table: "| k | ŝ | ŝ | ..."
+    for k, s in enumerate(["0", "0.5", "1"]):
+        assert re.search(rf"^\| {k} \| {re.escape(s)} \| {re.escape(s)} \|", md, re.M), k
+    assert "**PASS**" in md and "class='pass'" in html
+    # the HTML carries its three figures inline and stands alone
+    imgs = re.findall(r"data:image/png;base64,([A-Za-z0-9+/=]+)", html)
+    assert len(imgs) == 3 and all(base64.b64decode(i)[:8] == PNG_MAGIC for i in imgs)
+    assert "src='fig2" not in html
+    # nothing half-written is left beside the output
+    assert [p.name for p in tmp_path.iterdir()] == ["cmp"]
+
+
+def test_failing_comparison_exits_1_and_still_writes_the_verdict(tmp_path, monkeypatch, capsys):
+    # FEM pressure 5 % higher: the interior difference is 0.05 p0 > 0.02 p0
+    monkeypatch.setattr(compare_mod, "solve_case", analytic_solver(pressure_factor=1.05))
+    out = tmp_path / "cmp"
+    code = cli_main(["compare", HERTZ, "--out", str(out), "--no-render", "--quiet"] + STAGES)
+    assert code == 1
+    assert "FAILED" in capsys.readouterr().err
+    m = json.loads((out / "metrics.json").read_text())
+    assert not m["passed"]
+    for st in m["stages"]:
+        assert st["pressure_interior_max"] == pytest.approx(0.05, abs=1e-3)
+        assert not st["checks"]["pressure_interior_max"]["passed"]
+        assert st["checks"]["force"]["passed"]
+    md = (out / "report.md").read_text()
+    assert "**FAIL**" in md and "pressure_interior_max" in md
+
+
+def test_truncated_case_is_checked_against_the_reference(tmp_path, monkeypatch):
+    monkeypatch.setattr(compare_mod, "solve_case", analytic_solver())
+    out = tmp_path / "trunc"
+    code = cli_main(["compare", TRUNCATED, "--out", str(out), "--no-render", "--quiet",
+                     "--set", "mdr.elements=200", "--set", "fem.contact_nodes=60"])
+    assert code == 0
+    m = json.loads((out / "metrics.json").read_text())
+    tr = m["truncated_reference"]
+    # the stand-in returns the reference itself: differences are interpolation-free zeros
+    for name in ("mdr", "fem"):
+        assert tr["solvers"][name]["pressure_interior_max"] < 1e-12
+    assert "Fig. 3" in (out / "report.md").read_text()
+
+
+def test_an_error_leaves_no_directory(tmp_path, monkeypatch):
+    def broken(case, name, progress=None):
+        raise cases.SolverError("diverged on purpose")
+    monkeypatch.setattr(compare_mod, "solve_case", broken)
+    out = tmp_path / "cmp"
+    code = cli_main(["compare", HERTZ, "--out", str(out), "--quiet"])
+    assert code == cases.SolverError.exit_code
+    assert not out.exists() and list(tmp_path.iterdir()) == []
