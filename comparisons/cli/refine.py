@@ -1,0 +1,254 @@
+"""``wearcheck refine CASE.toml --solver mdr|fem --out DIR``: a refinement study on Dask.
+
+Runs the case at a sequence of resolutions (and optionally sliding steps),
+one run directory per level in DIR, and writes ``refinement-<solver>.csv`` and
+``.json`` (differences to the finest level, observed order, Richardson's
+estimate, coarsest converged level) and the figures ``fig4_profiles.png``,
+``fig4_force.png``, ``convergence.png`` and ``cost.png``. MDR and FEM studies
+run into the same DIR coexist; the figures show every study found there.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import cases
+from .. import refine as rf
+from ..distributed import Task, run_cases
+from ..runio import _jsonable, provenance, write_text_atomic
+from ..solvers import SOLVERS
+from ._common import add_case_arguments, load_case
+
+
+def add_parser(sub):
+    p = sub.add_parser("refine", help="refinement study: one solver at several resolutions",
+                       description=__doc__)
+    add_case_arguments(p)
+    p.add_argument("--solver", choices=SOLVERS, default="mdr", help="which solver (default: mdr)")
+    p.add_argument("--out", type=Path, default=None,
+                   help="study directory, shared by the MDR and FEM studies "
+                        "(default: runs/<case name>-refine)")
+    p.add_argument("--levels", type=_int_list, default=None, metavar="N1,N2,...",
+                   help="resolutions: mdr.elements (default 100,200,400,800,1600,3200) or "
+                        "fem.contact_nodes (default 60,125,250,500,1000)")
+    p.add_argument("--steps", type=_float_list, default=None, metavar="S1,S2,...",
+                   help="sliding.step_hat per level (pairs with --levels; one value: all)")
+    p.add_argument("--tolerance", type=float, default=0.01,
+                   help="a level is converged when its profile (rel. depth d0) and force "
+                        "(rel. F0) differ from the finest level's by at most this, and so do "
+                        "all finer levels (default 0.01)")
+    p.add_argument("--stage", type=float, default=None, metavar="S_HAT",
+                   help="stage ŝ for the profile figure and Richardson's estimate "
+                        "(default: the last stage every level reached)")
+    add_cluster_arguments(p)
+    return p
+
+
+def add_cluster_arguments(p) -> None:
+    """--scheduler and --workers, shared with ``wearcheck sweep``."""
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on an existing Dask scheduler, e.g. tcp://host:8786 "
+                        "(default: an embedded local cluster)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="worker processes of the embedded cluster (default: one per core)")
+
+
+def _int_list(text):
+    return [int(v) for v in text.split(",") if v.strip()]
+
+
+def _float_list(text):
+    return [float(v) for v in text.split(",") if v.strip()]
+
+
+def main(args) -> int:
+    case = load_case(args)
+    out = args.out or Path("runs") / f"{args.case.stem}-refine"
+    summary = refine(args.case, args.overrides, args.solver, out, levels=args.levels,
+                     steps=args.steps, tolerance=args.tolerance, stage=args.stage,
+                     scheduler=args.scheduler, workers=args.workers, quiet=args.quiet,
+                     case=case)
+    print(table(summary))
+    return 0 if all(lv["status"] == "ok" for lv in summary["levels"]) else 1
+
+
+def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolerance=0.01,
+           stage=None, scheduler=None, workers=None, quiet=False, solve=None, case=None) -> dict:
+    """Run a refinement study into ``out``; return its summary (as in the JSON).
+
+    ``solve`` replaces the solver (tests inject one with a known order).
+    """
+    case = case or cases.load(case_path, overrides)
+    if not tolerance > 0:
+        raise cases.CaseError(f"--tolerance {tolerance}: must be > 0")
+    if stage is not None and stage not in case.stages.s_hat:
+        raise cases.CaseError(f"--stage {stage}: not a stage of the case; stages.s_hat = "
+                              f"{list(case.stages.s_hat)}")
+    lvls = rf.levels(solver, levels, steps)
+    varied = rf.refined_parameter(lvls)
+    tasks = [Task(lv.name, solver, lv.overrides) for lv in lvls]
+    out = Path(out)
+    prov = provenance()
+    outcomes = run_cases(case_path, overrides, tasks, out, scheduler=scheduler, workers=workers,
+                         quiet=quiet, solve=solve, extra_meta=dict(study=f"refine-{solver}"))
+    summary = summarize(case, solver, lvls, outcomes, varied, tolerance, stage)
+    summary.update(case=str(case_path), overrides=list(overrides), provenance=prov)
+    record_study(out, f"refine-{solver}", case, overrides, prov)
+    write_text_atomic(out / f"refinement-{solver}.json",
+                      json.dumps(_jsonable(summary), indent=2) + "\n")
+    write_text_atomic(out / f"refinement-{solver}.csv", csv_text(summary))
+    from ..study_figures import write_figures
+    write_figures(out)
+    return summary
+
+
+def summarize(case, solver, lvls, outcomes, varied, tolerance, stage) -> dict:
+    """Differences to the finest level, orders, Richardson, converged level."""
+    from cases.reference import scales as case_scales
+    sols = [rf.scaled(o.result, case_scales(o.case)) if o.ok else None for o in outcomes]
+    ok = [i for i, s in enumerate(sols) if s is not None]
+    stages = list(case.stages.s_hat)
+    rows = []
+    for lv, o, sol in zip(lvls, outcomes, sols):
+        rows.append(dict(
+            name=lv.name, resolution=lv.resolution, step_hat=lv.step_hat,
+            h=rf.refinement_h(lv, varied), status=o.status, wall_seconds=o.wall_seconds,
+            solve_seconds=o.result.solve_seconds if o.ok else math.nan,
+            peak_rss_mb=o.peak_rss_mb, start_rss_mb=o.start_rss_mb,
+            steps=len(sol.s_hat) - 1 if sol else None,
+            final_s_hat=float(sol.s_hat[-1]) if sol else math.nan,
+            stage_force=dict(zip(stages, rf.stage_forces(sol, stages).tolist()))
+            if sol else dict.fromkeys(stages, math.nan),
+            run_dir=o.task.name if o.ok else None,
+            traceback=o.traceback or None))
+    summary = dict(study="refine", solver=solver, resolution_key=rf.RESOLUTION_KEY[solver],
+                   refined=varied, tolerance=tolerance, levels=rows, finest=None,
+                   stage_s_hat=stage, observed_order={}, richardson=None, converged=None)
+    if not ok:
+        return summary
+    finest = ok[-1]
+    summary["finest"] = rows[finest]["name"]
+    edge = case.compare.edge_band
+    for i in ok:
+        rows[i]["differences"] = rf.differences(sols[i], sols[finest], edge)
+    for row in rows:
+        row.setdefault("differences", dict.fromkeys(rf.MEASURES, math.nan))
+    fit = [i for i in ok if i != finest]
+    for m in rf.MEASURES:
+        p, c = rf.observed_order([rows[i]["h"] for i in fit],
+                                 [rows[i]["differences"][m] for i in fit])
+        summary["observed_order"][m] = dict(order=p, constant=c, levels=len(fit))
+    # the stage shown and extrapolated: the last one every successful level reached
+    if stage is None:
+        reached = [s for s in stages if all(math.isfinite(rows[i]["stage_force"][s]) for i in ok)]
+        stage = reached[-1] if reached else stages[0]
+    summary["stage_s_hat"] = stage
+    if len(ok) >= 3:
+        three = ok[-3:]
+        h = [rows[i]["h"] for i in three]
+        q = [rows[i]["stage_force"][stage] for i in three]
+        p, q_star = rf.richardson(h, q)
+        summary["richardson"] = dict(
+            quantity=f"F/F0 at stage ŝ = {stage:g}", levels=[rows[i]["name"] for i in three],
+            values=q, order=p, estimate=q_star,
+            finest_error=abs(q[-1] - q_star) if math.isfinite(q_star) else math.nan)
+    worst = [max(r["differences"]["profile"], r["differences"]["force"]) for r in rows]
+    i = rf.coarsest_converged(worst, tolerance)
+    summary["converged"] = dict(
+        tolerance=tolerance, measures=["profile (rel. d0)", "force (rel. F0)"],
+        level=rows[i]["name"] if i is not None else None,
+        resolution=rows[i]["resolution"] if i is not None else None,
+        step_hat=rows[i]["step_hat"] if i is not None else None)
+    return summary
+
+
+def record_study(out: Path, study: str, case, overrides, prov) -> None:
+    """Add this study's provenance to DIR/meta.json (kept for the other studies)."""
+    path = Path(out) / "meta.json"
+    meta = {}
+    if path.is_file():
+        try:
+            meta = json.loads(path.read_text(encoding="utf-8"))
+        except json.JSONDecodeError:
+            meta = {}
+    meta.setdefault("studies", {})[study] = dict(
+        prov, case_file=str(getattr(case, "source", "")), overrides=list(overrides),
+        resolved_case=cases.to_toml(case))
+    write_text_atomic(path, json.dumps(_jsonable(meta), indent=2) + "\n")
+
+
+def _fmt(v, spec=".4g"):
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return "nan" if math.isnan(v) else format(v, spec)
+    return str(v)
+
+
+def csv_text(summary: dict) -> str:
+    """refinement-<solver>.csv: summary lines as # comments, then one row per level."""
+    prov = summary["provenance"]
+    head = [f"# wearcheck refine, solver {summary['solver']}: differences to the finest level "
+            f"{summary['finest']}",
+            f"# command: {prov['command']}",
+            f"# git revision: {prov['git_revision']}; versions and resolved case: meta.json",
+            "# profile rel. d0, pressure rel. p0 (interior: without the edge band), force rel. "
+            "F0; peak_rss_mb: worker process RSS sampled every 10 ms during the task"]
+    for m, fit in summary["observed_order"].items():
+        head.append(f"# observed order {m}: {_fmt(fit['order'], '.3f')} "
+                    f"(log-log fit over {fit['levels']} levels)")
+    rich = summary["richardson"]
+    if rich:
+        head.append(f"# Richardson ({', '.join(rich['levels'])}): order "
+                    f"{_fmt(rich['order'], '.3f')}, {rich['quantity']} -> "
+                    f"{_fmt(rich['estimate'], '.6g')}")
+    conv = summary["converged"]
+    if conv:
+        head.append(f"# coarsest converged level within {conv['tolerance']:g}: "
+                    f"{conv['level'] or 'none coarser than the finest'}")
+    stages = list(summary["levels"][0]["stage_force"]) if summary["levels"] else []
+    cols = (["level", "resolution", "step_hat", "status", "wall_seconds", "solve_seconds",
+             "peak_rss_mb", "steps", "final_s_hat"]
+            + [f"F/F0 at s_hat={s:g}" for s in stages]
+            + [f"{m}_difference" for m in rf.MEASURES])
+    lines = head + [",".join(cols)]
+    for r in summary["levels"]:
+        d = r["differences"]
+        vals = ([r["name"], r["resolution"], r["step_hat"],
+                 '"' + r["status"].replace('"', "'") + '"',
+                 r["wall_seconds"], r["solve_seconds"], r["peak_rss_mb"], r["steps"],
+                 r["final_s_hat"]]
+                + [r["stage_force"][s] for s in stages] + [d[m] for m in rf.MEASURES])
+        lines.append(",".join(_fmt(v, ".6g") for v in vals))
+    return "\n".join(lines) + "\n"
+
+
+def table(summary: dict) -> str:
+    """The printed table: one line per level, then orders and the converged level."""
+    key = summary["resolution_key"]
+    lines = [f"{'level':<28} {key:>16} {'step':>8} {'wall s':>8} {'MB':>6} "
+             f"{'profile/d0':>11} {'p/p0':>9} {'p/p0 int':>9} {'F/F0':>9}  status"]
+    for r in summary["levels"]:
+        d = r["differences"]
+        lines.append(f"{r['name']:<28} {r['resolution']:>16} {_fmt(r['step_hat']):>8} "
+                     f"{_fmt(r['wall_seconds'], '.3g'):>8} {_fmt(r['peak_rss_mb'], '.0f'):>6} "
+                     + " ".join(f"{_fmt(d[m], '.2e'):>{w}}" for m, w in
+                                zip(rf.MEASURES, (11, 9, 9, 9)))
+                     + f"  {r['status']}")
+    per = "1/resolution" if summary["refined"] == "resolution" else "step"
+    for m, fit in summary["observed_order"].items():
+        lines.append(f"observed order, {m}: {_fmt(fit['order'], '.2f')} "
+                     f"(difference ∝ ({per})^p, fit over {fit['levels']} levels)")
+    rich = summary["richardson"]
+    if rich:
+        lines.append(f"Richardson, {rich['quantity']}: order {_fmt(rich['order'], '.2f')}, "
+                     f"estimate {_fmt(rich['estimate'], '.6g')}, finest level off by "
+                     f"{_fmt(rich['finest_error'], '.2e')}")
+    conv = summary["converged"]
+    if conv:
+        lines.append(f"coarsest level converged within {conv['tolerance']:g} (profile/d0, "
+                     f"F/F0): {conv['level'] or 'none coarser than the finest'}")
+    return "\n".join(lines)

@@ -1,0 +1,277 @@
+"""Run many variants of one case on Dask, write each as a run directory.
+
+The runner behind ``wearcheck refine`` and ``wearcheck sweep``. Each task
+builds its case from the parsed case file plus ``section.key=value``
+overrides, solves it, and returns the result with its wall time and peak
+memory; the client writes each run directory atomically as results arrive. A
+task that fails (a rejected case, a solver error, a crashed worker) comes back
+as an error outcome; the others go on.
+
+By default the tasks run on an embedded ``LocalCluster`` bound to 127.0.0.1
+without a dashboard: one single-threaded worker process per core. Processes,
+not threads, because they measured faster on 2 cores (``benchmarks/
+bench_refine.py``) and because a process of its own is what makes the peak
+memory of a task measurable. ``scheduler=ADDRESS`` uses an existing cluster
+instead; its workers need wearcheck importable (``pip install .``) and, for a
+tabulated profile, the table file at the same path.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+import time
+import tomllib
+import traceback
+import uuid
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cases
+from .progress import ProgressBar
+from .runio import write_run
+
+#: seconds between two samples of a task's resident set size
+RSS_INTERVAL = 0.01
+#: least seconds between two progress events of one task
+PROGRESS_INTERVAL = 0.5
+
+
+@dataclass(frozen=True)
+class Task:
+    """One run: its directory name, solver and overrides on top of the base case."""
+
+    name: str
+    solver: str
+    overrides: tuple[str, ...] = ()
+
+
+@dataclass
+class Outcome:
+    """What came back from one task (``result`` and ``case`` only when ``ok``)."""
+
+    task: Task
+    ok: bool
+    message: str = ""
+    wall_seconds: float = float("nan")
+    peak_rss_mb: float = float("nan")
+    start_rss_mb: float = float("nan")
+    worker: str = ""
+    case: cases.Case | None = None
+    result: cases.RunResult | None = None
+    run_dir: Path | None = None
+    traceback: str = ""
+
+    @property
+    def status(self) -> str:
+        """"ok", or "error: <message>" for the tables."""
+        return "ok" if self.ok else f"error: {self.message}"
+
+
+# --------------------------------------------------------------------------
+# Inside a worker
+
+class _PeakRSS:
+    """Peak resident set size of this process while the block runs.
+
+    A daemon thread samples ``psutil`` every ``RSS_INTERVAL`` s; a peak
+    shorter than that (or inside one call that holds the GIL) can be missed.
+    """
+
+    def __enter__(self):
+        import psutil  # a dependency of distributed
+        self._proc = psutil.Process()
+        self.start = self.peak = self._proc.memory_info().rss
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._sample, daemon=True)
+        self._thread.start()
+        return self
+
+    def _sample(self):
+        while not self._stop.wait(RSS_INTERVAL):
+            self.peak = max(self.peak, self._proc.memory_info().rss)
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._thread.join()
+        self.peak = max(self.peak, self._proc.memory_info().rss)
+        return False
+
+
+def _progress_sender(topic: str | None, name: str):
+    """A solver progress callback that reports to the client, throttled."""
+    try:
+        from distributed import get_worker
+        worker = get_worker()
+    except (ImportError, ValueError):
+        worker = None
+    if worker is None or topic is None:
+        return None
+    last = [0.0]
+
+    def progress(fraction, text=""):
+        now = time.perf_counter()
+        if now - last[0] >= PROGRESS_INTERVAL:
+            last[0] = now
+            worker.log_event(topic, {"name": name, "fraction": float(fraction)})
+    return progress
+
+
+def execute(raw: dict, source: str, overrides: tuple[str, ...], solver: str, name: str,
+            topic: str | None = None, solve=None) -> dict:
+    """Build the case, solve it; never raises. Runs inside a worker.
+
+    ``solve(case, solver, progress)`` defaults to ``comparisons.solvers.solve``.
+    """
+    if solve is None:
+        from .solvers import solve
+    out = dict(ok=False, message="", case=None, result=None, traceback="")
+    try:
+        from distributed import get_worker
+        out["worker"] = get_worker().address
+    except (ImportError, ValueError):
+        out["worker"] = "local"
+    t0 = time.perf_counter()
+    with _PeakRSS() as rss:
+        try:
+            case = cases.from_dict(raw, source=source, overrides=list(overrides))
+            result = solve(case, solver, _progress_sender(topic, name))
+            out.update(ok=True, case=case, result=result)
+        except cases.WearcheckError as exc:
+            out["message"] = str(exc)
+        except Exception as exc:  # a bug or a library failure: keep the others going
+            out["message"] = f"{type(exc).__name__}: {exc}"
+            out["traceback"] = traceback.format_exc()
+    out.update(wall_seconds=time.perf_counter() - t0, peak_rss_mb=rss.peak / 2**20,
+               start_rss_mb=rss.start / 2**20)
+    return out
+
+
+# --------------------------------------------------------------------------
+# On the client
+
+class _Client:
+    """A distributed Client on ``scheduler``, or on an embedded LocalCluster."""
+
+    def __init__(self, scheduler: str | None, workers: int | None, n_tasks: int):
+        import dask
+        from distributed import Client, LocalCluster
+        self.cluster = None
+        if scheduler:
+            try:
+                self.client = Client(scheduler, timeout="10s")
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise cases.WearcheckError(f"cannot reach the Dask scheduler at '{scheduler}': "
+                                           f"{exc}") from None
+            return
+        n = workers or max(1, min(os.cpu_count() or 1, n_tasks))
+        # a task that kills its worker (out of memory, crash) is reported at once,
+        # not retried on the next worker
+        with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+            self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                        host="127.0.0.1", dashboard_address=None,
+                                        silence_logs=40)
+        self.client = Client(self.cluster)
+
+    def close(self):
+        self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
+class _Reporter:
+    """Per-level progress on stderr: a bar while running, a line per finished task."""
+
+    def __init__(self, label: str, names: list[str], quiet: bool):
+        self.quiet = quiet
+        self.bar = ProgressBar(label, quiet=quiet)
+        self.fraction = dict.fromkeys(names, 0.0)
+        self.done = 0
+        self.lock = threading.Lock()
+
+    def event(self, event):
+        _, msg = event
+        with self.lock:
+            if self.fraction.get(msg["name"], 1.0) < 1.0:
+                self.fraction[msg["name"]] = min(msg["fraction"], 0.999)
+                self._draw()
+
+    def _draw(self):
+        running = [f"{n} {100 * f:.0f}%" for n, f in self.fraction.items() if 0 < f < 1]
+        self.bar(sum(self.fraction.values()) / len(self.fraction),
+                 f"{self.done}/{len(self.fraction)} done " + ", ".join(running))
+
+    def finished(self, outcome: Outcome):
+        with self.lock:
+            self.fraction[outcome.task.name] = 1.0
+            self.done += 1
+            if not self.quiet:
+                if self.bar.enabled:
+                    sys.stderr.write("\r\033[K")
+                mem = f", peak {outcome.peak_rss_mb:.0f} MB" if outcome.ok else ""
+                print(f"[{self.done}/{len(self.fraction)}] {outcome.task.name}: {outcome.status}"
+                      f" ({outcome.wall_seconds:.3g} s{mem})", file=sys.stderr, flush=True)
+            self._draw()
+
+    def close(self):
+        self.bar.close()
+
+
+def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | Path, *,
+              scheduler: str | None = None, workers: int | None = None, quiet: bool = False,
+              solve=None, extra_meta: dict | None = None) -> list[Outcome]:
+    """Run every task on Dask; write each successful one to ``out/<task.name>``.
+
+    ``base_overrides`` apply to every task before its own. Returns the outcomes
+    in the order of ``tasks``; each run directory is written (atomically, by
+    ``runio.write_run``) as soon as its result arrives, so an interrupted study
+    keeps the levels already done.
+    """
+    from distributed import as_completed
+
+    source = str(Path(source).absolute())
+    raw = tomllib.loads(Path(source).read_text(encoding="utf-8"))
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    names = [t.name for t in tasks]
+    if len(set(names)) != len(names):
+        raise cases.CaseError("two runs would share a directory: " + ", ".join(names))
+    reporter = _Reporter(tasks[0].solver if tasks else "", names, quiet)
+    topic = f"wearcheck-progress-{uuid.uuid4().hex}"
+    outcomes: dict[str, Outcome] = {}
+    conn = _Client(scheduler, workers, len(tasks))
+    try:
+        client = conn.client
+        client.subscribe_topic(topic, reporter.event)
+        futures = {}
+        for t in tasks:
+            fut = client.submit(execute, raw, source, tuple(base_overrides) + t.overrides,
+                                t.solver, t.name, topic, solve, pure=False,
+                                key=f"{t.name}-{uuid.uuid4().hex[:8]}")
+            futures[fut] = t
+        for fut in as_completed(futures):
+            t = futures[fut]
+            try:
+                rec = fut.result()
+                outcome = Outcome(task=t, **rec)
+            except Exception as exc:  # the worker died (KilledWorker) or was lost
+                outcome = Outcome(task=t, ok=False, message=f"{type(exc).__name__}: {exc}")
+            fut.release()
+            if outcome.ok:
+                meta = dict(task=t.name, overrides=list(t.overrides),
+                            wall_seconds=outcome.wall_seconds, peak_rss_mb=outcome.peak_rss_mb,
+                            worker=outcome.worker)
+                meta.update(extra_meta or {})
+                try:
+                    outcome.run_dir = write_run(out / t.name, outcome.case, outcome.result,
+                                                t.solver, extra_meta=meta)
+                except OSError as exc:
+                    outcome.ok, outcome.message = False, f"writing the run failed: {exc}"
+            outcomes[t.name] = outcome
+            reporter.finished(outcome)
+        client.unsubscribe_topic(topic)
+    finally:
+        reporter.close()
+        conn.close()
+    return [outcomes[t.name] for t in tasks]

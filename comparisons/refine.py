@@ -1,0 +1,227 @@
+"""Refinement studies, the pure part: levels, differences to the finest level,
+observed order of convergence, Richardson's estimate, coarsest converged level.
+
+Arrays in, arrays out: no I/O, no Dask. Solutions enter in the natural scales
+of the case (r/a0, f/d0, p/p0, F/F0, ŝ) so that errors read as fractions.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from cases import CaseError
+
+#: the case key each solver's resolution is set by
+RESOLUTION_KEY = {"mdr": "mdr.elements", "fem": "fem.contact_nodes"}
+#: default resolutions, coarsest first (MDR: paper Fig. 4 spans N = 100 ... 3200)
+DEFAULT_LEVELS = {"mdr": (100, 200, 400, 800, 1600, 3200), "fem": (60, 125, 250, 500, 1000)}
+#: the error measures of a level, in the order tables show them
+MEASURES = ("profile", "pressure", "pressure_interior", "force")
+
+
+@dataclass(frozen=True)
+class Level:
+    """One run of a study: a resolution and, optionally, a sliding step ŝ."""
+
+    solver: str
+    resolution: int
+    step_hat: float | None = None
+
+    @property
+    def key(self) -> str:
+        return RESOLUTION_KEY[self.solver]
+
+    @property
+    def name(self) -> str:
+        """Run directory name, ``<solver>-<key>-<value>[-step-<v>]``."""
+        name = f"{self.solver}-{self.key.split('.')[1]}-{self.resolution}"
+        return name + (f"-step-{self.step_hat:g}" if self.step_hat is not None else "")
+
+    @property
+    def overrides(self) -> tuple[str, ...]:
+        out = (f"{self.key}={self.resolution}",)
+        if self.step_hat is not None:
+            out += (f"sliding.step_hat={self.step_hat!r}",)
+        return out
+
+
+def levels(solver: str, resolutions=None, steps=None) -> list[Level]:
+    """The levels of a study, coarsest first.
+
+    Resolutions and steps pair up one to one; a single value of either applies
+    to every level, so ``steps`` alone refines the step at one resolution.
+    """
+    if solver not in RESOLUTION_KEY:
+        raise CaseError(f"solver '{solver}': must be one of " + ", ".join(RESOLUTION_KEY))
+    res = tuple(resolutions) if resolutions else DEFAULT_LEVELS[solver]
+    st = tuple(steps) if steps else (None,)
+    if len(st) == 1:
+        st = st * len(res)
+    elif len(res) == 1:
+        res = res * len(st)
+    elif len(st) != len(res):
+        raise CaseError(f"--levels has {len(res)} values and --steps {len(st)}: give one step, "
+                        "one level, or as many steps as levels (they pair up)")
+    out = [Level(solver, int(n), None if s is None else float(s)) for n, s in zip(res, st)]
+    if len({lv.name for lv in out}) != len(out):
+        raise CaseError("the levels repeat: " + ", ".join(lv.name for lv in out))
+    varied = refined_parameter(out)
+    return sorted(out, key=lambda lv: -refinement_h(lv, varied))
+
+
+def refined_parameter(lvls) -> str:
+    """"resolution" when the resolution varies across the levels, else "step"."""
+    return "resolution" if len({lv.resolution for lv in lvls}) > 1 else "step"
+
+
+def refinement_h(level: Level, varied: str) -> float:
+    """The refinement parameter h (error ∝ h^p): 1/resolution, or the step ŝ."""
+    if varied == "resolution":
+        return 1.0 / level.resolution
+    return level.step_hat if level.step_hat is not None else math.nan
+
+
+# --------------------------------------------------------------------------
+# Solutions in natural scales
+
+@dataclass
+class Solution:
+    """One level's result in natural scales.
+
+    s_hat, force: history (n,) of ŝ and F/F0; stage_s_hat (K,); r (M,) r/a0;
+    f, p (K, M): worn profile f/d0 and pressure p/p0.
+    """
+
+    s_hat: np.ndarray
+    force: np.ndarray
+    stage_s_hat: np.ndarray
+    r: np.ndarray
+    f: np.ndarray
+    p: np.ndarray
+
+
+def scaled(result, scales: dict) -> Solution:
+    """A :class:`cases.RunResult` in the natural scales ``cases.reference.scales``."""
+    k = scales["s_hat_per_m"]
+    return Solution(
+        s_hat=np.asarray(result.history["s"], float) * k,
+        force=np.asarray(result.history["force"], float) / scales["F0"],
+        stage_s_hat=np.asarray(result.stage_s, float) * k,
+        r=np.asarray(result.r, float) / scales["a0"],
+        f=np.asarray(result.f, float) / scales["d0"],
+        p=np.asarray(result.p, float) / scales["p0"],
+    )
+
+
+def stage_forces(sol: Solution, stage_s_hat) -> np.ndarray:
+    """F/F0 at each requested stage ŝ (linear in the history); NaN past the run's end."""
+    s = np.asarray(stage_s_hat, float)
+    out = np.interp(s, sol.s_hat, sol.force)
+    # a stage is reached when the run got there, up to rounding of the step sum
+    out[s > sol.s_hat[-1] * (1 + 1e-9) + 1e-12] = np.nan
+    return out
+
+
+def contact_radius(r, p) -> float:
+    """Largest r with p > 0 (0 when nothing is in contact)."""
+    inside = np.flatnonzero(np.asarray(p) > 0)
+    return float(r[inside[-1]]) if inside.size else 0.0
+
+
+def differences(sol: Solution, ref: Solution, edge_band: float = 0.1) -> dict:
+    """Max differences of a level to the reference (finest) level.
+
+    Compared on the reference's own points: its r grid for the profile f/d0 and
+    pressure p/p0 (at every stage both reached, by index), its history ŝ for
+    the force F/F0, each restricted to the range both cover; the level is
+    interpolated linearly there, as its piecewise-linear plot would show it.
+    ``pressure_interior`` leaves out the band ``edge_band * a`` inside the
+    reference's contact radius a, where the edge peak converges slowest.
+    """
+    K = min(len(sol.stage_s_hat), len(ref.stage_s_hat))
+    lo, hi = max(sol.r[0], ref.r[0]), min(sol.r[-1], ref.r[-1])
+    grid = (ref.r >= lo) & (ref.r <= hi)
+    r = ref.r[grid]
+    prof, pres, inner = [], [], []
+    for k in range(K):
+        prof.append(np.max(np.abs(np.interp(r, sol.r, sol.f[k]) - ref.f[k, grid])))
+        dp = np.abs(np.interp(r, sol.r, sol.p[k]) - ref.p[k, grid])
+        pres.append(np.max(dp))
+        band = r < (1.0 - edge_band) * contact_radius(ref.r, ref.p[k])
+        if band.any():
+            inner.append(np.max(dp[band]))
+    upto = ref.s_hat <= min(sol.s_hat[-1], ref.s_hat[-1])
+    force = float(np.max(np.abs(np.interp(ref.s_hat[upto], sol.s_hat, sol.force)
+                                - ref.force[upto])))
+
+    def largest(values):
+        return float(max(values)) if values else math.nan
+
+    return dict(profile=largest(prof), pressure=largest(pres),
+                pressure_interior=largest(inner), force=force)
+
+
+# --------------------------------------------------------------------------
+# Convergence
+
+def observed_order(h, error) -> tuple[float, float]:
+    """Order p and constant C of error ≈ C h^p: ``np.polyfit`` of log error on log h.
+
+    Points with a zero, negative or non-finite error (the reference level
+    itself, failed levels) are left out; fewer than two left give NaN.
+    """
+    h, e = np.asarray(h, float), np.asarray(error, float)
+    use = np.isfinite(h) & np.isfinite(e) & (h > 0) & (e > 0)
+    if use.sum() < 2:
+        return math.nan, math.nan
+    p, logc = np.polyfit(np.log(h[use]), np.log(e[use]), 1)
+    return float(p), float(math.exp(logc))
+
+
+def richardson(h, q) -> tuple[float, float]:
+    """Order p and extrapolated value q* from three levels, q = q* + C h^p.
+
+    ``h`` decreasing; the ratios h1/h2 and h2/h3 may differ (p then solves
+    (q1-q2)/(q2-q3) = (h1^p-h2^p)/(h2^p-h3^p)). NaN when the three values do
+    not converge monotonically, the premise of the estimate.
+    """
+    (h1, h2, h3), (q1, q2, q3) = np.asarray(h, float), np.asarray(q, float)
+    if not np.all(np.isfinite([h1, h2, h3, q1, q2, q3])) or not h1 > h2 > h3 > 0:
+        return math.nan, math.nan
+    if q2 == q3 or q1 == q2:
+        return math.nan, math.nan
+    ratio = (q1 - q2) / (q2 - q3)
+    r1, r2 = h1 / h2, h2 / h3
+
+    def excess(p):
+        return r2**p * (r1**p - 1.0) / (r2**p - 1.0) - ratio
+
+    # the right side rises from ln r1/ln r2 (p -> 0) without bound
+    p_lo, p_hi = 1e-6, 50.0
+    if not excess(p_lo) < 0 < excess(p_hi):
+        return math.nan, math.nan
+    p = optimize.brentq(excess, p_lo, p_hi, xtol=1e-14, rtol=1e-12)
+    q_star = q3 + (q3 - q2) * h3**p / (h2**p - h3**p)
+    return float(p), float(q_star)
+
+
+def coarsest_converged(errors, tolerance: float) -> int | None:
+    """Index of the coarsest level that, with every finer level, is within tolerance.
+
+    ``errors`` (levels coarsest first, the finest last) holds each level's
+    largest relative difference to the finest level, NaN for a failed level
+    (left out). None when no level coarser than the finest qualifies.
+    """
+    e = np.asarray(errors, float)
+    found = None
+    for i in range(len(e) - 2, -1, -1):
+        if math.isnan(e[i]):
+            continue
+        if e[i] > tolerance:
+            break
+        found = i
+    return found

@@ -1,0 +1,146 @@
+"""Figures of the refinement studies in one directory (paper Fig. 4 and cost).
+
+Drawn from what the directory holds: every ``refinement-<solver>.json`` and
+the run directories it lists, so the MDR and FEM studies run into one
+directory share ``cost.png`` and sit side by side in the other figures.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .refine import MEASURES
+from .runio import Run, provenance
+
+FIGURES = ("fig4_profiles.png", "fig4_force.png", "convergence.png", "cost.png")
+LABELS = {"profile": "profile / d0", "pressure": "pressure / p0",
+          "pressure_interior": "pressure / p0 (interior)", "force": "force / F0"}
+
+
+def studies(out: Path) -> list[dict]:
+    """The refinement summaries in ``out``, MDR first."""
+    found = []
+    for path in sorted(Path(out).glob("refinement-*.json")):
+        found.append(json.loads(path.read_text(encoding="utf-8")))
+    return sorted(found, key=lambda s: s["solver"] != "mdr")
+
+
+def _save(fig, path: Path) -> None:
+    """Save a PNG atomically, the command line in its metadata."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".png", dir=path.parent)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, dpi=130, metadata={"Software": "wearcheck",
+                                             "Description": provenance()["command"]})
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _level_label(study, row):
+    n = "N" if study["solver"] == "mdr" else "nodes"
+    label = f"{n} = {row['resolution']}"
+    return label + (f", Δŝ = {row['step_hat']:g}" if row["step_hat"] is not None else "")
+
+
+def write_figures(out: str | Path) -> list[Path]:
+    """Draw the four study figures into ``out``; return their paths."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(out)
+    found = studies(out)
+    if not found:
+        return []
+    paths = []
+    runs = {s["solver"]: [(row, Run(out / row["run_dir"])) for row in s["levels"]
+                          if row["run_dir"] and (out / row["run_dir"] / "meta.json").is_file()]
+            for s in found}
+
+    # Fig. 4a: worn profiles at one stage, one curve per level
+    fig, axes = plt.subplots(1, len(found), figsize=(5.5 * len(found), 4.2), squeeze=False)
+    for ax, s in zip(axes[0], found):
+        stage = s["stage_s_hat"]
+        for row, run in runs[s["solver"]]:
+            st = run.stages
+            k = np.flatnonzero(np.isclose(st["s_hat"], stage, rtol=1e-6, atol=1e-9))
+            if not k.size:
+                continue
+            sc = run.scales
+            ax.plot(st["r"] / sc["a0"], st["f"][k[0]] / sc["d0"], label=_level_label(s, row))
+        ax.set(xlabel="r / a0", ylabel="f / d0",
+               title=f"{s['solver'].upper()}: worn profile at ŝ = {stage:g}")
+        ax.set_ylim(bottom=0.0)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    paths.append(out / "fig4_profiles.png")
+    _save(fig, paths[-1])
+    plt.close(fig)
+
+    # Fig. 4b: normal force against sliding, one curve per level
+    fig, axes = plt.subplots(1, len(found), figsize=(5.5 * len(found), 4.2), squeeze=False)
+    for ax, s in zip(axes[0], found):
+        for row, run in runs[s["solver"]]:
+            sc = run.scales
+            ax.plot(run.history["s"] * sc["s_hat_per_m"], run.history["force"] / sc["F0"],
+                    label=_level_label(s, row))
+        ax.set(xlabel="ŝ = k μ E* s / (σ0 a0)", ylabel="F / F0",
+               title=f"{s['solver'].upper()}: normal force")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    paths.append(out / "fig4_force.png")
+    _save(fig, paths[-1])
+    plt.close(fig)
+
+    # convergence: difference to the finest level against resolution, fitted order
+    fig, axes = plt.subplots(1, len(found), figsize=(5.5 * len(found), 4.2), squeeze=False)
+    for ax, s in zip(axes[0], found):
+        by_res = s["refined"] == "resolution"
+        rows = [r for r in s["levels"] if r["name"] != s["finest"] and r["status"] == "ok"]
+        x = np.array([r["resolution"] if by_res else r["step_hat"] for r in rows], float)
+        for m in MEASURES:
+            e = np.array([r["differences"][m] for r in rows], float)
+            if not np.any(e > 0):
+                continue
+            fit = s["observed_order"][m]
+            line, = ax.loglog(x, e, "o", label=f"{LABELS[m]}, p = {fit['order']:.2f}")
+            if math.isfinite(fit["order"]):
+                # e = C h^p with h = 1/resolution (or the step itself)
+                h = 1.0 / x if by_res else x
+                ax.loglog(x, fit["constant"] * h ** fit["order"], "--", color=line.get_color())
+        xlabel = (f"resolution ({s['resolution_key']})" if by_res else "step Δŝ")
+        ax.set(xlabel=xlabel, ylabel="max difference to the finest level",
+               title=f"{s['solver'].upper()}: finest {s['finest']}")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    paths.append(out / "convergence.png")
+    _save(fig, paths[-1])
+    plt.close(fig)
+
+    # cost: difference to each solver's finest level against wall time
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    for ax, m in zip(axes, ("profile", "force")):
+        for s in found:
+            rows = [r for r in s["levels"] if r["name"] != s["finest"] and r["status"] == "ok"]
+            t = [r["wall_seconds"] for r in rows]
+            e = [r["differences"][m] for r in rows]
+            ax.loglog(t, e, "o-", label=s["solver"].upper())
+            for ti, ei, r in zip(t, e, rows):
+                ax.annotate(str(r["resolution"]), (ti, ei), fontsize=7,
+                            textcoords="offset points", xytext=(3, 3))
+        ax.set(xlabel="wall time per run [s]", ylabel=f"max difference, {LABELS[m]}",
+               title=f"cost against accuracy ({m})")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    paths.append(out / "cost.png")
+    _save(fig, paths[-1])
+    plt.close(fig)
+    return paths

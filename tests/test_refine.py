@@ -1,0 +1,205 @@
+"""Refinement studies: observed order on problems of known order, a study end
+to end through a LocalCluster on loopback, failed levels kept in the table."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+import cases
+from cases import reference
+from comparisons import refine as rf
+from comparisons.runio import Run
+
+# ----------------------------------------------------------------------------
+# The pure part against problems of known order
+
+
+def test_observed_order_of_a_power_law_is_exact():
+    # e = C h^p is a straight line in log-log: the fit recovers p and C to rounding
+    h = np.array([0.1, 0.05, 0.025, 0.0125])
+    p, c = rf.observed_order(h, 3.7 * h**1.5)
+    assert p == pytest.approx(1.5, abs=1e-12)
+    assert c == pytest.approx(3.7, rel=1e-10)
+
+
+def trapezoid(n):
+    """Composite trapezoid rule for ∫_0^1 e^x dx with n panels (error ∝ h² exactly
+    to leading order, Euler-Maclaurin: -(h²/12)(e-1) + O(h⁴))."""
+    x = np.linspace(0.0, 1.0, n + 1)
+    y = np.exp(x)
+    return (y.sum() - 0.5 * (y[0] + y[-1])) / n
+
+
+def test_observed_order_of_the_trapezoid_rule_is_two():
+    n = np.array([4, 8, 16, 32, 64])
+    err = np.abs([trapezoid(k) - (math.e - 1) for k in n])
+    p, _ = rf.observed_order(1.0 / n, err)
+    # the O(h⁴) term shifts the slope by ~h²/60 relative at n = 4: well below 0.01
+    assert p == pytest.approx(2.0, abs=0.01)
+
+
+def test_richardson_on_the_trapezoid_rule():
+    n = np.array([8, 16, 32])
+    p, q = rf.richardson(1.0 / n, [trapezoid(k) for k in n])
+    assert p == pytest.approx(2.0, abs=0.01)  # the h⁴ term perturbs p by O(h²)
+    # one Richardson step removes the h² term; what is left is O(h⁴) ≈ 1e-7 at n = 16
+    assert q == pytest.approx(math.e - 1, abs=1e-6)
+
+
+def test_richardson_with_unequal_ratios_is_exact_for_a_power_law():
+    # the FEM default levels are not in a constant ratio (60, 125, 250)
+    h = 1.0 / np.array([60.0, 125.0, 250.0])
+    p, q = rf.richardson(h, 0.7 + 2.3 * h**1.3)
+    assert p == pytest.approx(1.3, abs=1e-9)
+    assert q == pytest.approx(0.7, abs=1e-12)
+
+
+def test_richardson_refuses_oscillating_values():
+    # the premise q = q* + C h^p fails when the differences change sign
+    p, q = rf.richardson([0.4, 0.2, 0.1], [1.0, 0.9, 0.95])
+    assert math.isnan(p) and math.isnan(q)
+
+
+def test_differences_interpolate_onto_the_finest_grid():
+    # level: f = 1 + r on a coarse grid; finest: f = 1 + r + 0.1 sin(πr) on a fine
+    # grid; linear interpolation of the level is exact, so the difference is 0.1
+    coarse, fine = np.linspace(0, 2, 5), np.linspace(0, 2, 401)
+    s = np.linspace(0, 1, 11)
+
+    def sol(r, extra, force):
+        f = (1 + r + extra)[None, :]
+        p = np.clip(1 - r**2, 0, None)[None, :]
+        return rf.Solution(s, force, np.array([0.0]), r, f, p)
+    d = rf.differences(sol(coarse, 0 * coarse, 1 - s), sol(fine, 0.1 * np.sin(np.pi * fine),
+                                                         1 - s + 0.02 * s**2))
+    assert d["profile"] == pytest.approx(0.1, abs=1e-12)  # max of 0.1 sin(πr) on the grid
+    assert d["force"] == pytest.approx(0.02, abs=1e-12)   # 0.02 s² at s = 1
+    # pressure: interpolating 1 - r² on spacing 0.5 errs by at most (0.5/2)² = 1/16
+    assert d["pressure"] == pytest.approx(1 / 16, abs=1e-3)
+
+
+def test_coarsest_converged_needs_every_finer_level_within_tolerance():
+    # the third level is within tolerance, the fourth is not: only the fifth counts
+    assert rf.coarsest_converged([0.5, 0.1, 0.005, 0.02, 0.004, 0.0], 0.01) == 4
+    assert rf.coarsest_converged([0.5, 0.05, 0.0], 0.01) is None
+    # a failed level (NaN) is left out
+    assert rf.coarsest_converged([0.5, 0.008, np.nan, 0.001, 0.0], 0.01) == 1
+
+
+def test_levels_pair_resolutions_and_steps():
+    lv = rf.levels("mdr", [400, 100, 200], [0.1])
+    assert [x.name for x in lv] == ["mdr-elements-100-step-0.1", "mdr-elements-200-step-0.1",
+                                    "mdr-elements-400-step-0.1"]
+    assert lv[0].overrides == ("mdr.elements=100", "sliding.step_hat=0.1")
+    steps = rf.levels("fem", [250], [0.1, 0.05, 0.2])
+    assert [x.step_hat for x in steps] == [0.2, 0.1, 0.05]  # coarsest first
+    assert rf.refined_parameter(steps) == "step"
+    assert [x.resolution for x in rf.levels("fem")] == [60, 125, 250, 500, 1000]
+    with pytest.raises(cases.CaseError):
+        rf.levels("mdr", [100, 200, 400], [0.1, 0.05])
+
+
+# ----------------------------------------------------------------------------
+# A study end to end through a LocalCluster on loopback, with a solver of
+# known order: the error of every output is C h^2, h = 1/resolution.
+
+ORDER, AMPLITUDE = 2.0, 5.0
+
+
+def fake_solve(case, solver, progress=None):
+    """A stand-in solver: f, p and F are exact plus AMPLITUDE * h^ORDER.
+
+    Its profile is linear in r and its force history shares one ŝ grid across
+    levels, so interpolation adds nothing to the differences.
+    """
+    n = case.mdr.elements if solver == "mdr" else case.fem.contact_nodes
+    if n == 24:
+        raise cases.SolverError("injected failure at 24")
+    eps = AMPLITUDE * (1.0 / n) ** ORDER
+    sc = reference.scales(case)
+    s_hat = np.linspace(0.0, case.stages.s_hat[-1], 41)
+    r = np.linspace(0.0, 2.0 * sc["a0"], n + 1)
+    stage = np.asarray(case.stages.s_hat)
+    x = r / sc["a0"]
+    f = sc["d0"] * (x[None, :] * (1 + stage[:, None]) + 0.5 * eps * x[None, :])
+    p = sc["p0"] * (1 + eps) * np.clip(1 - x**2, 0, None)[None, :].repeat(len(stage), 0)
+    for k in range(5):
+        if progress:
+            progress(k / 5)
+    hist = dict(s=s_hat / sc["s_hat_per_m"], force=sc["F0"] * np.exp(-s_hat) * (1 + eps),
+                depth=np.full_like(s_hat, sc["d0"]), contact_radius=np.full_like(s_hat, sc["a0"]),
+                wear_center=np.zeros_like(s_hat), wear_volume=np.zeros_like(s_hat))
+    return cases.RunResult(history=hist, stage_s=stage / sc["s_hat_per_m"], r=r, f=f, p=p,
+                           solve_seconds=1e-3, info={"fake": True})
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    from distributed import LocalCluster
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as c:
+        yield c.scheduler_address
+
+
+@pytest.fixture(scope="module")
+def fake_study(cluster, tmp_path_factory):
+    from comparisons.cli.refine import refine
+    out = tmp_path_factory.mktemp("study")
+    case = cases.shipped("paper")
+    # level 1 is rejected by the case (mdr.elements >= 2); 24 fails in the solver
+    summary = refine(case, ["stages.s_hat=[0.0, 0.5, 1.0]"], "mdr", out,
+                     levels=[1, 8, 16, 24, 32, 64, 1024], scheduler=cluster, quiet=True,
+                     solve=fake_solve)
+    return out, summary
+
+
+def test_study_reports_failed_levels_and_writes_the_others(fake_study):
+    out, summary = fake_study
+    with open(out / "refinement-mdr.csv", newline="") as fh:
+        rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
+    status = {r["level"]: r["status"] for r in rows}
+    assert len(rows) == 7
+    assert "mdr.elements" in status["mdr-elements-1"]
+    assert "injected failure at 24" in status["mdr-elements-24"]
+    for n in (8, 16, 32, 64, 1024):
+        assert status[f"mdr-elements-{n}"] == "ok"
+        run = Run(out / f"mdr-elements-{n}")  # complete and readable back
+        assert run.case.mdr.elements == n
+    assert not (out / "mdr-elements-1").exists() and not (out / "mdr-elements-24").exists()
+    meta = json.loads((out / "meta.json").read_text())
+    assert "git_revision" in meta["studies"]["refine-mdr"]
+    assert "[mdr]" in meta["studies"]["refine-mdr"]["resolved_case"]
+
+
+def test_study_recovers_the_known_order(fake_study):
+    _, summary = fake_study
+    # differences to the finest level are C (h^2 - h_f^2): with h_f/h <= 1/16 the
+    # h_f term biases the slope by < 0.01
+    for m in ("profile", "force"):
+        assert summary["observed_order"][m]["order"] == pytest.approx(ORDER, abs=0.01)
+    rich = summary["richardson"]
+    # three finest levels 32, 64, 1024 (unequal ratios); F/F0 at ŝ = 1 is e^-1 (1 + C h²)
+    assert rich["order"] == pytest.approx(ORDER, abs=1e-6)
+    assert rich["estimate"] == pytest.approx(math.exp(-1.0), abs=1e-10)
+    # worst difference C (h² - h_f²) (profile: C h² r/2a0 with r/a0 up to 2, and
+    # force) is 5/32² = 0.0049 at N = 32 and 0.0195 at N = 16 against tolerance 0.01
+    assert summary["converged"]["level"] == "mdr-elements-32"
+
+
+def test_second_solver_joins_the_same_directory(fake_study, cluster):
+    from comparisons.cli.refine import refine
+    from comparisons.study_figures import FIGURES, studies
+    out, _ = fake_study
+    refine(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"], "fem", out,
+           levels=[10, 20, 40], scheduler=cluster, quiet=True, solve=fake_solve)
+    assert [s["solver"] for s in studies(out)] == ["mdr", "fem"]
+    meta = json.loads((out / "meta.json").read_text())
+    assert set(meta["studies"]) == {"refine-mdr", "refine-fem"}
+    for name in FIGURES:
+        assert (out / name).stat().st_size > 1000
+    assert not list(out.glob(".*"))  # no temporary leftovers
