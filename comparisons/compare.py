@@ -540,22 +540,36 @@ def R_fmt(v):
     return report.fmt(v)
 
 
+def _peak_cell(q) -> str:
+    """One peak in a table cell: position, height, prominence (relative to p(0))."""
+    if not q["present"]:
+        return "none"
+    text = (f"r/a={report.fmt(q['r_over_a'], 4)}, p/p(0)={report.fmt(q['height'], 4)}, "
+            f"prom.={report.fmt(q['prominence'], 2)}")
+    return text + (" (last node)" if q["at_last_node"] else "")
+
+
 def _edge_blocks(m) -> list:
     R = report
     fmt = R.fmt
     blocks = [R.heading("Edge peak (paper Section 4)"),
               R.para(f"An interior local maximum of p(r) in r ≥ {edge_peak.OUTER:g}·a counts as "
                      f"a peak when its prominence (height above the dip inward of it) exceeds "
-                     f"{edge_peak.MIN_PROMINENCE:g} of max p. Height and prominence relative "
-                     "to p(0).")]
+                     f"{edge_peak.MIN_PROMINENCE:g} of max p. Cells give its position r/a, its "
+                     "height p_peak/p(0) and its prominence relative to p(0); \"last node\": "
+                     "the maximum is the outermost node in contact (not resolved by the grid).")]
+    peaks = m["edge_peaks"]
+    K = max(len(v) for v in peaks.values())
     rows = []
-    for name, peaks in m["edge_peaks"].items():
-        for k, q in enumerate(peaks):
-            rows.append([name.upper(), k, fmt(q["s_hat"]), fmt(q["present"]),
-                         fmt(q["r_over_a"], 4), fmt(q["height"], 4), fmt(q["prominence"]),
-                         fmt(q["at_last_node"])])
-    blocks.append(R.table(["solver", "stage", "ŝ", "peak", "r/a", "p_peak/p(0)",
-                           "prominence/p(0)", "on last node"], rows))
+    for k in range(K):
+        row = [k]
+        for name in ("mdr", "fem"):
+            q = peaks[name][k] if k < len(peaks[name]) else None
+            if name == "mdr":
+                row.append(fmt(q["s_hat"]) if q else "—")
+            row.append(_peak_cell(q) if q else "—")
+        rows.append(row)
+    blocks.append(R.table(["stage", "ŝ", "MDR", "FEM"], rows))
     es = m.get("edge_study")
     if es is None:
         blocks.append(R.para("Resolution study not run (wearcheck compare --edge-study)."))
@@ -570,14 +584,12 @@ def _edge_blocks(m) -> list:
             blocks.append(R.para(f"{name.upper()} {f['label']} failed: {f['error']}"))
         rows = []
         for st in sol["stages"]:
-            for d in st["levels"]:
-                rows.append([st["stage"], fmt(d.get("s_hat")), d["label"], fmt(d["present"]),
-                             fmt(d["r_over_a"], 4), fmt(d["height"], 4), fmt(d["prominence"]),
-                             fmt(d["at_last_node"]), st["verdict"]])
-        blocks.append(R.table(["stage", "ŝ", "level", "peak", "r/a", "p_peak/p(0)",
-                               "prominence/p(0)", "on last node", "verdict"], rows))
-        blocks.append(R.para(f"{name.upper()}: " + "; ".join(
-            f"stage {st['stage']}: {st['verdict']} ({st['reason']})" for st in sol["stages"])))
+            rows.append([st["stage"], fmt(st["levels"][0].get("s_hat"))]
+                        + [_peak_cell(d) for d in st["levels"]]
+                        + [f"{st['verdict']}: {st['reason']}"])
+        labels = [d["label"].split(" (")[0] for d in lv]
+        blocks.append(R.table(["stage", "ŝ"] + [f"{name.upper()} {x}" for x in labels]
+                              + ["verdict"], rows))
     blocks.append(R.para("Answer: " + es["summary"]))
     if es.get("figure"):
         blocks.append(R.image(es["figure"], "p/p(0) against r/a near the edge at every level "
