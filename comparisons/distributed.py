@@ -18,6 +18,8 @@ tabulated profile, the table file at the same path.
 
 from __future__ import annotations
 
+import json
+import math
 import os
 import sys
 import threading
@@ -30,7 +32,7 @@ from pathlib import Path
 
 import cases
 from .progress import ProgressBar
-from .runio import write_run
+from .runio import _jsonable, write_run, write_text_atomic
 
 #: seconds between two samples of a task's resident set size
 RSS_INTERVAL = 0.01
@@ -275,3 +277,30 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
         reporter.close()
         conn.close()
     return [outcomes[t.name] for t in tasks]
+
+
+# --------------------------------------------------------------------------
+# The study directory
+
+def record_study(out: Path, study: str, case, overrides, prov) -> None:
+    """Add this study's provenance to DIR/meta.json (kept for the other studies)."""
+    path = Path(out) / "meta.json"
+    meta = {}
+    if path.is_file():
+        try:
+            meta = json.loads(path.read_text(encoding="utf-8"))
+        except json.JSONDecodeError:
+            meta = {}
+    meta.setdefault("studies", {})[study] = dict(
+        prov, case_file=str(getattr(case, "source", "")), overrides=list(overrides),
+        resolved_case=cases.to_toml(case))
+    write_text_atomic(path, json.dumps(_jsonable(meta), indent=2) + "\n")
+
+
+def fmt(v, spec=".4g"):
+    """A table cell: '' for None, ``spec`` for a float."""
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return "nan" if math.isnan(v) else format(v, spec)
+    return str(v)

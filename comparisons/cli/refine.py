@@ -17,7 +17,7 @@ from pathlib import Path
 
 import cases
 from .. import refine as rf
-from ..distributed import Task, run_cases
+from ..distributed import Task, fmt as _fmt, record_study, run_cases
 from ..runio import _jsonable, provenance, write_text_atomic
 from ..solvers import SOLVERS
 from ._common import add_case_arguments, load_case
@@ -163,29 +163,6 @@ def summarize(case, solver, lvls, outcomes, varied, tolerance, stage) -> dict:
         resolution=rows[i]["resolution"] if i is not None else None,
         step_hat=rows[i]["step_hat"] if i is not None else None)
     return summary
-
-
-def record_study(out: Path, study: str, case, overrides, prov) -> None:
-    """Add this study's provenance to DIR/meta.json (kept for the other studies)."""
-    path = Path(out) / "meta.json"
-    meta = {}
-    if path.is_file():
-        try:
-            meta = json.loads(path.read_text(encoding="utf-8"))
-        except json.JSONDecodeError:
-            meta = {}
-    meta.setdefault("studies", {})[study] = dict(
-        prov, case_file=str(getattr(case, "source", "")), overrides=list(overrides),
-        resolved_case=cases.to_toml(case))
-    write_text_atomic(path, json.dumps(_jsonable(meta), indent=2) + "\n")
-
-
-def _fmt(v, spec=".4g"):
-    if v is None:
-        return ""
-    if isinstance(v, float):
-        return "nan" if math.isnan(v) else format(v, spec)
-    return str(v)
 
 
 def csv_text(summary: dict) -> str:

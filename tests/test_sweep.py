@@ -1,0 +1,71 @@
+"""Parameter sweeps: one run directory per value, a summary row per run."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+import cases
+from cases import reference
+from comparisons.cli.sweep import parse_vary, split_values, sweep
+from comparisons.runio import Run
+
+
+def fake_solve(case, solver, progress=None):
+    """A stand-in solver: the force falls as exp(-ŝ) up to ŝ = 2 (SI history)."""
+    sc = reference.scales(case)
+    s_hat = np.linspace(0.0, 2.0, 21)
+    r = np.linspace(0.0, 2.0 * sc["a0"], 11)
+    stage = np.array([0.0])
+    hist = dict(s=s_hat / sc["s_hat_per_m"], force=sc["F0"] * np.exp(-s_hat),
+                depth=np.full_like(s_hat, sc["d0"]), contact_radius=np.full_like(s_hat, sc["a0"]),
+                wear_center=np.zeros_like(s_hat), wear_volume=np.zeros_like(s_hat))
+    return cases.RunResult(history=hist, stage_s=stage, r=r, f=np.zeros((1, 11)),
+                           p=np.zeros((1, 11)), solve_seconds=1e-3)
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    from distributed import LocalCluster
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as c:
+        yield c.scheduler_address
+
+
+def test_vary_values_split_like_set():
+    assert split_values("1e-5, 1e-4,1e-3") == ["1e-5", "1e-4", "1e-3"]
+    assert split_values("[0.0, 1.0],[0.0, 2.0]") == ["[0.0, 1.0]", "[0.0, 2.0]"]
+    assert parse_vary("loading.control=depth,force") == ("loading.control", ["depth", "force"])
+    for bad in ("wear.k", "wear.kk=1,2", "nosection.k=1", "wear.k=1,,2"):
+        with pytest.raises(cases.CaseError):
+            parse_vary(bad)
+
+
+def test_sweep_writes_one_run_per_value(cluster, tmp_path):
+    out = tmp_path / "sweep"
+    # 3 x 2 combinations; wear.k = -1 is rejected by the case (k > 0)
+    rows = sweep(cases.shipped("paper"), [], ["wear.k=1e-5,1e-4,-1", "loading.depth=1e-6,2e-6"],
+                 "mdr", out, scheduler=cluster, quiet=True, solve=fake_solve)
+    assert len(rows) == 6
+    with open(out / "sweep.csv", newline="") as fh:
+        table = list(csv.DictReader(line for line in fh if not line.startswith("#")))
+    assert [r["run"] for r in table] == [r["run"] for r in rows]
+    for r in table:
+        if r["wear.k"] == "-1":
+            assert "wear.k" in r["status"] and not (out / r["run"]).exists()
+            continue
+        assert r["status"] == "ok"
+        run = Run(out / r["run"])  # a complete run directory, read back
+        assert run.case.wear.k == float(r["wear.k"])
+        assert run.case.loading.depth == float(r["loading.depth"])
+        # the fake ends at ŝ = 2; s = ŝ / (k μ E*/(σ0 a0)) with a0 = sqrt(R d) (Hertz)
+        E = run.case.E_star
+        a0 = np.sqrt(run.case.indenter.radius * run.case.loading.depth)
+        s_expected = 2.0 / (run.case.wear.k * 0.3 * E / (2e9 * a0))
+        # the sphere's a0 differs from Hertz's by ~(a0/R)²/6 = 2e-6 relative
+        assert float(r["final_s"]) == pytest.approx(s_expected, rel=1e-4)
+    meta = json.loads((out / "meta.json").read_text())
+    assert "sweep-mdr" in meta["studies"]
