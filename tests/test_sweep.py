@@ -65,7 +65,7 @@ def test_sweep_writes_one_run_per_value(cluster, tmp_path):
         E = run.case.E_star
         a0 = np.sqrt(run.case.indenter.radius * run.case.loading.depth)
         s_expected = 2.0 / (run.case.wear.k * 0.3 * E / (2e9 * a0))
-        # the sphere's a0 differs from Hertz's by ~(a0/R)²/6 = 2e-6 relative
+        # the sphere's a0 differs from Hertz's by ~(a0/R)²/6 = 1.7e-5 relative
         assert float(r["final_s"]) == pytest.approx(s_expected, rel=1e-4)
     meta = json.loads((out / "meta.json").read_text())
     assert "sweep-mdr" in meta["studies"]
