@@ -1,0 +1,151 @@
+"""Off-screen pictures of a run directory (pyvista, no display needed).
+
+``render_run(run_dir)`` writes ``RUN_DIR/render/`` atomically and returns the
+PNG paths:
+
+``von_mises_stageKKK.png``  FEM runs: von Mises stress near the contact at the
+                            first and the last stage (one picture if they are
+                            the same), both with the same colour range.
+``worn_surface.png``        the worn indenter surface at the last stage, its
+                            height exaggerated (the factor is in the title).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .runio import Run, atomic_directory
+from .vtk import (SURFACE_SEGMENTS, VTK_QUADRATIC_TRIANGLE, VTK_TRIANGLE, check_fields, grid,
+                  orient_triangles, revolve_curve, section_data, unworn_profile)
+
+#: size (width, height) of every picture, pixels
+WINDOW_SIZE = (1200, 800)
+#: half-width of the von Mises window, and its extent into the body, in a0
+ZOOM_HALF_WIDTH = 3.0
+ZOOM_DEPTH = 3.5
+
+
+def _plotter():
+    """An off-screen plotter through VTK's EGL window (no X server)."""
+    # read when the render window is created; must precede any window
+    os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
+    import pyvista as pv
+    pv.OFF_SCREEN = True
+    plotter = pv.Plotter(off_screen=True, window_size=list(WINDOW_SIZE))
+    plotter.set_background("white")
+    return plotter
+
+
+def nice_factor(x: float) -> float:
+    """The largest of 1, 2, 5 times a power of ten not above x (x > 0)."""
+    e = np.floor(np.log10(x))
+    m = x / 10.0**e
+    return float((5.0 if m >= 5 else 2.0 if m >= 2 else 1.0) * 10.0**e)
+
+
+def zoom_window(points, contact_nodes, a0):
+    """(r_max, z_low, z_high) of the picture: a few a0 around the pole, into the body."""
+    tip = contact_nodes[np.argmin(points[contact_nodes, 0])]
+    z_tip = points[tip, 1]
+    into_body = 1.0 if np.mean(points[:, 1]) >= z_tip else -1.0
+    z_ends = sorted([z_tip - 0.5 * a0 * into_body, z_tip + ZOOM_DEPTH * a0 * into_body])
+    return ZOOM_HALF_WIDTH * a0, z_ends[0], z_ends[1]
+
+
+def _von_mises_picture(run: Run, k: int, window, clim, path: Path) -> None:
+    fields = run.fields
+    a0 = run.scales["a0"]
+    points = np.asarray(fields["points"], dtype=float)
+    cells = orient_triangles(points, fields["cells"])
+    kind = VTK_TRIANGLE if cells.shape[1] == 3 else VTK_QUADRATIC_TRIANGLE
+    # in units of a0, mirrored about the axis for a full cross-section
+    xyz = np.column_stack([points / a0, np.zeros(len(points))])
+    vm = section_data(fields, k)["von_mises"] / 1e6
+    r_max, z_lo, z_hi = (w / a0 for w in window)
+    whole = grid(xyz, {kind: cells})
+    whole.point_data["von Mises [MPa]"] = vm
+    right = whole.clip_box((0.0, r_max, z_lo, z_hi, -1.0, 1.0), invert=False)
+    left = right.reflect((1.0, 0.0, 0.0), point=(0.0, 0.0, 0.0))
+    plotter = _plotter()
+    for half in (right, left):
+        plotter.add_mesh(half, scalars="von Mises [MPa]", cmap="viridis", clim=clim,
+                         show_scalar_bar=half is right,
+                         scalar_bar_args=dict(title="von Mises [MPa]", color="black",
+                                              vertical=True, position_x=0.86, position_y=0.15,
+                                              height=0.7, fmt="%.0f"))
+    plotter.add_text(f"von Mises stress near the contact, stage {k}: "
+                     f"s^ = {run.stages['s_hat'][k]:.3g}, s = {run.stages['s'][k]:.3g} m\n"
+                     f"undeformed r-z section, lengths in a0 = {a0:.3g} m",
+                     font_size=11, color="black", position="upper_left")
+    plotter.show_bounds(bounds=(-r_max, r_max, z_lo, z_hi, 0.0, 0.0), xtitle="r / a0",
+                        ytitle="z / a0", ztitle="y", color="black", location="outer",
+                        show_zaxis=False, grid=False, font_size=12, use_2d=True)
+    plotter.view_xy()
+    plotter.enable_parallel_projection()
+    centre = (0.0, 0.5 * (z_lo + z_hi), 0.0)
+    plotter.camera.focal_point = centre
+    plotter.camera.position = (centre[0], centre[1], 10.0 * r_max)
+    plotter.camera.parallel_scale = 0.62 * (z_hi - z_lo)
+    plotter.screenshot(str(path))
+    plotter.close()
+
+
+def _surface_picture(run: Run, path: Path) -> None:
+    a0 = run.scales["a0"]
+    st = run.stages
+    k = len(st["s"]) - 1
+    r, f = st["r"], st["f"][k]
+    f0 = unworn_profile(run, r)
+    span = float(np.ptp(f)) or float(np.ptp(f0))
+    # heights drawn at about half the surface's radius
+    scale = nice_factor(0.5 * (r[-1] - r[0]) / span) if span > 0 else 1.0
+    xyz, cells, source = revolve_curve(r / a0, f * scale / a0, SURFACE_SEGMENTS)
+    worn = grid(xyz, cells)
+    worn.point_data["wear depth [um]"] = ((f - f0) * 1e6)[source]
+    ref_xyz, ref_cells, _ = revolve_curve(r / a0, f0 * scale / a0, SURFACE_SEGMENTS)
+    unworn = grid(ref_xyz, ref_cells)
+    plotter = _plotter()
+    plotter.add_mesh(worn, scalars="wear depth [um]", cmap="plasma", smooth_shading=True,
+                     scalar_bar_args=dict(title="wear depth [um]", color="black",
+                                          vertical=True, position_x=0.86, position_y=0.15,
+                                          height=0.7, fmt="%.3g"))
+    plotter.add_mesh(unworn.extract_all_edges(), color="gray", opacity=0.25, line_width=1)
+    plotter.add_text(f"worn indenter surface, stage {k}: s^ = {st['s_hat'][k]:.3g}, "
+                     f"s = {st['s'][k]:.3g} m ({run.solver})\n"
+                     f"vertical scale x{scale:g}; lengths in a0 = {a0:.3g} m; "
+                     "grey: unworn surface",
+                     font_size=11, color="black", position="upper_left")
+    plotter.camera_position = [(2.2 * r[-1] / a0, 1.6 * r[-1] / a0, 2.6 * r[-1] / a0),
+                               (0.0, 0.25 * r[-1] / a0, 0.0), (0.0, 1.0, 0.0)]
+    plotter.screenshot(str(path))
+    plotter.close()
+
+
+def render_run(run_dir) -> list[Path]:
+    """Write the PNGs of a run into ``RUN_DIR/render/`` atomically; returns their paths."""
+    run = Run(run_dir)
+    target = run.path / "render"
+    names = []
+    with atomic_directory(target) as tmp:
+        if run.fields is not None:
+            fields = run.fields
+            K = len(run.stages["s"])
+            check_fields(fields, K)
+            points = np.asarray(fields["points"], dtype=float)
+            window = zoom_window(points, fields["contact_nodes"], run.scales["a0"])
+            r_max, z_lo, z_hi = window
+            inside = ((np.abs(points[:, 0]) <= r_max) & (points[:, 1] >= z_lo)
+                      & (points[:, 1] <= z_hi))
+            stages = sorted({0, K - 1})
+            vmax = max(float(np.max(section_data(fields, k)["von_mises"][inside]))
+                       for k in stages) / 1e6
+            for k in stages:
+                name = f"von_mises_stage{k:03d}.png"
+                _von_mises_picture(run, k, window, (0.0, vmax or 1.0), tmp / name)
+                names.append(name)
+        _surface_picture(run, tmp / "worn_surface.png")
+        names.append("worn_surface.png")
+    return [target / name for name in names]
