@@ -1,0 +1,180 @@
+"""``mdr.solve(case)``: the MDR gross-slip wear run of one case."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from cases import CaseError, RunResult, SolverError, profiles, reference
+
+from . import transforms, wear
+
+#: implicit Euler's default step in ŝ (sliding.step_hat = "auto"); see README/report:
+#: at N = 800 on the paper case its time error in F/F0 is about 1e-3
+IMPLICIT_STEP_HAT = 0.05
+#: runaway guards
+MAX_STEPS = 2_000_000
+MAX_S_HAT = 1.0e4
+
+
+def build_model(case) -> tuple[wear.Model, dict]:
+    """Grid, unworn profile and load of a case; the scales of reference.scales."""
+    sc = reference.scales(case)
+    N = case.mdr.elements
+    L = case.mdr.domain_factor * math.sqrt(2.0) * sc["a0"]
+    x = transforms.grid(N, L)
+    f0 = profiles.height(case.indenter, x, case.table)
+    tangential = (case.wear.mu / case.G_star) if case.wear.tangential_correction else 0.0
+    model = wear.Model(x=x, f0=f0, E_star=case.E_star, wear_rate=case.wear_rate,
+                       depth=case.loading.depth, force=case.loading.force,
+                       tangential=tangential)
+    return model, sc
+
+
+def stability_limit_hat(model: wear.Model, s_hat_per_m: float) -> float:
+    """Largest stable explicit step in ŝ: h λ_max <= 2."""
+    return 2.0 / wear.stiffest_rate(model) * s_hat_per_m
+
+
+def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: float,
+        force_fraction: float, progress=None, check_oscillation: bool = True) -> dict:
+    """Step the wear from the unworn state; the numerics without case handling.
+
+    h, stage_s, s_end in metres of sliding. Returns the history (lists),
+    the stages reached (s, f, p) and counters.
+    """
+    state = wear.contact_state(model, model.f0.copy())
+    F_start = state.force
+    if not F_start > 0.0:
+        raise SolverError("the unworn indenter carries no load (no node in contact); "
+                          "raise mdr.elements or the load")
+    hist = {k: [] for k in ("s", "force", "depth", "contact_radius", "wear_center",
+                            "wear_volume", "max_pressure")}
+    stages_s, stages_f, stages_p = [], [], []
+    stage_s = list(stage_s)
+    counters = {"steps": 0, "gmres_iterations": 0, "contact_iterations": 0}
+    step = wear.explicit_step if scheme == "explicit" else wear.implicit_step
+    dt = model.dt
+    s = 0.0
+    m_prev = None
+    last_report = -1.0
+
+    def record(st, s):
+        w = st.f - model.f0
+        hist["s"].append(s)
+        hist["force"].append(st.force)
+        hist["depth"].append(st.depth)
+        hist["contact_radius"].append(st.contact_radius)
+        hist["wear_center"].append(w[0])
+        hist["wear_volume"].append(transforms.volume(w, dt))
+        hist["max_pressure"].append(float(np.max(st.p)))
+        while stage_s and stage_s[0] <= s * (1 + 1e-12) + 1e-300:
+            stages_s.append(s)
+            stages_f.append(st.f.copy())
+            stages_p.append(st.p.copy())
+            stage_s.pop(0)
+
+    record(state, s)
+    while True:
+        if until == "force_fraction" and s > 0.0 and state.force < force_fraction * F_start:
+            break
+        if s >= s_end:
+            break
+        target = s_end
+        if stage_s:
+            target = min(target, stage_s[0])
+        hn = min(h, target - s)
+        s_new = target if target - s <= h * (1 + 1e-9) else s + h
+        if scheme == "explicit":
+            new = step(model, state, hn)
+            if check_oscillation and wear.oscillation(new.p, new.m):
+                raise SolverError(
+                    f"explicit Euler: grid-scale oscillation of the pressure at ŝ step "
+                    f"{counters['steps'] + 1}; the step is past the stability limit — "
+                    "reduce sliding.step_hat or use sliding.scheme = \"implicit\"")
+        else:
+            guess = state.m
+            if m_prev is not None:  # the contact edge moves smoothly: extrapolate it
+                guess = max(state.m + (state.m - m_prev), 0)
+            new = step(model, state, hn, m_guess=guess)
+            m_prev = state.m
+            for k in ("gmres_iterations", "contact_iterations"):
+                counters[k] += new.stats.get(k, 0)
+        if not np.all(np.isfinite(new.f)) or not math.isfinite(new.force):
+            raise SolverError("the wear run produced non-finite values; reduce sliding.step_hat")
+        state, s = new, s_new
+        counters["steps"] += 1
+        record(state, s)
+        if counters["steps"] >= MAX_STEPS:
+            raise SolverError(f"the wear run took more than {MAX_STEPS} steps; raise "
+                              "sliding.step_hat or use sliding.scheme = \"implicit\"")
+        if progress is not None:
+            if until == "distance":
+                frac = s / s_end
+            else:
+                frac = (1.0 - state.force / F_start) / (1.0 - force_fraction)
+            if frac - last_report >= 0.01:
+                last_report = frac
+                progress(min(max(frac, 0.0), 1.0), f"F/F0 = {state.force / F_start:.3g}")
+    counters.update(F_start=F_start)
+    return dict(history={k: np.asarray(v) for k, v in hist.items()},
+                stage_s=np.asarray(stages_s), f=np.asarray(stages_f), p=np.asarray(stages_p),
+                counters=counters)
+
+
+def solve(case, progress=None) -> RunResult:
+    """Run the MDR wear simulation of ``case`` (see the package docstring)."""
+    t0 = time.perf_counter()
+    model, sc = build_model(case)
+    per_m = sc["s_hat_per_m"]
+    sl = case.sliding
+    info = dict(solver="mdr", N=case.mdr.elements, domain=float(model.x[-1]),
+                grid="uniform in r^2", scheme=sl.scheme)
+    limit_hat = None
+    if sl.scheme == "explicit":
+        limit_hat = stability_limit_hat(model, per_m)
+        info["stability_limit_hat"] = limit_hat
+        step_hat = 0.5 * limit_hat if sl.step_hat == "auto" else sl.step_hat
+        if step_hat > limit_hat:
+            raise CaseError(
+                f"key 'sliding.step_hat' = {sl.step_hat!r}: past the stability limit of "
+                f"explicit Euler on this grid; the largest stable step is {limit_hat:.4g} "
+                f"(N = {case.mdr.elements}); use a smaller step or sliding.scheme = "
+                "\"implicit\"")
+    else:
+        step_hat = IMPLICIT_STEP_HAT if sl.step_hat == "auto" else sl.step_hat
+    info["step_hat"] = float(step_hat)
+    if sl.until == "distance":
+        s_end = sl.distance
+        if s_end * per_m > MAX_S_HAT:
+            raise CaseError(f"key 'sliding.distance' = {s_end!r}: ŝ = {s_end * per_m:.4g} "
+                            f"exceeds the solver's cap of {MAX_S_HAT:g}")
+        expected = s_end * per_m / step_hat
+        if expected > MAX_STEPS:
+            raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: the run would take "
+                            f"{expected:.3g} steps (cap {MAX_STEPS}); raise the step")
+    else:
+        s_end = MAX_S_HAT / per_m
+    stage_s = [sh / per_m for sh in case.stages.s_hat]
+    if sl.until == "distance":
+        stage_s = [s for s in stage_s if s <= s_end * (1 + 1e-12)]
+    until = sl.until
+    out = run(model, sl.scheme, step_hat / per_m, stage_s,
+              "distance" if until == "distance" else "force_fraction",
+              s_end, sl.force_fraction, progress)
+    if until == "force_fraction" and out["history"]["s"][-1] >= s_end * (1 - 1e-12):
+        raise SolverError(f"the force did not fall below {sl.force_fraction} F0 within "
+                          f"ŝ = {MAX_S_HAT:g}")
+    hist = out["history"]
+    hist["s_hat"] = hist["s"] * per_m
+    info.update(out["counters"])
+    K = len(out["stage_s"])
+    M = len(model.x)
+    f = out["f"].reshape(K, M)
+    p = out["p"].reshape(K, M)
+    if progress is not None:
+        progress(1.0, "done")
+    return RunResult(history=hist, stage_s=out["stage_s"], r=model.x.copy(), f=f, p=p,
+                     solve_seconds=time.perf_counter() - t0, info=info)

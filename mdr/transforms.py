@@ -1,0 +1,249 @@
+"""MDR transforms on a grid uniform in t = r² (paper Eqs. 2, 3, 12, 13).
+
+Functions are represented by their values at the nodes ``x_i = L sqrt(i/N)``,
+i = 0..N, and taken piecewise linear in t = x² between them. In t the
+weakly singular kernels of the MDR are Abel kernels 1/sqrt(t - τ): every
+segment integral is done in closed form (segment-exact) and depends only on
+the index difference, so each transform is a triangular Toeplitz convolution,
+applied by FFT in O(N log N) without forming a matrix.
+
+Paper Eq. 2 (with the tip offset f(0) kept, physics.md §2)::
+
+    g(x) = f(0) + x ∫_0^x f'(r) / sqrt(x² - r²) dr = f(0) + sqrt(t) ∫_0^t f_τ / sqrt(t - τ) dτ
+
+Paper Eq. 3::
+
+    f(r) = (2/π) ∫_0^r g(x) / sqrt(r² - x²) dx = (1/π) ∫_0^τ g(t) / (sqrt(t) sqrt(τ - t)) dt
+
+Paper Eq. 13::
+
+    p(r) = -(1/π) ∫_r^∞ q'(x) / sqrt(x² - r²) dx = -(1/π) ∫_τ^∞ q_t / sqrt(t - τ) dt
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+from scipy import fft as _fft
+
+
+def grid(elements: int, length: float) -> np.ndarray:
+    """Nodes x_i = L sqrt(i/N), i = 0..N: uniform in t = x², N segments (springs)."""
+    return length * np.sqrt(np.arange(elements + 1) / elements)
+
+
+# -- triangular Toeplitz convolutions ----------------------------------------
+
+_SPECTRA: dict = {}
+
+
+def _spectrum(kernel: np.ndarray, nfft: int, key) -> np.ndarray:
+    """rFFT of kernel[:nfft//2], cached per (kernel, size): kernels are fixed per grid.
+
+    With len(x) <= nfft/2, a kernel truncated to nfft/2 terms gives the exact
+    leading outputs without wrap-around, so one spectrum serves every length.
+    """
+    k = (key, nfft)
+    spec = _SPECTRA.get(k)
+    if spec is None:
+        if len(_SPECTRA) > 32:
+            _SPECTRA.clear()
+        spec = _fft.rfft(kernel[:nfft // 2], nfft)  # zero-padded if shorter
+        _SPECTRA[k] = spec
+    return spec
+
+
+def lower(kernel: np.ndarray, x: np.ndarray, key=None) -> np.ndarray:
+    """y_i = Σ_{j<=i} kernel[i-j] x_j (lower-triangular Toeplitz), i < len(x)."""
+    n = len(x)
+    if n == 0:
+        return x.copy()
+    if n <= 64:  # a direct sum beats the FFT's overhead on tiny vectors
+        return np.convolve(kernel[:n], x)[:n]
+    nfft = _fft.next_fast_len(2 * n, real=True)
+    if key is None:
+        spec = _fft.rfft(kernel[:n], nfft)
+    else:
+        # any truncation between n and nfft/2 terms gives the same leading outputs
+        spec = _spectrum(kernel, nfft, key)
+    return _fft.irfft(spec * _fft.rfft(x, nfft), nfft)[:n]
+
+
+def upper(kernel: np.ndarray, x: np.ndarray, key=None) -> np.ndarray:
+    """y_i = Σ_{j>=i} kernel[j-i] x_j (upper-triangular Toeplitz)."""
+    return lower(kernel, x[::-1], key)[::-1]
+
+
+# -- kernels -------------------------------------------------------------------
+
+@lru_cache(maxsize=8)
+def abel_kernel(n: int) -> np.ndarray:
+    """c[k] = sqrt(k+1) - sqrt(k): (1/(2 sqrt Δt)) ∫ over segment k of dt/sqrt(t) - like weights.
+
+    ∫_{t_j}^{t_{j+1}} dτ / sqrt(t_i - τ) = 2 sqrt(Δt) c[i-j-1].
+    """
+    k = np.arange(n, dtype=float)
+    # sqrt(k+1) - sqrt(k) written without cancellation
+    c = 1.0 / (np.sqrt(k + 1.0) + np.sqrt(k))
+    c.flags.writeable = False
+    return c
+
+
+@lru_cache(maxsize=8)
+def abel_kernel_inverse(n: int) -> np.ndarray:
+    """Coefficients b of the power series 1/c(z), c(z) = Σ c[k] z^k (c[0] = 1).
+
+    The inverse of a triangular Toeplitz matrix is triangular Toeplitz with
+    these entries; Newton's iteration b <- b (2 - c b) doubles the number of
+    correct terms per pass, O(n log n) in all.
+    """
+    c = abel_kernel(n)
+    b = np.ones(1)
+    m = 1
+    while m < n:
+        m = min(2 * m, n)
+        cb = _fft.irfft(_fft.rfft(c[:m], 2 * m) * _fft.rfft(b, 2 * m), 2 * m)[:m]
+        corr = _fft.irfft(_fft.rfft(b, 2 * m) * _fft.rfft(cb, 2 * m), 2 * m)[:m]
+        b = np.concatenate([b, np.zeros(m - len(b))])
+        b = 2.0 * b - corr
+    b.flags.writeable = False
+    return b
+
+
+@lru_cache(maxsize=8)
+def _eq3_kernels(n: int):
+    """Product-integration weights of ∫ ψ(t) / sqrt(τ - t) dt for ψ linear per segment.
+
+    With v = (t - t_j)/Δt and k = i - j >= 1: α_k = ∫_0^1 (1-v)/sqrt(k-v) dv,
+    β_k = ∫_0^1 v/sqrt(k-v) dv (times sqrt(Δt)).
+    """
+    k = np.arange(1, n + 1, dtype=float)
+    i0 = 2.0 / (np.sqrt(k) + np.sqrt(k - 1.0))                  # ∫ dv/sqrt(k-v)
+    # (2/3)(k^{3/2} - (k-1)^{3/2}) without cancellation
+    i1 = (2.0 / 3.0) * (3.0 * k * k - 3.0 * k + 1.0) / (k**1.5 + (k - 1.0) ** 1.5)
+    beta = k * i0 - i1
+    alpha = i0 - beta
+    a = np.concatenate([[0.0], alpha])          # a[k] = α_k, a[0] unused (0)
+    b = beta                                     # b[k] = β_{k+1}
+    return a, b
+
+
+@lru_cache(maxsize=8)
+def _force_weights(n: int) -> np.ndarray:
+    """Nodal weights w with ∫_0^{t_n} q(t)/sqrt(t) dt = sqrt(Δt) Σ w_i q_i, q linear in t."""
+    j = np.arange(n, dtype=float)
+    i0 = 2.0 / (np.sqrt(j + 1.0) + np.sqrt(j))
+    i1 = (2.0 / 3.0) * (3.0 * j * j + 3.0 * j + 1.0) / ((j + 1.0) ** 1.5 + j**1.5)
+    w = np.zeros(n + 1)
+    w[:-1] += (j + 1.0) * i0 - i1
+    w[1:] += i1 - j * i0
+    w.flags.writeable = False
+    return w
+
+
+# -- the transforms ----------------------------------------------------------
+
+def to_1d(f: np.ndarray) -> np.ndarray:
+    """Paper Eq. 2 on the t-uniform grid, keeping the tip offset f(0).
+
+    g_i = f_0 + 2 sqrt(i) Σ_{j<i} c[i-j-1] (f_{j+1} - f_j); exact for f linear
+    in t (paraboloid r²/2R -> x²/R). Independent of the grid length.
+    """
+    f = np.asarray(f, dtype=float)
+    n = len(f)
+    g = np.full(n, f[0])
+    if n > 1:
+        s = lower(abel_kernel(n - 1), np.diff(f), key="c")
+        g[1:] += 2.0 * np.sqrt(np.arange(1, n)) * s
+    return g
+
+
+def from_1d_exact(g: np.ndarray) -> np.ndarray:
+    """The exact inverse of :func:`to_1d` (a discrete Eq. 3).
+
+    Triangular, so the inverse on nodes 0..m needs g on 0..m only: used by
+    the implicit wear step, where it must invert to_1d to round-off.
+    """
+    g = np.asarray(g, dtype=float)
+    n = len(g)
+    f = np.full(n, g[0])
+    if n > 1:
+        s = (g[1:] - g[0]) / (2.0 * np.sqrt(np.arange(1, n)))
+        df = lower(abel_kernel_inverse(n - 1), s, key="b")
+        f[1:] += np.cumsum(df)
+    return f
+
+
+def to_3d(g: np.ndarray) -> np.ndarray:
+    """Paper Eq. 3 by segment-exact product integration on the t-uniform grid.
+
+    On the first segment g is linear in t and the kernel 1/(sqrt(t) sqrt(τ-t))
+    is integrated exactly; beyond it ψ = g/sqrt(t) is taken linear in t per
+    segment and 1/sqrt(τ - t) integrated exactly. Independent of :func:`to_1d`
+    (the round trip is a test of both).
+    """
+    g = np.asarray(g, dtype=float)
+    n = len(g)
+    f = np.empty(n)
+    f[0] = g[0]
+    if n == 1:
+        return f
+    i = np.arange(1, n, dtype=float)
+    phi = np.arcsin(1.0 / np.sqrt(i))
+    first = g[0] * 2.0 * phi + (g[1] - g[0]) * (i * phi - np.sqrt(i - 1.0))
+    a, b = _eq3_kernels(n - 1)
+    h = np.zeros(n)
+    h[1:] = g[1:] / np.sqrt(np.arange(1, n))
+    rest = lower(a, h, key="eq3a")[1:]
+    h2 = h.copy()
+    h2[:2] = 0.0
+    # Σ_{j=2}^{i} β_{i-j+1} h_j = Σ_{j<=i} b[i-j] h2_j, b[k] = β_{k+1}
+    rest += lower(b, h2, key="eq3b")[1:]
+    f[1:] = (first + rest) / math.pi
+    return f
+
+
+def pressure(q: np.ndarray, dt: float) -> np.ndarray:
+    """Paper Eq. 13: p at the nodes from the line load q (Pa·m/m), q linear in t.
+
+    q must vanish at the last node (the contact lies inside the grid).
+    p_i = -(2/(π sqrt Δt)) Σ_{j>=i} c[j-i] (q_{j+1} - q_j).
+    """
+    q = np.asarray(q, dtype=float)
+    n = len(q)
+    p = np.zeros(n)
+    if n > 1:
+        p[:-1] = upper(abel_kernel(n - 1), np.diff(q), key="c")
+        p[:-1] *= -2.0 / (math.pi * math.sqrt(dt))
+    return p
+
+
+def line_load(p: np.ndarray, dt: float) -> np.ndarray:
+    """Inverse of :func:`pressure` for a contact ending at the node after the last.
+
+    Given p on nodes 0..m, returns q on 0..m with q_{m+1} = 0 (upper
+    triangular, so the contact set's block is inverted on its own).
+    """
+    p = np.asarray(p, dtype=float)
+    dq = upper(abel_kernel_inverse(len(p)), p, key="b") * (-0.5 * math.pi * math.sqrt(dt))
+    return -np.cumsum(dq[::-1])[::-1]
+
+
+def force(q: np.ndarray, dt: float) -> float:
+    """Paper Eq. 12: F = 2 ∫_0^∞ q dx = ∫ q / sqrt(t) dt, exact for q linear in t."""
+    q = np.asarray(q, dtype=float)
+    n = len(q) - 1
+    return float(math.sqrt(dt) * (_force_weights(n) @ q)) if n > 0 else 0.0
+
+
+def force_weights(n: int, dt: float) -> np.ndarray:
+    """Nodal weights w (N+1) with F = w · q (paper Eq. 12, exact for q linear in t)."""
+    return math.sqrt(dt) * _force_weights(n)
+
+
+def volume(w: np.ndarray, dt: float) -> float:
+    """∫ 2π r w dr = π ∫ w dt, exact for w linear in t."""
+    w = np.asarray(w, dtype=float)
+    return float(math.pi * dt * (w.sum() - 0.5 * (w[0] + w[-1])))
