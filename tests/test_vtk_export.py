@@ -139,6 +139,42 @@ def quarter_disc_mesh(R, n, rng):
     return points, tri
 
 
+#: faces of VTK's linear cells by local point number (vtkWedge, vtkPyramid, vtkTetra)
+FACES = {13: [(0, 1, 2), (3, 5, 4), (0, 3, 4, 1), (1, 4, 5, 2), (2, 5, 3, 0)],
+         14: [(0, 1, 2, 3), (0, 4, 1), (1, 4, 2), (2, 4, 3), (3, 4, 0)],
+         10: [(0, 1, 3), (1, 2, 3), (2, 0, 3), (0, 2, 1)]}
+
+
+def assert_valid_convex_cells(mesh):
+    """VTK's cell validator, and convexity checked face by face.
+
+    VTK's own convexity test flags some of these wedges although every face
+    plane has all the cell's other points on one side (checked here
+    directly), and its face-intersection test uses an absolute tolerance
+    that trips on cells of 1e-4 m; those two checks are replaced by this one.
+    """
+    report = mesh.validate_mesh(exclude_fields=["non_convex", "intersecting_faces"])
+    assert report.is_valid, report.message
+    conn = mesh.cell_connectivity
+    offsets = mesh.cell_offsets
+    for kind, faces in FACES.items():
+        sel = np.flatnonzero(mesh.celltypes == kind)
+        if not len(sel):
+            continue
+        n = {13: 6, 14: 5, 10: 4}[kind]
+        ids = conn[offsets[sel][:, None] + np.arange(n)]
+        P = mesh.points[ids]  # (cells, n, 3)
+        size = np.max(np.ptp(P, axis=1), axis=1)
+        for face in faces:
+            a, b, c = (P[:, i] for i in face[:3])
+            normal = np.cross(b - a, c - a)
+            normal /= np.linalg.norm(normal, axis=1)[:, None]
+            d = np.einsum("cnk,ck->cn", P - a[:, None, :], normal) / size[:, None]
+            # planar faces and all points on one side, to rounding (1e-9 of the cell)
+            assert np.all((d <= 1e-9).all(axis=1) | (d >= -1e-9).all(axis=1))
+            assert np.all(np.abs(d[:, list(face)]) <= 1e-9)
+
+
 def read_pvd(path):
     """(times, files) of a .pvd, by the standard library's XML parser."""
     sets = ET.parse(path).getroot().find("Collection").findall("DataSet")
@@ -205,7 +241,7 @@ def test_revolved_quarter_disc_is_a_valid_solid_of_the_hemisphere_volume(segment
     # VTK's own verdict: every cell has positive volume, no inverted faces
     volume = mesh.compute_cell_sizes().cell_data["Volume"]
     assert np.all(volume > 0)
-    assert mesh.validate_mesh().is_valid
+    assert_valid_convex_cells(mesh)
     # a closed solid: no free faces
     assert mesh.extract_surface(algorithm="dataset_surface").n_open_edges == 0
     # The polygonal revolution has exactly N sin(2π/N)/(2π) times the volume
@@ -239,3 +275,220 @@ def test_revolve_vectors_rotates_about_the_axis():
     np.testing.assert_allclose(theta_points[1:-1], theta, atol=1e-15)
     np.testing.assert_allclose(v[:, [0, 2]], xyz[1:-1, [0, 2]], atol=1e-15)
     np.testing.assert_allclose(v[:, 1], 2.0)
+
+
+# -- export of a synthetic FEM run ---------------------------------------------
+
+SECTION_FIELDS = {"displacement", "sigma_rr", "sigma_zz", "sigma_tt", "sigma_rz", "von_mises",
+                  "contact_pressure", "wear_depth", "contact_node"}
+SERIES_FIELDS = dict(profile={"f", "wear_depth", "pressure"},
+                     pressure={"pressure", "p_over_p0", "r"},
+                     surface={"f", "wear_depth", "pressure"},
+                     section=SECTION_FIELDS, solid=SECTION_FIELDS)
+
+
+@pytest.fixture(scope="module", params=[1, 2], ids=["P1", "P2"])
+def exported(request, tmp_path_factory):
+    run, cyl = cylinder_run(tmp_path_factory.mktemp("vtk") / "run", order=request.param)
+    return run, cyl, vtk.export_run(run.path, revolve=SEGMENTS)
+
+
+def check_series(directory, run, expected):
+    """The .pvd files: names, time values (= s of the stages), files present."""
+    assert {p.stem for p in directory.glob("*.pvd")} == set(expected)
+    import pyvista as pv
+    for name in expected:
+        times, files = read_pvd(directory / f"{name}.pvd")
+        # written with repr(): exact round trip
+        np.testing.assert_array_equal(times, run.stages["s"])
+        assert all(f.is_file() for f in files)
+        reader = pv.get_reader(directory / f"{name}.pvd")
+        np.testing.assert_allclose(reader.time_values, run.stages["s"], rtol=1e-15, atol=0)
+        assert len(reader.time_values) == len(run.stages["s"])
+
+
+def test_series_and_time_values(exported):
+    run, _, directory = exported
+    check_series(directory, run, SERIES_FIELDS)
+
+
+def test_every_vtu_reads_back_with_meshio_and_pyvista(exported):
+    run, _, directory = exported
+    K = len(run.stages["s"])
+    Np = len(run.fields["points"])
+    for name, names in SERIES_FIELDS.items():
+        files = sorted(directory.glob(f"{name}_*.vtu"))
+        assert len(files) == K
+        for k, file in enumerate(files):
+            m, g = read_both(file)
+            assert set(m.point_data) == names == set(g.point_data)
+            assert len(m.points) == g.n_points
+            for key in names:
+                want = (g.n_points, 3) if key == "displacement" else (g.n_points,)
+                assert m.point_data[key].shape == want == g.point_data[key].shape
+            for data in (m.field_data, g.field_data):
+                assert float(np.ravel(data["s"])[0]) == run.stages["s"][k]
+                assert float(np.ravel(data["TimeValue"])[0]) == run.stages["s"][k]
+                assert float(np.ravel(data["s_hat"])[0]) == pytest.approx(
+                    run.stages["s_hat"][k], rel=1e-15)
+                assert int(np.ravel(data["stage"])[0]) == k
+            if name == "section":
+                assert g.n_points == Np
+                kind = "triangle" if run.fields["cells"].shape[1] == 3 else "triangle6"
+                assert [c.type for c in m.cells] == [kind]
+
+
+def test_section_fields_are_the_exact_solution(exported):
+    run, cyl, directory = exported
+    r, z = run.fields["points"].T
+    contact = run.fields["contact_nodes"]
+    for k, s in enumerate(run.stages["s"]):
+        m, g = read_both(directory / f"section_{k:03d}.vtu")
+        np.testing.assert_array_equal(m.points[:, :2], run.fields["points"])
+        assert np.all(m.points[:, 2] == 0)
+        u_r, u_z = cyl.displacement(s, r, z)
+        # fields pass through float64 unchanged: rounding only
+        np.testing.assert_allclose(m.point_data["displacement"],
+                                   np.column_stack([u_r, u_z, 0 * r]), rtol=0, atol=1e-22)
+        srr, szz, stt, srz = cyl.stress(s)
+        for key, value in (("sigma_rr", srr), ("sigma_zz", szz), ("sigma_tt", stt),
+                           ("sigma_rz", srz)):
+            np.testing.assert_allclose(g.point_data[key], value, rtol=1e-14)
+        # σ_rr = σ_θθ, σ_rz = 0: von Mises is |σ_zz - σ_rr| (and not the
+        # plane value, which would ignore the hoop stress)
+        np.testing.assert_allclose(g.point_data["von_mises"], abs(szz - srr), rtol=1e-12)
+        marker = np.zeros(len(r))
+        marker[contact] = 1
+        np.testing.assert_array_equal(g.point_data["contact_node"], marker)
+        np.testing.assert_allclose(g.point_data["contact_pressure"],
+                                   marker * cyl.pressure(s), rtol=1e-14)
+        np.testing.assert_allclose(g.point_data["wear_depth"], marker * cyl.wear(s), rtol=1e-14)
+
+
+def check_contact_against_run(run, directory, gap_tol, field_tol):
+    """The exported contact nodes against the run's own contact results.
+
+    FEM convention (physics.md §7, fem/model.py): the top is held and the
+    plane rises by the depth d, so a node in contact closes its gap:
+    z + w + u_z = d. Its wear and pressure are those of the run's stages at
+    its radius. Tolerances: ``gap_tol`` (m) on the closed gap, ``field_tol``
+    relative to the largest stage value of wear and pressure.
+    """
+    contact = run.fields["contact_nodes"]
+    for k, s in enumerate(run.stages["s"]):
+        g = pv_read(directory / f"section_{k:03d}.vtu")
+        z = g.points[contact, 1]
+        u_z = g.point_data["displacement"][contact, 1]
+        w = g.point_data["wear_depth"][contact]
+        p = g.point_data["contact_pressure"][contact]
+        depth = np.interp(s, run.history["s"], run.history["depth"])
+        touching = p > 0
+        assert touching.any()
+        np.testing.assert_allclose((z + w + u_z)[touching], depth, rtol=0, atol=gap_tol)
+        r = g.points[contact, 0]
+        st = run.stages
+        f0 = vtk.unworn_profile(run, st["r"])
+        wear = np.interp(r, st["r"], st["f"][k] - f0)
+        pressure = np.interp(r, st["r"], st["p"][k])
+        scale_w = max(np.max(np.abs(st["f"] - f0)), 1e-300)
+        np.testing.assert_allclose(w, wear, rtol=0, atol=field_tol * scale_w)
+        np.testing.assert_allclose(p, pressure, rtol=0, atol=field_tol * np.max(st["p"]))
+
+
+def pv_read(path):
+    import pyvista as pv
+    return pv.read(path)
+
+
+def test_contact_nodes_against_the_runs_contact_results(exported):
+    run, cyl, directory = exported
+    # exact synthetic data: rounding of values ~1e-6 m and ~1e8 Pa
+    check_contact_against_run(run, directory, gap_tol=1e-18, field_tol=1e-12)
+
+
+def test_revolved_solid(exported):
+    run, cyl, directory = exported
+    N = SEGMENTS
+    factor = N * np.sin(2 * np.pi / N) / (2 * np.pi)
+    for k, s in enumerate(run.stages["s"]):
+        m, g = read_both(directory / f"solid_{k:03d}.vtu")
+        assert {c.type for c in m.cells} == {"wedge", "pyramid", "tetra"}
+        volume = g.compute_cell_sizes().cell_data["Volume"]
+        assert np.all(volume > 0)
+        assert_valid_convex_cells(g)
+        # the N-gon prism inscribed in the cylinder: (N/2) sin(2π/N) Rc² H
+        # exactly (straight r–z boundaries), rounding only; the cylinder's
+        # πRc²H is larger by the polygonal revolution factor
+        assert volume.sum() == pytest.approx(factor * np.pi * cyl.Rc**2 * cyl.H, rel=1e-12)
+        assert 1 - volume.sum() / (np.pi * cyl.Rc**2 * cyl.H) == pytest.approx(1 - factor,
+                                                                               rel=1e-9)
+        # Cartesian displacement of the homogeneous field at each 3D point
+        x, y, zc = g.points.T
+        e, alpha = cyl.strain(s)
+        want = np.column_stack([alpha * x, (cyl.d - cyl.wear(s)) * (1 - y / cyl.H), alpha * zc])
+        np.testing.assert_allclose(m.point_data["displacement"], want, rtol=0, atol=1e-21)
+        np.testing.assert_allclose(g.point_data["sigma_zz"], cyl.stress(s)[1], rtol=1e-14)
+
+
+def test_profile_pressure_and_surface(exported):
+    run, cyl, directory = exported
+    st = run.stages
+    M = len(st["r"])
+    for k, s in enumerate(st["s"]):
+        m, g = read_both(directory / f"profile_{k:03d}.vtu")
+        np.testing.assert_array_equal(m.points, np.column_stack([st["r"], st["f"][k], 0 * st["r"]]))
+        assert [c.type for c in m.cells] == ["line"] and len(m.cells[0].data) == M - 1
+        # the case's unworn profile is flat out to the cylinder's radius
+        np.testing.assert_allclose(g.point_data["wear_depth"], cyl.wear(s), rtol=1e-14)
+        m, g = read_both(directory / f"pressure_{k:03d}.vtu")
+        np.testing.assert_array_equal(m.points[:, 0], st["r"])
+        assert np.all(m.points[:, 1:] == 0)
+        np.testing.assert_allclose(g.point_data["p_over_p0"],
+                                   cyl.pressure(s) / run.scales["p0"], rtol=1e-14)
+        m, g = read_both(directory / f"surface_{k:03d}.vtu")
+        # r[0] = 0 is on the axis: one point there, N on every other ring
+        assert g.n_points == 1 + (M - 1) * SEGMENTS
+        ring = np.hypot(g.points[:, 0], g.points[:, 2])
+        assert np.all(np.min(np.abs(ring[:, None] - st["r"][None, :]), axis=1) < 1e-15)
+        np.testing.assert_allclose(g.points[:, 1], cyl.wear(s), rtol=1e-14)
+        area = g.compute_cell_sizes().cell_data["Area"].sum()
+        # flat disc, an inscribed N-gon: (N/2) sin(2π/N) Rc²
+        assert area == pytest.approx(SEGMENTS / 2 * np.sin(2 * np.pi / SEGMENTS) * cyl.Rc**2,
+                                     rel=1e-12)
+
+
+def test_run_without_fields_gets_profiles_only(tmp_path):
+    run, _ = cylinder_run(tmp_path / "mdr", with_fields=False)
+    directory = vtk.export_run(run.path, revolve=SEGMENTS)
+    check_series(directory, run, ("profile", "pressure", "surface"))
+
+
+def test_export_replaces_atomically_and_a_failure_keeps_the_old_files(tmp_path):
+    run, _ = cylinder_run(tmp_path / "run", s_hat=(0.0, 1.0))
+    directory = vtk.export_run(run.path)
+    before = {p.name: p.read_bytes() for p in directory.iterdir()}
+    assert "solid.pvd" not in before
+    directory = vtk.export_run(run.path, revolve=4)
+    assert (directory / "solid.pvd").is_file()
+    before = {p.name: p.read_bytes() for p in directory.iterdir()}
+    # break fields.npz: the export fails and leaves the previous vtk/ alone
+    fields = dict(np.load(run.path / "fields.npz"))
+    del fields["stress"]
+    np.savez(run.path / "fields.npz", **fields)
+    with pytest.raises(WearcheckError, match="stress"):
+        vtk.export_run(run.path, revolve=4)
+    assert {p.name: p.read_bytes() for p in directory.iterdir()} == before
+    assert sorted(p.name for p in run.path.iterdir() if p.name.startswith(".")) == []
+
+
+def test_export_command(tmp_path, capsys):
+    from comparisons.cli import main
+    run, _ = cylinder_run(tmp_path / "run", s_hat=(0.0, 2.0))
+    assert main(["export", str(run.path), "--revolve", "5"]) == 0
+    check_series(run.path / "vtk", run, SERIES_FIELDS)
+    # the rest of the run directory is untouched
+    assert Run(run.path).meta == run.meta
+    assert main(["export", str(tmp_path / "nothing")]) != 0
+    assert "not a complete run directory" in capsys.readouterr().err
+    assert main(["export", str(run.path), "--revolve", "2"]) != 0
+    assert "at least 3 segments" in capsys.readouterr().err
