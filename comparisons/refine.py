@@ -92,12 +92,13 @@ def refinement_h(level: Level, varied: str) -> float:
 class Solution:
     """One level's result in natural scales.
 
-    s_hat, force: history (n,) of ŝ and F/F0; stage_s_hat (K,); r (M,) r/a0;
-    f, p (K, M): worn profile f/d0 and pressure p/p0.
+    s_hat, force, radius: history (n,) of ŝ, F/F0 and contact radius a/a0;
+    stage_s_hat (K,); r (M,) r/a0; f, p (K, M): worn profile f/d0, pressure p/p0.
     """
 
     s_hat: np.ndarray
     force: np.ndarray
+    radius: np.ndarray
     stage_s_hat: np.ndarray
     r: np.ndarray
     f: np.ndarray
@@ -110,6 +111,7 @@ def scaled(result, scales: dict) -> Solution:
     return Solution(
         s_hat=np.asarray(result.history["s"], float) * k,
         force=np.asarray(result.history["force"], float) / scales["F0"],
+        radius=np.asarray(result.history["contact_radius"], float) / scales["a0"],
         stage_s_hat=np.asarray(result.stage_s, float) * k,
         r=np.asarray(result.r, float) / scales["a0"],
         f=np.asarray(result.f, float) / scales["d0"],
@@ -126,12 +128,6 @@ def stage_forces(sol: Solution, stage_s_hat) -> np.ndarray:
     return out
 
 
-def contact_radius(r, p) -> float:
-    """Largest r with p > 0 (0 when nothing is in contact)."""
-    inside = np.flatnonzero(np.asarray(p) > 0)
-    return float(r[inside[-1]]) if inside.size else 0.0
-
-
 def differences(sol: Solution, ref: Solution, edge_band: float = 0.1) -> dict:
     """Max differences of a level to the reference (finest) level.
 
@@ -140,7 +136,8 @@ def differences(sol: Solution, ref: Solution, edge_band: float = 0.1) -> dict:
     the force F/F0, each restricted to the range both cover; the level is
     interpolated linearly there, as its piecewise-linear plot would show it.
     ``pressure_interior`` leaves out the band ``edge_band * a`` inside the
-    reference's contact radius a, where the edge peak converges slowest.
+    reference's contact radius a (its history's, at the stage), where the
+    edge peak converges slowest.
     """
     K = min(len(sol.stage_s_hat), len(ref.stage_s_hat))
     lo, hi = max(sol.r[0], ref.r[0]), min(sol.r[-1], ref.r[-1])
@@ -151,7 +148,8 @@ def differences(sol: Solution, ref: Solution, edge_band: float = 0.1) -> dict:
         prof.append(np.max(np.abs(np.interp(r, sol.r, sol.f[k]) - ref.f[k, grid])))
         dp = np.abs(np.interp(r, sol.r, sol.p[k]) - ref.p[k, grid])
         pres.append(np.max(dp))
-        band = r < (1.0 - edge_band) * contact_radius(ref.r, ref.p[k])
+        a = np.interp(ref.stage_s_hat[k], ref.s_hat, ref.radius)
+        band = r < (1.0 - edge_band) * a
         if band.any():
             inner.append(np.max(dp[band]))
     upto = ref.s_hat <= min(sol.s_hat[-1], ref.s_hat[-1])

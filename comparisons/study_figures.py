@@ -50,6 +50,19 @@ def _level_label(study, row):
     return label + (f", Δŝ = {row['step_hat']:g}" if row["step_hat"] is not None else "")
 
 
+def _with_differences(axes, study, curves):
+    """Curves (row, x, y) on the upper axes; each minus the finest level's below."""
+    finest = [c for c in curves if c[0]["name"] == study["finest"]]
+    for row, x, y in curves:
+        line, = axes[0].plot(x, y, label=_level_label(study, row))
+        if finest and row["name"] != study["finest"]:
+            _, xf, yf = finest[0]
+            keep = (xf >= x[0]) & (xf <= x[-1])
+            axes[1].plot(xf[keep], np.interp(xf[keep], x, y) - yf[keep], color=line.get_color())
+    axes[0].legend(fontsize=8)
+    axes[1].axhline(0.0, color="0.6", lw=0.8)
+
+
 def write_figures(out: str | Path) -> list[Path]:
     """Draw the four study figures into ``out``; return their paths."""
     import matplotlib
@@ -65,36 +78,40 @@ def write_figures(out: str | Path) -> list[Path]:
                           if row["run_dir"] and (out / row["run_dir"] / "meta.json").is_file()]
             for s in found}
 
-    # Fig. 4a: worn profiles at one stage, one curve per level
-    fig, axes = plt.subplots(1, len(found), figsize=(5.5 * len(found), 4.2), squeeze=False)
-    for ax, s in zip(axes[0], found):
+    # Fig. 4a: worn profiles at one stage, one curve per level; below, each
+    # level minus the finest (on the finest level's r), where they differ
+    fig, axes = plt.subplots(2, len(found), figsize=(5.5 * len(found), 6.4), squeeze=False,
+                             sharex="col", gridspec_kw=dict(height_ratios=(2, 1)))
+    for col, s in enumerate(found):
         stage = s["stage_s_hat"]
+        curves = []
         for row, run in runs[s["solver"]]:
-            st = run.stages
+            st, sc = run.stages, run.scales
             k = np.flatnonzero(np.isclose(st["s_hat"], stage, rtol=1e-6, atol=1e-9))
-            if not k.size:
-                continue
-            sc = run.scales
-            ax.plot(st["r"] / sc["a0"], st["f"][k[0]] / sc["d0"], label=_level_label(s, row))
-        ax.set(xlabel="r / a0", ylabel="f / d0",
-               title=f"{s['solver'].upper()}: worn profile at ŝ = {stage:g}")
-        ax.set_ylim(bottom=0.0)
-        ax.legend(fontsize=8)
+            if k.size:
+                curves.append((row, st["r"] / sc["a0"], st["f"][k[0]] / sc["d0"]))
+        _with_differences(axes[:, col], s, curves)
+        axes[0, col].set(ylabel="f / d0", title=f"{s['solver'].upper()}: worn profile at "
+                                                f"ŝ = {stage:g}")
+        axes[0, col].set_ylim(bottom=0.0)
+        axes[1, col].set(xlabel="r / a0", ylabel="f/d0 − finest")
     fig.tight_layout()
     paths.append(out / "fig4_profiles.png")
     _save(fig, paths[-1])
     plt.close(fig)
 
     # Fig. 4b: normal force against sliding, one curve per level
-    fig, axes = plt.subplots(1, len(found), figsize=(5.5 * len(found), 4.2), squeeze=False)
-    for ax, s in zip(axes[0], found):
+    fig, axes = plt.subplots(2, len(found), figsize=(5.5 * len(found), 6.4), squeeze=False,
+                             sharex="col", gridspec_kw=dict(height_ratios=(2, 1)))
+    for col, s in enumerate(found):
+        curves = []
         for row, run in runs[s["solver"]]:
             sc = run.scales
-            ax.plot(run.history["s"] * sc["s_hat_per_m"], run.history["force"] / sc["F0"],
-                    label=_level_label(s, row))
-        ax.set(xlabel="ŝ = k μ E* s / (σ0 a0)", ylabel="F / F0",
-               title=f"{s['solver'].upper()}: normal force")
-        ax.legend(fontsize=8)
+            curves.append((row, run.history["s"] * sc["s_hat_per_m"],
+                           run.history["force"] / sc["F0"]))
+        _with_differences(axes[:, col], s, curves)
+        axes[0, col].set(ylabel="F / F0", title=f"{s['solver'].upper()}: normal force")
+        axes[1, col].set(xlabel="ŝ = k μ E* s / (σ0 a0)", ylabel="F/F0 − finest")
     fig.tight_layout()
     paths.append(out / "fig4_force.png")
     _save(fig, paths[-1])

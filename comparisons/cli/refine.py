@@ -116,6 +116,7 @@ def summarize(case, solver, lvls, outcomes, varied, tolerance, stage) -> dict:
         rows.append(dict(
             name=lv.name, resolution=lv.resolution, step_hat=lv.step_hat,
             h=rf.refinement_h(lv, varied), status=o.status, wall_seconds=o.wall_seconds,
+            cpu_seconds=o.cpu_seconds,
             solve_seconds=o.result.solve_seconds if o.ok else math.nan,
             peak_rss_mb=o.peak_rss_mb, start_rss_mb=o.start_rss_mb,
             steps=len(sol.s_hat) - 1 if sol else None,
@@ -173,7 +174,8 @@ def csv_text(summary: dict) -> str:
             f"# command: {prov['command']}",
             f"# git revision: {prov['git_revision']}; versions and resolved case: meta.json",
             "# profile rel. d0, pressure rel. p0 (interior: without the edge band), force rel. "
-            "F0; peak_rss_mb: worker process RSS sampled every 10 ms during the task"]
+            "F0; wall/cpu_seconds: the task in its worker (case, solve; not writing), "
+            "peak_rss_mb: worker process RSS sampled every 10 ms during the task"]
     for m, fit in summary["observed_order"].items():
         head.append(f"# observed order {m}: {_fmt(fit['order'], '.3f')} "
                     f"(log-log fit over {fit['levels']} levels)")
@@ -187,7 +189,8 @@ def csv_text(summary: dict) -> str:
         head.append(f"# coarsest converged level within {conv['tolerance']:g}: "
                     f"{conv['level'] or 'none coarser than the finest'}")
     stages = list(summary["levels"][0]["stage_force"]) if summary["levels"] else []
-    cols = (["level", "resolution", "step_hat", "status", "wall_seconds", "solve_seconds",
+    cols = (["level", "resolution", "step_hat", "status", "wall_seconds", "cpu_seconds",
+             "solve_seconds",
              "peak_rss_mb", "steps", "final_s_hat"]
             + [f"F/F0 at s_hat={s:g}" for s in stages]
             + [f"{m}_difference" for m in rf.MEASURES])
@@ -196,22 +199,24 @@ def csv_text(summary: dict) -> str:
         d = r["differences"]
         vals = ([r["name"], r["resolution"], r["step_hat"],
                  '"' + r["status"].replace('"', "'") + '"',
-                 r["wall_seconds"], r["solve_seconds"], r["peak_rss_mb"], r["steps"],
+                 r["wall_seconds"], r["cpu_seconds"], r["solve_seconds"], r["peak_rss_mb"],
+                 r["steps"],
                  r["final_s_hat"]]
                 + [r["stage_force"][s] for s in stages] + [d[m] for m in rf.MEASURES])
-        lines.append(",".join(_fmt(v, ".6g") for v in vals))
+        lines.append(",".join(_fmt(v, ".10g") for v in vals))
     return "\n".join(lines) + "\n"
 
 
 def table(summary: dict) -> str:
     """The printed table: one line per level, then orders and the converged level."""
     key = summary["resolution_key"]
-    lines = [f"{'level':<28} {key:>16} {'step':>8} {'wall s':>8} {'MB':>6} "
+    lines = [f"{'level':<28} {key:>16} {'step':>8} {'wall s':>8} {'cpu s':>8} {'MB':>6} "
              f"{'profile/d0':>11} {'p/p0':>9} {'p/p0 int':>9} {'F/F0':>9}  status"]
     for r in summary["levels"]:
         d = r["differences"]
         lines.append(f"{r['name']:<28} {r['resolution']:>16} {_fmt(r['step_hat']):>8} "
-                     f"{_fmt(r['wall_seconds'], '.3g'):>8} {_fmt(r['peak_rss_mb'], '.0f'):>6} "
+                     f"{_fmt(r['wall_seconds'], '.3g'):>8} {_fmt(r['cpu_seconds'], '.3g'):>8} "
+                     f"{_fmt(r['peak_rss_mb'], '.0f'):>6} "
                      + " ".join(f"{_fmt(d[m], '.2e'):>{w}}" for m, w in
                                 zip(rf.MEASURES, (11, 9, 9, 9)))
                      + f"  {r['status']}")

@@ -117,7 +117,7 @@ def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=No
     for t, o in zip(tasks, outcomes):
         row = dict(run=t.name)
         row.update({n: o.partition("=")[2] for n, o in zip(names, t.overrides)})
-        row.update(status=o.status, wall_seconds=o.wall_seconds,
+        row.update(status=o.status, wall_seconds=o.wall_seconds, cpu_seconds=o.cpu_seconds,
                    solve_seconds=o.result.solve_seconds if o.ok else math.nan,
                    peak_rss_mb=o.peak_rss_mb)
         final = dict(steps=None, final_s=math.nan, final_s_hat=math.nan, final_F_over_F0=math.nan,
@@ -138,7 +138,7 @@ def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=No
             "# final_*: end of each run, in that run's own scales (d0, a0, F0 of its unworn "
             "contact); peak_rss_mb: worker process RSS sampled every 10 ms during the task",
             ",".join(rows[0])]
-    body = [",".join('"' + v.replace('"', "'") + '"' if isinstance(v, str) else fmt(v, ".6g")
+    body = [",".join('"' + v.replace('"', "'") + '"' if isinstance(v, str) else fmt(v, ".10g")
                      for v in r.values()) for r in rows]
     write_text_atomic(out / "sweep.csv", "\n".join(head + body) + "\n")
     return rows
