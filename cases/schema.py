@@ -154,7 +154,7 @@ class MDRSettings:
 class FEMSettings:
     contact_nodes: int = key(250, minimum=2,
                              doc="number of nodes on the candidate contact arc")
-    contact_factor: float = key(1.25, minimum=1.0, open_minimum=True,
+    contact_factor: float = key(1.25, minimum=0.0, open_minimum=True,
                                 doc="extent of the candidate contact arc as a multiple of √2·a0")
     element_order: int = key(2, minimum=1, maximum=2, doc="1: linear, 2: quadratic triangles")
     pressure_recovery: str = key("lumped", choices=("lumped", "consistent"),

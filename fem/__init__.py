@@ -1,0 +1,35 @@
+"""FEM counterpart of the MDR solver: an axisymmetric elastic sphere in
+scikit-fem, condensed onto its candidate contact nodes, against a rigid plane.
+
+``solve(case, progress=None) -> cases.RunResult``.
+
+Geometry and conventions (SI units): r–z plane, the sphere's pole at the
+origin, the sphere above it (centre at (0, R), R = indenter.radius), its flat
+top face z = R clamped and moved rigidly down by the approach d, u_r = 0 on
+the axis; the rigid plane is z = 0. The initial gap of contact node i is the
+case's profile f(r_i) (exactly the mesh surface for profile "sphere"; for the
+paraboloid and truncated paraboloid the elastic body is still the sphere,
+whose compliance differs negligibly at a0/R <= 0.01). Only the sphere's E1,
+ν1 enter: the counterface must be rigid.
+
+Contact is node-to-node: gap_i = z_i + w_i − d + (C f)_i >= 0, f_i >= 0,
+f_i gap_i = 0, solved by a warm-started active-set method (:mod:`fem.contact`).
+Nodal pressure p_i = f_i / A_i with A_i = ∫ φ_i 2πr ds (row-sum lumping).
+With quadratic elements the node on the axis has A = 0 exactly and carries
+no force; it is left out of the contact problem and its pressure and wear
+are reported as the even extrapolation v(0) = (v1 r2² − v2 r1²)/(r2² − r1²).
+Wear w_i += (k μ/σ0) p_i Δs, explicit or implicit Euler (:mod:`fem.wear`).
+Not modelled: wear.tangential_correction (frictionless normal FEM).
+
+``RunResult.fields`` (for export): ``points`` (Np, 2) undeformed r, z of the
+DOF locations (P2: with midside nodes); ``cells`` (Nt, 3|6), counter-clockwise,
+meshio ``triangle``/``triangle6`` order; ``displacement`` (K, Np, 2) u_r, u_z
+in the plane's frame (the top face has u_z = −d); ``stress`` (K, Np, 4) σ_rr,
+σ_zz, σ_θθ, σ_rz, L2-projected onto the continuous nodal space;
+``contact_nodes`` (Nc,) indices into points, by increasing r;
+``contact_pressure`` and ``wear_depth`` (K, Nc).
+"""
+
+from .solver import solve
+
+__all__ = ["solve"]

@@ -1,0 +1,212 @@
+"""``solve(case)``: the FEM counterpart of the MDR solver, from case to RunResult."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+import meshes
+from cases import CaseError, RunResult, reference
+from cases.profiles import height
+
+from . import wear
+from .model import build
+
+#: growth of the element size away from the contact arc, per element order:
+#: linear triangles need a gentler grading for the same bulk compliance
+#: (measured: F/F_Hertz − 1 at a0/R = 0.01 is 0.58 % with P2 at 0.25 and
+#: 0.66 % with P1 at 0.05, against a converged 0.565 %)
+GROWTH = {1: 0.05, 2: 0.25}
+#: implicit Euler step in ŝ when sliding.step_hat = "auto" (accuracy-based;
+#: see benchmarks/bench_fem.py for the measured step-size error)
+IMPLICIT_AUTO_STEP_HAT = 0.02
+#: fewest arc nodes required inside the unworn contact radius
+MIN_NODES_IN_CONTACT = 5
+
+
+def check_case(case) -> None:
+    """Reject, with a CaseError, what this FEM model cannot represent."""
+    ind, cf = case.indenter, case.counterface
+    if ind.radius is None:
+        raise CaseError(f"the FEM needs 'indenter.radius' (the radius of the FEM sphere) for "
+                        f"profile \"{ind.profile}\"; it is not given")
+    if not cf.rigid:
+        raise CaseError("counterface.rigid = false: the FEM models an elastic sphere against a "
+                        "rigid plane (node-to-node contact with the plane); set "
+                        "counterface.rigid = true or use the MDR solver")
+    if ind.rigid:
+        raise CaseError("indenter.rigid = true: the FEM body is the elastic sphere; a rigid "
+                        "indenter has nothing to deform (use the MDR solver)")
+
+
+def solve(case, progress=None) -> RunResult:
+    """Run the FEM superelement model on ``case``; see :mod:`fem`."""
+    t_start = time.perf_counter()
+    check_case(case)
+    sc = reference.scales(case)
+    a0, d0, F0, p0, per_m = sc["a0"], sc["d0"], sc["F0"], sc["p0"], sc["s_hat_per_m"]
+    fem, sl = case.fem, case.sliding
+    order = fem.element_order
+    R = case.indenter.radius
+
+    rc = fem.contact_factor * math.sqrt(2.0) * a0
+    if rc <= a0:
+        raise CaseError(f"key 'fem.contact_factor' = {fem.contact_factor!r}: the candidate "
+                        f"contact arc ends at r = {rc:.4g} m, inside the unworn contact radius "
+                        f"a0 = {a0:.4g} m; must be > {1 / math.sqrt(2):.4f} (≥ 1 to reach the "
+                        "complete-wear radius √2·a0)")
+    edges = meshes.contact_edges_for(fem.contact_nodes, order)
+    spacing = rc / (edges * order)
+    inside = int(a0 / spacing) + 1
+    if inside < MIN_NODES_IN_CONTACT:
+        need = math.ceil((MIN_NODES_IN_CONTACT - 1) * rc / a0) + 1
+        raise CaseError(f"key 'fem.contact_nodes' = {fem.contact_nodes}: only {inside} nodes "
+                        f"would lie inside the unworn contact (a0 = {a0:.4g} m); at least "
+                        f"{MIN_NODES_IN_CONTACT} are needed, i.e. fem.contact_nodes >= {need}")
+    if rc >= R:
+        raise CaseError(f"key 'fem.contact_factor' = {fem.contact_factor!r}: the candidate "
+                        f"arc would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m")
+    params = meshes.SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges,
+                                         growth=GROWTH[order])
+    if progress:
+        progress(0.0, "mesh")
+    t0 = time.perf_counter()
+    sm = meshes.sphere_mesh(params)
+    t_mesh = time.perf_counter() - t0
+    if progress:
+        progress(0.0, "assembly")
+    model = build(sm, case.indenter.youngs_modulus, case.indenter.poisson_ratio, order)
+    model.factorise()
+    if progress:
+        progress(0.0, "compliance")
+    C_all = model.compliance()
+
+    # P2: the node on the axis has ∫φ 2πr ds = 0; it cannot carry a pressure
+    # (the consistent load of a smooth pressure on it is <= 0), so it takes
+    # no part in the contact problem; its pressure and wear are reported as
+    # the even extrapolation v(0) from the next two nodes.
+    first = 1 if order == 2 else 0
+    idx = np.arange(first, len(model.contact))
+    C = C_all[np.ix_(idx, idx)]
+    r_all = model.r
+    z_all = height(case.indenter, r_all, case.table)
+    r, z, area = r_all[idx], z_all[idx], model.area_rowsum[idx]
+    rate = case.wear_rate
+    # wear at r = 0 as a combination of the nodal wear (even extrapolation for P2)
+    center = np.zeros(len(idx))
+    if first:
+        r1, r2 = r_all[1], r_all[2]
+        center[:2] = r2**2 / (r2**2 - r1**2), -r1**2 / (r2**2 - r1**2)
+    else:
+        center[0] = 1.0
+
+    limit = wear.explicit_limit(C, area, rate)
+    limit_hat = limit * per_m
+    if sl.step_hat == "auto":
+        step_hat = 0.5 * limit_hat if sl.scheme == "explicit" else IMPLICIT_AUTO_STEP_HAT
+    else:
+        step_hat = float(sl.step_hat)
+        if sl.scheme == "explicit" and step_hat > limit_hat:
+            raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: beyond the explicit "
+                            f"Euler stability limit of this mesh, {limit_hat:.4g} (node spacing "
+                            f"{model.stats()['contact_spacing']:.3g} m); use a step <= "
+                            f"{limit_hat:.4g} or sliding.scheme = \"implicit\"")
+    step = step_hat / per_m
+    control = case.loading.control
+    value = getattr(case.loading, control)
+    stage_s = [sh / per_m for sh in case.stages.s_hat]
+    distance = sl.distance if sl.until == "distance" else None
+    if distance is not None:
+        stage_s = [s for s in stage_s if s <= distance * (1 + 1e-12)]
+
+    def loop_progress(frac, text):
+        if progress:
+            progress(0.05 + 0.9 * frac, text)
+
+    t0 = time.perf_counter()
+    out = wear.run(C, z, r, area, rate, control=control, value=value, step=step,
+                   scheme=sl.scheme, stage_s=stage_s, until=sl.until, distance=distance,
+                   force_fraction=sl.force_fraction, gap_scale=d0, force_scale=F0,
+                   pressure_scale=p0, center=center, progress=loop_progress)
+    t_loop = time.perf_counter() - t0
+
+    # stages: full arc values (with the axis node for P2)
+    t0 = time.perf_counter()
+    K = len(out.stages)
+    nc = len(r_all)
+    f_nodes = np.zeros((K, nc))
+    w_nodes = np.zeros((K, nc))
+    for k, (_s, fk, wk, _d, _g) in enumerate(out.stages):
+        f_nodes[k, first:] = fk
+        w_nodes[k, first:] = wk
+    p_lumped = np.zeros((K, nc))
+    p_lumped[:, first:] = f_nodes[:, first:] / area
+    if first:
+        r1, r2 = r_all[1], r_all[2]
+        for arr in (p_lumped, w_nodes):
+            arr[:, 0] = (arr[:, 1] * r2**2 - arr[:, 2] * r1**2) / (r2**2 - r1**2)
+    if fem.pressure_recovery == "consistent":
+        # p = M⁻¹ f with the consistent 2πr-weighted boundary mass of the arc
+        p_out = np.linalg.solve(model.boundary_mass, f_nodes.T).T
+    else:
+        p_out = p_lumped
+    profile = z_all[None, :] + w_nodes
+    fields = _fields(model, out, f_nodes, first, p_out, w_nodes)
+    t_fields = time.perf_counter() - t0
+
+    history = dict(s=np.array(out.s), force=np.array(out.force), depth=np.array(out.depth),
+                   contact_radius=np.array(out.contact_radius),
+                   wear_center=np.array(out.wear_center), wear_volume=np.array(out.wear_volume))
+    info = dict(
+        solver="fem", scheme=sl.scheme, step_hat=step_hat, step=step,
+        explicit_limit_step_hat=limit_hat, steps=out.steps,
+        lcp_iterations=out.lcp_iterations, lcp_tolerance=wear.LCP_TOL,
+        max_complementarity_residual=out.max_residual,
+        refactorisations=out.refactorisations, borderings=out.borderings,
+        mesh=dict(model.stats(), growth=params.growth, contact_arc_radius=rc,
+                  cache_file=str(sm.path), generated=sm.generate_seconds > 0),
+        timings=dict(mesh=t_mesh, assembly=model.timings["assembly"],
+                     factorisation=model.timings["factorisation"],
+                     compliance=model.timings["compliance"], wear_loop=t_loop,
+                     fields=t_fields),
+        pressure_recovery=fem.pressure_recovery,
+        axis_node=("P2: the axis node has zero 2πr-weighted area; excluded from the contact "
+                   "problem, its pressure and wear are the even extrapolation from the next "
+                   "two nodes") if first else "P1: included (row-sum area)",
+        tangential_correction=("not modelled: frictionless normal FEM, wear.tangential_correction"
+                               f" = {str(case.wear.tangential_correction).lower()} ignored"),
+        body=("elastic sphere of radius indenter.radius clamped on its flat top face, against "
+              "a rigid plane; the initial gap is the case's profile f(r_i)"),
+    )
+    if progress:
+        progress(1.0, "done")
+    return RunResult(history=history, stage_s=np.array([st[0] for st in out.stages]),
+                     r=r_all.copy(), f=profile, p=p_out,
+                     solve_seconds=time.perf_counter() - t_start, info=info, fields=fields)
+
+
+def _fields(model, out, f_nodes, first, p_out, w_nodes) -> dict:
+    """Mesh, displacement and nodal stress at the stored stages (SI)."""
+    scalar = model.scalar
+    points = scalar.doflocs.T.copy()
+    cells = scalar.element_dofs.T.copy()
+    # counter-clockwise in (r, z); for triangle6 swap vertices 1, 2 and edges 01, 20
+    p = points[cells[:, :3]]
+    signed = ((p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1])
+              - (p[:, 2, 0] - p[:, 0, 0]) * (p[:, 1, 1] - p[:, 0, 1]))
+    flip = signed < 0
+    swap = [0, 2, 1] if cells.shape[1] == 3 else [0, 2, 1, 5, 4, 3]
+    cells[flip] = cells[flip][:, swap]
+    K, Np = len(out.stages), len(points)
+    disp = np.zeros((K, Np, 2))
+    stress = np.zeros((K, Np, 4))
+    for k, (_s, _f, _w, depth, _g) in enumerate(out.stages):
+        u = model.displacement(f_nodes[k])
+        stress[k] = model.nodal_stress(u)
+        disp[k] = u.reshape(-1, 2)
+        disp[k, :, 1] -= depth  # the top face moved down by the approach
+    return dict(points=points, cells=cells.astype(np.int64), displacement=disp, stress=stress,
+                contact_nodes=model.contact.astype(np.int64), contact_pressure=p_out,
+                wear_depth=w_nodes)

@@ -1,0 +1,194 @@
+"""Gap-based Reye–Archard wear on the condensed sphere (pure arrays).
+
+Each contact node i carries a wear depth w_i that widens its gap,
+gap_i = z_i + w_i − d + (C f)_i, and grows as w_i += (k μ/σ0) p_i Δs with the
+nodal pressure p_i = f_i / A_i (A_i: lumped 2πr-weighted area).
+
+* explicit (forward) Euler: p from the contact at the start of the step;
+  stable for Δs < 2 / (rate · λ_max(A⁻¹ C⁻¹)) (:func:`explicit_limit`);
+* implicit (backward) Euler: w_{n+1} = w_n + D f_{n+1}, D = rate Δs / A, so
+  one LCP with compliance C + D per step, no stability limit (physics.md §4).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import linalg
+
+from cases import SolverError
+
+from .contact import PrefixCholesky, solve_lcp
+
+#: relative tolerance on the complementarity residual of every contact solve
+LCP_TOL = 1e-9
+
+
+def explicit_limit(C: np.ndarray, area: np.ndarray, rate: float) -> float:
+    """Largest stable explicit Euler step Δs [m].
+
+    The wear map δw ← (I − rate Δs A⁻¹ S) δw with S = C_AA⁻¹ is stable while
+    rate Δs λ_max(A⁻¹ S) < 2. Over the whole candidate arc λ_max is an upper
+    bound for any active subset (Schur complement), so the limit is safe.
+    λ_max(A⁻¹ C⁻¹) = 1 / λ_min(A^½ C A^½), of order E*/h for node spacing h.
+    """
+    sa = np.sqrt(area)
+    lam_min = linalg.eigvalsh(sa[:, None] * C * sa[None, :], subset_by_index=[0, 0])[0]
+    return 2.0 * lam_min / rate
+
+
+@dataclass
+class WearRun:
+    s: list = field(default_factory=list)
+    force: list = field(default_factory=list)
+    depth: list = field(default_factory=list)
+    contact_radius: list = field(default_factory=list)
+    wear_center: list = field(default_factory=list)
+    wear_volume: list = field(default_factory=list)
+    stages: list = field(default_factory=list)  # (s, f, w, depth, gap)
+    lcp_iterations: int = 0
+    max_residual: float = 0.0
+    refactorisations: int = 0
+    borderings: int = 0
+    steps: int = 0
+
+
+def contact_radius(r: np.ndarray, f: np.ndarray, gap: np.ndarray) -> float:
+    """Contact radius to sub-node accuracy.
+
+    Between the last loaded node i and the next node the edge is found from
+    the gaps of the first two free nodes j, j+1: near a smooth contact edge
+    the gap grows like (r − a)^{3/2}, so gap^{2/3} is extrapolated linearly to
+    zero; the result is clamped to [r_i, r_j].
+    """
+    loaded = np.flatnonzero(f > 0)
+    if len(loaded) == 0:
+        return 0.0
+    i = loaded[-1]
+    j = i + 1
+    if j >= len(r):
+        return float(r[i])
+    if j + 1 >= len(r):
+        return float(r[i])
+    t1, t2 = np.cbrt(max(gap[j], 0.0)) ** 2, np.cbrt(max(gap[j + 1], 0.0)) ** 2
+    if t2 <= t1:
+        return float(r[i])
+    a = r[j] - t1 * (r[j + 1] - r[j]) / (t2 - t1)
+    return float(min(max(a, r[i]), r[j]))
+
+
+def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
+        distance=None, force_fraction=None, gap_scale, force_scale, pressure_scale,
+        center=None, progress=None, max_steps=2_000_000, oscillation_steps=5) -> WearRun:
+    """Slide and wear; return history and the states at the stored stages.
+
+    Parameters
+    ----------
+    C : (n, n) compliance [m/N]; z : (n,) unworn heights [m]; r, area : (n,)
+    radii [m] and lumped areas [m²]; rate : k μ / σ0 [1/Pa]; control : "depth"
+    or "force" with its ``value``; step : Δs [m]; scheme : "explicit" or
+    "implicit"; stage_s : increasing stage distances [m]; until : "distance"
+    (stop exactly at ``distance``) or "force_fraction" (stop at the first step
+    with F < force_fraction · F(0)); center : (n,) weights giving the wear at
+    r = 0 as center @ w (default: node 0).
+    """
+    n = len(z)
+    out = WearRun()
+    w = np.zeros(n)
+    if center is None:
+        center = np.eye(1, n)[0]
+    kw = {control: value}
+    factors: dict[float, PrefixCholesky] = {}
+
+    def factor_for(ds):
+        key = 0.0 if scheme == "explicit" else ds
+        if key not in factors:
+            if len(factors) > 3:
+                factors.pop(next(iter(factors)))
+            M = C if key == 0.0 else C + np.diag(rate * ds / area)
+            factors[key] = PrefixCholesky(M)
+            out.refactorisations += 1
+        return factors[key]
+
+    def contact(zz, fac, active):
+        res = solve_lcp(fac, zz, active=active, gap_scale=gap_scale, force_scale=force_scale,
+                        tol=LCP_TOL, **kw)
+        out.lcp_iterations += res.iterations
+        out.max_residual = max(out.max_residual, res.residual)
+        if res.f[-1] > 0:
+            raise SolverError(
+                f"the contact reached the end of the candidate arc (r = {r[-1]:.4g} m) at "
+                f"s = {s:.4g} m; increase fem.contact_factor")
+        return res
+
+    stages = list(stage_s)
+    s = 0.0
+    res = contact(z, factor_for(0.0), None)
+    F_start = res.f.sum()
+    if not F_start > 0:
+        raise SolverError("the unworn sphere carries no force")
+
+    def record(res):
+        out.s.append(s)
+        out.force.append(res.f.sum())
+        out.depth.append(res.depth)
+        out.contact_radius.append(contact_radius(r, res.f, res.gap))
+        out.wear_center.append(float(center @ w))
+        out.wear_volume.append(float(area @ w))
+        if stages and abs(s - stages[0]) <= 1e-12 * max(abs(s), step):
+            out.stages.append((s, res.f.copy(), w.copy(), res.depth, res.gap.copy()))
+            stages.pop(0)
+
+    record(res)
+    s_end = distance if until == "distance" else math.inf
+    dp_prev = np.zeros(n)
+    p_prev = res.f / area
+    osc = np.zeros(n, dtype=int)
+    while True:
+        if until == "distance" and s >= s_end:
+            break
+        if until == "force_fraction" and out.force[-1] < force_fraction * F_start:
+            break
+        if out.steps >= max_steps:
+            raise SolverError(f"no end after {max_steps} steps (s = {s:.4g} m, "
+                              f"F = {out.force[-1]:.4g} N); the step is too small")
+        target = min(stages[0] if stages else math.inf, s_end)
+        ds = step
+        land = target - s <= step * (1 + 1e-9)
+        if land:
+            ds = target - s
+        fac = factor_for(ds)
+        if scheme == "explicit":
+            w = w + rate * ds * res.f / area
+            res = contact(z + w, fac, res.active)
+        else:
+            res = contact(z + w, fac, res.active)
+            w = w + rate * ds * res.f / area
+            # the gap of the new geometry is the LCP's gap (C + D) f + q
+        s = target if land else s + ds
+        out.steps += 1
+        record(res)
+        if scheme == "explicit":
+            p = res.f / area
+            dp = p - p_prev
+            growing = (dp * dp_prev < 0) & (np.abs(dp) > np.abs(dp_prev)) & \
+                (np.abs(dp) > 1e-3 * pressure_scale)
+            osc = np.where(growing, osc + 1, 0)
+            if np.any(osc >= oscillation_steps):
+                i = int(np.argmax(osc))
+                raise SolverError(
+                    f"explicit wear oscillates: the pressure at r = {r[i]:.4g} m alternates "
+                    f"with growing amplitude for {oscillation_steps} steps (s = {s:.4g} m); "
+                    "reduce sliding.step_hat or use sliding.scheme = \"implicit\"")
+            dp_prev, p_prev = dp, p
+        if progress is not None:
+            if until == "distance":
+                progress(min(s / s_end, 1.0) if s_end > 0 else 1.0, f"s = {s:.3g} m")
+            else:
+                F = max(out.force[-1], 1e-300)
+                progress(min(math.log(F / F_start) / math.log(force_fraction), 1.0),
+                         f"F/F0 = {F / F_start:.3g}")
+    out.borderings = sum(f.borderings for f in factors.values())
+    return out
