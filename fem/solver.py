@@ -161,7 +161,7 @@ def solve(case, progress=None) -> RunResult:
                    wear_center=np.array(out.wear_center), wear_volume=np.array(out.wear_volume))
     info = dict(
         solver="fem", scheme=sl.scheme, step_hat=step_hat, step=step,
-        explicit_limit_step_hat=limit_hat, steps=out.steps,
+        explicit_limit_step_hat=float(limit_hat), steps=out.steps,
         lcp_iterations=out.lcp_iterations, lcp_tolerance=wear.LCP_TOL,
         max_complementarity_residual=out.max_residual,
         refactorisations=out.refactorisations, borderings=out.borderings,
