@@ -28,6 +28,7 @@ import time
 import tomllib
 import traceback
 import uuid
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -177,7 +178,11 @@ class _Client:
         n = workers or max(1, min(os.cpu_count() or 1, n_tasks))
         # a task that kills its worker (out of memory, crash) is reported at once,
         # not retried on the next worker
-        with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        with dask.config.set({"distributed.scheduler.allowed-failures": 0}), \
+                warnings.catch_warnings():
+            # without a dashboard the scheduler still serves /health on 127.0.0.1,
+            # port 8787 or, when taken, another one: nothing to warn about
+            warnings.filterwarnings("ignore", message="Port .* is already in use")
             self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
                                         host="127.0.0.1", dashboard_address=None,
                                         silence_logs=40)
@@ -237,7 +242,7 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
     ``runio.write_run``) as soon as its result arrives, so an interrupted study
     keeps the levels already done.
     """
-    from distributed import as_completed
+    from distributed import KilledWorker, as_completed
 
     source = str(Path(source).absolute())
     raw = tomllib.loads(Path(source).read_text(encoding="utf-8"))
@@ -253,18 +258,29 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
     try:
         client = conn.client
         client.subscribe_topic(topic, reporter.event)
-        futures = {}
-        for t in tasks:
-            fut = client.submit(execute, raw, source, tuple(base_overrides) + t.overrides,
-                                t.solver, t.name, topic, solve, pure=False,
-                                key=f"{t.name}-{uuid.uuid4().hex[:8]}")
-            futures[fut] = t
-        for fut in as_completed(futures):
+        pending, futures, running = list(tasks), {}, as_completed()
+
+        def fill():
+            # no more tasks out than worker threads: a task queued on a worker
+            # that dies would be lost with it
+            slots = max(1, sum(client.nthreads().values()))
+            while pending and running.count() < slots:
+                t = pending.pop(0)
+                fut = client.submit(execute, raw, source, tuple(base_overrides) + t.overrides,
+                                    t.solver, t.name, topic, solve, pure=False,
+                                    key=f"{t.name}-{uuid.uuid4().hex[:8]}")
+                futures[fut] = t
+                running.add(fut)
+        fill()
+        for fut in running:
             t = futures[fut]
             try:
                 rec = fut.result()
                 outcome = Outcome(task=t, **rec)
-            except Exception as exc:  # the worker died (KilledWorker) or was lost
+            except KilledWorker:
+                outcome = Outcome(task=t, ok=False, message="its worker died while running it "
+                                  "(a crash, or memory beyond the worker's limit)")
+            except Exception as exc:  # e.g. the scheduler was lost
                 outcome = Outcome(task=t, ok=False, message=f"{type(exc).__name__}: {exc}")
             fut.release()
             if outcome.ok:
@@ -280,6 +296,7 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
                     outcome.ok, outcome.message = False, f"writing the run failed: {exc}"
             outcomes[t.name] = outcome
             reporter.finished(outcome)
+            fill()
         client.unsubscribe_topic(topic)
     finally:
         reporter.close()

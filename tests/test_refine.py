@@ -235,3 +235,24 @@ def test_mdr_study_through_the_command_line(cluster, tmp_path):
         assert summary["observed_order"][m]["order"] > 0.5
     for name in ("fig4_profiles.png", "fig4_force.png", "convergence.png", "cost.png"):
         assert (out / name).is_file()
+
+
+def crashing_solve(case, solver, progress=None):
+    """fake_solve, except that the worker process dies at N = 16."""
+    import os
+    if case.mdr.elements == 16:
+        os._exit(3)
+    return fake_solve(case, solver, progress)
+
+
+def test_a_dead_worker_fails_only_its_level(tmp_path):
+    from comparisons.distributed import Task, run_cases
+    # the embedded cluster (no scheduler given): loopback, one task per worker
+    tasks = [Task(f"mdr-elements-{n}", "mdr", (f"mdr.elements={n}",)) for n in (8, 16, 32, 64)]
+    outcomes = run_cases(cases.shipped("paper"), [], tasks, tmp_path, workers=2, quiet=True,
+                         solve=crashing_solve)
+    status = {o.task.name: o for o in outcomes}
+    assert "worker died" in status["mdr-elements-16"].message
+    for n in (8, 32, 64):
+        assert status[f"mdr-elements-{n}"].ok
+        assert Run(tmp_path / f"mdr-elements-{n}").case.mdr.elements == n

@@ -92,8 +92,10 @@ def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolera
     tasks = [Task(lv.name, solver, lv.overrides) for lv in lvls]
     out = Path(out)
     prov = provenance()
-    outcomes = run_cases(case_path, overrides, tasks, out, scheduler=scheduler, workers=workers,
-                         quiet=quiet, solve=solve, extra_meta=dict(study=f"refine-{solver}"))
+    # finest (longest) levels first, so that the short ones fill in around them
+    outcomes = run_cases(case_path, overrides, tasks[::-1], out, scheduler=scheduler,
+                         workers=workers, quiet=quiet, solve=solve,
+                         extra_meta=dict(study=f"refine-{solver}"))[::-1]
     summary = summarize(case, solver, lvls, outcomes, varied, tolerance, stage)
     summary.update(case=str(case_path), overrides=list(overrides), provenance=prov)
     record_study(out, f"refine-{solver}", case, overrides, prov)
