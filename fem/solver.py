@@ -41,16 +41,11 @@ def check_case(case) -> None:
                         "indenter has nothing to deform (use the MDR solver)")
 
 
-def solve(case, progress=None) -> RunResult:
-    """Run the FEM superelement model on ``case``; see :mod:`fem`."""
-    t_start = time.perf_counter()
+def mesh_parameters(case) -> meshes.SphereMeshParameters:
+    """The mesh of a case, after checking that the FEM can represent it."""
     check_case(case)
-    sc = reference.scales(case)
-    a0, d0, F0, p0, per_m = sc["a0"], sc["d0"], sc["F0"], sc["p0"], sc["s_hat_per_m"]
-    fem, sl = case.fem, case.sliding
-    order = fem.element_order
-    R = case.indenter.radius
-
+    fem, order, R = case.fem, case.fem.element_order, case.indenter.radius
+    a0 = reference.scales(case)["a0"]
     rc = fem.contact_factor * math.sqrt(2.0) * a0
     if rc <= a0:
         raise CaseError(f"key 'fem.contact_factor' = {fem.contact_factor!r}: the candidate "
@@ -68,8 +63,19 @@ def solve(case, progress=None) -> RunResult:
     if rc >= R:
         raise CaseError(f"key 'fem.contact_factor' = {fem.contact_factor!r}: the candidate "
                         f"arc would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m")
-    params = meshes.SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges,
-                                         growth=GROWTH[order])
+    return meshes.SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges,
+                                       growth=GROWTH[order])
+
+
+def solve(case, progress=None) -> RunResult:
+    """Run the FEM superelement model on ``case``; see :mod:`fem`."""
+    t_start = time.perf_counter()
+    params = mesh_parameters(case)
+    sc = reference.scales(case)
+    d0, F0, p0, per_m = sc["d0"], sc["F0"], sc["p0"], sc["s_hat_per_m"]
+    fem, sl = case.fem, case.sliding
+    order = fem.element_order
+    rc = params.contact_radius
     if progress:
         progress(0.0, "mesh")
     t0 = time.perf_counter()

@@ -92,8 +92,8 @@ def cache_dir() -> Path:
     return base
 
 
-def _generate(params: SphereMeshParameters, path: Path) -> None:
-    """Mesh with gmsh (headless) and write ``path`` (.msh 4.1)."""
+def _generate(params: SphereMeshParameters, msh_path: Path) -> dict:
+    """Mesh with gmsh (headless), write ``msh_path`` (.msh 4.1), return the arrays."""
     import gmsh
 
     R, rc, n = params.radius, params.contact_radius, params.contact_edges
@@ -106,7 +106,6 @@ def _generate(params: SphereMeshParameters, path: Path) -> None:
         gmsh.initialize(["wearcheck", "-nopopup"], readConfigFiles=False, interruptible=False)
         try:
             gmsh.option.setNumber("General.Terminal", 0)
-            gmsh.option.setNumber("General.Verbosity", 2)
             gmsh.model.add("sphere")
             geo = gmsh.model.geo
             zc = R - math.sqrt(R * R - rc * rc)
@@ -122,7 +121,8 @@ def _generate(params: SphereMeshParameters, path: Path) -> None:
             body = geo.addPlaneSurface([loop])
             geo.mesh.setTransfiniteCurve(contact, n + 1)
             geo.synchronize()
-            for name, tag in zip(GROUPS, (axis, top, surface, contact)):
+            curves = dict(zip(GROUPS, (axis, top, surface, contact)))
+            for name, tag in curves.items():
                 gmsh.model.addPhysicalGroup(1, [tag], name=name)
             gmsh.model.addPhysicalGroup(2, [body], name="sphere")
 
@@ -144,70 +144,93 @@ def _generate(params: SphereMeshParameters, path: Path) -> None:
             gmsh.option.setNumber("Mesh.ElementOrder", 1)
             gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
             gmsh.model.mesh.generate(2)
-            gmsh.write(str(path))
+            gmsh.write(str(msh_path))
+
+            tags, coords, _ = gmsh.model.mesh.getNodes()
+            index = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
+            index[tags.astype(np.int64)] = np.arange(len(tags))
+            points = coords.reshape(-1, 3)[:, :2]
+            types, _, nodes = gmsh.model.mesh.getElements(2, body)
+            if list(types) != [2]:
+                raise SolverError(f"gmsh produced element types {list(types)}, expected "
+                                  "3-node triangles only")
+            triangles = index[nodes[0].astype(np.int64)].reshape(-1, 3)
+            lines = {}
+            for name, tag in curves.items():
+                types, _, nodes = gmsh.model.mesh.getElements(1, tag)
+                lines[name] = index[nodes[0].astype(np.int64)].reshape(-1, 2)
+        except SolverError:
+            raise
         except Exception as exc:  # gmsh raises plain Exception with its log text
             raise SolverError(f"gmsh failed to mesh the sphere ({asdict(params)}): {exc}") from None
         finally:
             gmsh.finalize()
-
-
-def _read(path: Path, params: SphereMeshParameters) -> SphereMesh:
-    import meshio
-
-    try:
-        m = meshio.read(path)
-    except Exception as exc:
-        raise SolverError(f"cannot read mesh file '{path}': {exc}") from None
-    names = {tag: name for name, (tag, _dim) in
-             ((k, tuple(v)) for k, v in m.field_data.items())}
-    tri = np.concatenate([c.data for c in m.cells if c.type == "triangle"])
-    lines: dict[str, list] = {g: [] for g in GROUPS}
-    for block, phys in zip(m.cells, m.cell_data["gmsh:physical"]):
-        if block.type != "line":
-            continue
-        for tag in np.unique(phys):
-            name = names.get(int(tag))
-            if name in lines:
-                lines[name].append(block.data[phys == tag])
     # drop nodes used by no triangle (gmsh keeps none, but be safe) and renumber
-    used = np.unique(tri)
-    renum = -np.ones(len(m.points), dtype=np.int64)
+    used = np.unique(triangles)
+    renum = -np.ones(len(points), dtype=np.int64)
     renum[used] = np.arange(len(used))
-    out_lines = {}
-    for name, blocks in lines.items():
-        if not blocks:
-            raise SolverError(f"mesh file '{path}' lacks the physical group '{name}'")
-        out_lines[name] = renum[np.concatenate(blocks)]
-    return SphereMesh(points=np.ascontiguousarray(m.points[used, :2]), triangles=renum[tri],
-                      lines=out_lines, parameters=params, path=path)
+    arrays = dict(points=np.ascontiguousarray(points[used]), triangles=renum[triangles])
+    for name, pairs in lines.items():
+        if len(pairs) == 0 or np.any(renum[pairs] < 0):
+            raise SolverError(f"gmsh mesh lacks a proper boundary group '{name}'")
+        arrays[f"line_{name}"] = renum[pairs]
+    return arrays
+
+
+def _atomic_save(path: Path, write) -> None:
+    """Write ``path`` through a temporary file in its directory, then rename."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        write(Path(tmp))
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+
+
+def _from_arrays(arrays, params, path) -> SphereMesh:
+    return SphereMesh(points=arrays["points"], triangles=arrays["triangles"],
+                      lines={g: arrays[f"line_{g}"] for g in GROUPS}, parameters=params,
+                      path=path)
 
 
 def sphere_mesh(params: SphereMeshParameters, use_cache: bool = True) -> SphereMesh:
-    """The mesh for ``params``: read from the cache, or generated and cached."""
+    """The mesh for ``params``: read from the cache, or generated and cached.
+
+    The cache holds ``sphere-<hash>.msh`` (gmsh's file, for users and
+    ``wearcheck mesh``) and ``sphere-<hash>.npz`` (the arrays, read back
+    without meshio); the .npz is written last, so its presence marks a
+    complete entry.
+    """
     import time
 
     params.check()
     directory = cache_dir()
-    path = directory / f"sphere-{params.key()}.msh"
-    if use_cache and path.is_file():
-        return _read(path, params)
+    stem = f"sphere-{params.key()}"
+    msh, npz = directory / f"{stem}.msh", directory / f"{stem}.npz"
+    if use_cache and npz.is_file() and msh.is_file():
+        try:
+            with np.load(npz) as z:
+                return _from_arrays({k: z[k] for k in z.files}, params, msh)
+        except (OSError, ValueError, KeyError):
+            pass  # a damaged entry: regenerate it
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise SolverError(f"cannot create the mesh cache directory '{directory}' "
                           f"(set WEARCHECK_CACHE): {exc}") from None
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=".msh", dir=directory)
-    os.close(fd)
-    try:
-        t0 = time.perf_counter()
-        _generate(params, Path(tmp))
-        seconds = time.perf_counter() - t0
-        mesh = _read(Path(tmp), params)
-        os.replace(tmp, path)
-    finally:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-    mesh.path = path
+    t0 = time.perf_counter()
+    arrays = {}
+
+    def write_msh(tmp):
+        arrays.update(_generate(params, tmp))
+
+    _atomic_save(msh, write_msh)
+    seconds = time.perf_counter() - t0
+    _atomic_save(npz, lambda tmp: np.savez(tmp, **arrays))
+    mesh = _from_arrays(arrays, params, msh)
     mesh.generate_seconds = seconds
     return mesh
 
@@ -223,25 +246,5 @@ def contact_edges_for(contact_nodes: int, element_order: int) -> int:
     return max(1, contact_nodes - 1)
 
 
-def parameters_for_case(case) -> SphereMeshParameters:
-    """Mesh parameters of a case: the sphere of indenter.radius, the arc to
-    fem.contact_factor·√2·a0 with fem.contact_nodes nodes."""
-    from cases import reference
-
-    R = case.indenter.radius
-    if R is None:
-        raise CaseError(f"the FEM needs 'indenter.radius' (the radius of the FEM sphere) for "
-                        f"profile \"{case.indenter.profile}\"; it is not given")
-    a0 = reference.scales(case)["a0"]
-    rc = case.fem.contact_factor * math.sqrt(2.0) * a0
-    if rc >= R:
-        raise CaseError(f"key 'fem.contact_factor' = {case.fem.contact_factor!r}: the candidate "
-                        f"contact arc would reach r = {rc:.4g} m, beyond the sphere's radius "
-                        f"indenter.radius = {R:.4g} m")
-    return SphereMeshParameters(radius=R, contact_radius=rc,
-                                contact_edges=contact_edges_for(case.fem.contact_nodes,
-                                                                case.fem.element_order))
-
-
-__all__ = ["SphereMesh", "SphereMeshParameters", "sphere_mesh", "parameters_for_case",
-           "contact_edges_for", "cache_dir", "GROUPS"]
+__all__ = ["SphereMesh", "SphereMeshParameters", "sphere_mesh", "contact_edges_for", "cache_dir",
+           "GROUPS"]

@@ -1,0 +1,53 @@
+"""``wearcheck mesh CASE.toml [--out FILE.msh]``: the FEM sphere mesh of a case."""
+
+from __future__ import annotations
+
+import shutil
+import sys
+from pathlib import Path
+
+from ._common import add_case_arguments, load_case
+
+
+def add_parser(sub):
+    p = sub.add_parser("mesh", help="generate (or fetch from the cache) the FEM mesh of a case",
+                       description=__doc__)
+    add_case_arguments(p)
+    p.add_argument("--out", type=Path, default=None, metavar="FILE.msh",
+                   help="also copy the gmsh .msh file here")
+    return p
+
+
+def main(args) -> int:
+    import meshes
+    from cases import reference
+
+    from fem.solver import mesh_parameters
+
+    case = load_case(args)
+    params = mesh_parameters(case)
+    mesh = meshes.sphere_mesh(params)
+    order = case.fem.element_order
+    edges = params.contact_edges
+    contact_nodes = edges * order + 1
+    nodes = len(mesh.points)
+    if order == 2:
+        # every triangle edge carries a midside node: N_v + N_edges nodes
+        n_edges = (3 * len(mesh.triangles) + sum(len(v) for k, v in mesh.lines.items())) // 2
+        nodes += n_edges
+    if args.out is not None:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = out.with_name(f".{out.name}.partial")
+        shutil.copyfile(mesh.path, tmp)
+        tmp.replace(out)
+    a0 = reference.scales(case)["a0"]
+    print(f"mesh: {len(mesh.points)} vertices, {len(mesh.triangles)} triangles; "
+          f"order {order}: {nodes} nodes, {2 * nodes} DOFs; {contact_nodes} contact nodes on "
+          f"0 <= r <= {params.contact_radius:.4g} m ({params.contact_radius / a0:.3g} a0, "
+          f"spacing {params.contact_radius / (edges * order):.3g} m)")
+    print(f"file: {args.out if args.out is not None else mesh.path}"
+          + ("" if mesh.generate_seconds else " (from the cache)"))
+    if not args.quiet and mesh.generate_seconds:
+        print(f"gmsh: {mesh.generate_seconds:.3g} s", file=sys.stderr)
+    return 0
