@@ -39,11 +39,12 @@ def test_groups_and_contact_arc():
     assert theta[0] == 0 and math.isclose(R * math.sin(theta[-1]), 1.8e-4, rel_tol=1e-12)
     assert np.allclose(np.diff(theta), theta[-1] / 20, rtol=1e-9)
     # the triangles cover the quarter disc: Σ areas = πR²/4 minus the chord
-    # segments of the polygonal arc (relative (h/R)², < 1e-3 with size R/10)
+    # segments of the polygonal arc: relative θ²/6 for chords of angle θ;
+    # the far arc has elements of R/10, θ = 0.1: 1.7e-3
     t = m.points[m.triangles]
     e1, e2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
     area = np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum() / 2
-    assert abs(area / (math.pi * R**2 / 4) - 1) < 1e-3
+    assert abs(area / (math.pi * R**2 / 4) - 1) < 2e-3
 
 
 def test_grading_keeps_the_mesh_small():
@@ -71,11 +72,11 @@ def test_gmsh_failure_is_a_clear_error(monkeypatch):
     def boom(*args, **kwargs):
         raise Exception("simulated meshing failure")
 
-    monkeypatch.setattr(gmsh.model.mesh, "generate", boom)
-    with pytest.raises(SolverError, match="gmsh failed.*simulated meshing failure"):
-        meshes.sphere_mesh(_params(12))
+    with monkeypatch.context() as mp:
+        mp.setattr(gmsh.model.mesh, "generate", boom)
+        with pytest.raises(SolverError, match="gmsh failed.*simulated meshing failure"):
+            meshes.sphere_mesh(_params(12))
     assert not gmsh.isInitialized()  # finalised cleanly
-    monkeypatch.undo()
     assert meshes.sphere_mesh(_params(12)).generate_seconds > 0  # nothing half-cached
 
 
