@@ -67,10 +67,15 @@ def _float_list(text):
 def main(args) -> int:
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-refine"
-    summary = refine(args.case, args.overrides, args.solver, out, levels=args.levels,
-                     steps=args.steps, tolerance=args.tolerance, stage=args.stage,
-                     scheduler=args.scheduler, workers=args.workers, quiet=args.quiet,
-                     case=case)
+    try:
+        summary = refine(args.case, args.overrides, args.solver, out, levels=args.levels,
+                         steps=args.steps, tolerance=args.tolerance, stage=args.stage,
+                         scheduler=args.scheduler, workers=args.workers, quiet=args.quiet,
+                         case=case)
+    except KeyboardInterrupt:
+        print(f"wearcheck refine: interrupted; the levels finished are in {out}, "
+              "no summary was written", file=sys.stderr)
+        return 130
     print(table(summary))
     return 0 if all(lv["status"] == "ok" for lv in summary["levels"]) else 1
 
@@ -152,12 +157,15 @@ def summarize(case, solver, lvls, outcomes, varied, tolerance, stage) -> dict:
     if len(ok) >= 3:
         three = ok[-3:]
         h = [rows[i]["h"] for i in three]
-        q = [rows[i]["stage_force"][stage] for i in three]
-        p, q_star = rf.richardson(h, q)
-        summary["richardson"] = dict(
-            quantity=f"F/F0 at stage ŝ = {stage:g}", levels=[rows[i]["name"] for i in three],
-            values=q, order=p, estimate=q_star,
-            finest_error=abs(q[-1] - q_star) if math.isfinite(q_star) else math.nan)
+        by_stage = {}
+        for st in stages:
+            q = [rows[i]["stage_force"][st] for i in three]
+            p, q_star = rf.richardson(h, q)
+            by_stage[st] = dict(values=q, order=p, estimate=q_star,
+                                finest_error=abs(q[-1] - q_star))
+        summary["richardson"] = dict(quantity=f"F/F0 at stage ŝ = {stage:g}",
+                                     levels=[rows[i]["name"] for i in three],
+                                     **by_stage[stage], by_stage=by_stage)
     worst = [max(r["differences"]["profile"], r["differences"]["force"]) for r in rows]
     i = rf.coarsest_converged(worst, tolerance)
     summary["converged"] = dict(
@@ -228,9 +236,12 @@ def table(summary: dict) -> str:
                      f"(difference ∝ ({per})^p, fit over {fit['levels']} levels)")
     rich = summary["richardson"]
     if rich:
-        lines.append(f"Richardson, {rich['quantity']}: order {_fmt(rich['order'], '.2f')}, "
-                     f"estimate {_fmt(rich['estimate'], '.6g')}, finest level off by "
-                     f"{_fmt(rich['finest_error'], '.2e')}")
+        lines.append(f"Richardson ({', '.join(rich['levels'])}), F/F0 at each stage ŝ "
+                     "(NaN: not monotone in the three levels):")
+        for st, r in rich["by_stage"].items():
+            lines.append(f"  ŝ = {float(st):<6g} order {_fmt(r['order'], '.2f'):>5}, estimate "
+                         f"{_fmt(r['estimate'], '.7g'):>10}, finest level off by "
+                         f"{_fmt(r['finest_error'], '.2e')}")
     conv = summary["converged"]
     if conv:
         lines.append(f"coarsest level converged within {conv['tolerance']:g} (profile/d0, "

@@ -41,8 +41,13 @@ def add_parser(sub):
 def main(args) -> int:
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-sweep"
-    rows = sweep(args.case, args.overrides, args.vary, args.solver, out,
-                 scheduler=args.scheduler, workers=args.workers, quiet=args.quiet, case=case)
+    try:
+        rows = sweep(args.case, args.overrides, args.vary, args.solver, out,
+                     scheduler=args.scheduler, workers=args.workers, quiet=args.quiet, case=case)
+    except KeyboardInterrupt:
+        print(f"wearcheck sweep: interrupted; the runs finished are in {out}, "
+              "no sweep.csv was written", file=sys.stderr)
+        return 130
     print(Path(out) / "sweep.csv")
     failed = [r for r in rows if r["status"] != "ok"]
     if failed and not args.quiet:
