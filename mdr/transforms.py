@@ -67,7 +67,7 @@ def lower(kernel: np.ndarray, x: np.ndarray, key=None) -> np.ndarray:
         spec = _fft.rfft(kernel[:n], nfft)
     else:
         # any truncation between n and nfft/2 terms gives the same leading outputs
-        spec = _spectrum(kernel, nfft, key)
+        spec = _spectrum(kernel, nfft, (key, len(kernel)))
     return _fft.irfft(spec * _fft.rfft(x, nfft), nfft)[:n]
 
 
@@ -78,7 +78,7 @@ def upper(kernel: np.ndarray, x: np.ndarray, key=None) -> np.ndarray:
 
 # -- kernels -------------------------------------------------------------------
 
-@lru_cache(maxsize=8)
+@lru_cache(maxsize=4)
 def abel_kernel(n: int) -> np.ndarray:
     """c[k] = sqrt(k+1) - sqrt(k): (1/(2 sqrt Δt)) ∫ over segment k of dt/sqrt(t) - like weights.
 
@@ -91,7 +91,7 @@ def abel_kernel(n: int) -> np.ndarray:
     return c
 
 
-@lru_cache(maxsize=8)
+@lru_cache(maxsize=4)
 def abel_kernel_inverse(n: int) -> np.ndarray:
     """Coefficients b of the power series 1/c(z), c(z) = Σ c[k] z^k (c[0] = 1).
 
@@ -143,6 +143,11 @@ def _force_weights(n: int) -> np.ndarray:
     return w
 
 
+def _kernel(fn, n: int) -> np.ndarray:
+    """A cached kernel with at least n terms (lengths rounded up to powers of 2)."""
+    return fn(1 << max(int(n - 1).bit_length(), 6))
+
+
 # -- the transforms ----------------------------------------------------------
 
 def to_1d(f: np.ndarray) -> np.ndarray:
@@ -155,7 +160,7 @@ def to_1d(f: np.ndarray) -> np.ndarray:
     n = len(f)
     g = np.full(n, f[0])
     if n > 1:
-        s = lower(abel_kernel(n - 1), np.diff(f), key="c")
+        s = lower(_kernel(abel_kernel, n - 1), np.diff(f), key="c")
         g[1:] += 2.0 * np.sqrt(np.arange(1, n)) * s
     return g
 
@@ -171,7 +176,7 @@ def from_1d_exact(g: np.ndarray) -> np.ndarray:
     f = np.full(n, g[0])
     if n > 1:
         s = (g[1:] - g[0]) / (2.0 * np.sqrt(np.arange(1, n)))
-        df = lower(abel_kernel_inverse(n - 1), s, key="b")
+        df = lower(_kernel(abel_kernel_inverse, n - 1), s, key="b")
         f[1:] += np.cumsum(df)
     return f
 
@@ -193,7 +198,7 @@ def to_3d(g: np.ndarray) -> np.ndarray:
     i = np.arange(1, n, dtype=float)
     phi = np.arcsin(1.0 / np.sqrt(i))
     first = g[0] * 2.0 * phi + (g[1] - g[0]) * (i * phi - np.sqrt(i - 1.0))
-    a, b = _eq3_kernels(n - 1)
+    a, b = _eq3_kernels(1 << max(int(n - 2).bit_length(), 6))
     h = np.zeros(n)
     h[1:] = g[1:] / np.sqrt(np.arange(1, n))
     rest = lower(a, h, key="eq3a")[1:]
@@ -215,7 +220,7 @@ def pressure(q: np.ndarray, dt: float) -> np.ndarray:
     n = len(q)
     p = np.zeros(n)
     if n > 1:
-        p[:-1] = upper(abel_kernel(n - 1), np.diff(q), key="c")
+        p[:-1] = upper(_kernel(abel_kernel, n - 1), np.diff(q), key="c")
         p[:-1] *= -2.0 / (math.pi * math.sqrt(dt))
     return p
 
@@ -227,7 +232,7 @@ def line_load(p: np.ndarray, dt: float) -> np.ndarray:
     triangular, so the contact set's block is inverted on its own).
     """
     p = np.asarray(p, dtype=float)
-    dq = upper(abel_kernel_inverse(len(p)), p, key="b") * (-0.5 * math.pi * math.sqrt(dt))
+    dq = upper(_kernel(abel_kernel_inverse, len(p)), p, key="b") * (-0.5 * math.pi * math.sqrt(dt))
     return -np.cumsum(dq[::-1])[::-1]
 
 
@@ -247,3 +252,23 @@ def volume(w: np.ndarray, dt: float) -> float:
     """∫ 2π r w dr = π ∫ w dt, exact for w linear in t."""
     w = np.asarray(w, dtype=float)
     return float(math.pi * dt * (w.sum() - 0.5 * (w[0] + w[-1])))
+
+
+def compliance_matrix(n: int, dt: float, E_star: float) -> np.ndarray:
+    """Dense n×n matrix of p -> T⁻¹[P⁻¹ p]/E*: 3D surface displacement from pressure.
+
+    The exact composition of :func:`line_load` and :func:`from_1d_exact` on
+    nodes 0..n-1 (contact ending at node n), built from their Toeplitz
+    kernels. Its leading blocks are the same map on smaller contact sets.
+    """
+    from scipy.linalg import toeplitz
+
+    B = np.cumsum(_kernel(abel_kernel_inverse, n)[:n])          # kernel of both triangular maps
+    Q = toeplitz(np.r_[B[0], np.zeros(n - 1)], B) * (0.5 * math.pi * math.sqrt(dt))
+    Tinv = np.zeros((n, n))
+    Tinv[0, 0] = 1.0
+    if n > 1:
+        d = 1.0 / (2.0 * np.sqrt(np.arange(1, n)))
+        Tinv[1:, 1:] = toeplitz(B[:n - 1], np.r_[B[0], np.zeros(n - 2)]) * d
+        Tinv[1:, 0] = 1.0 - Tinv[1:, 1:].sum(axis=1)
+    return (Tinv @ Q) / E_star

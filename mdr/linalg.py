@@ -1,0 +1,112 @@
+"""Linear algebra for the implicit wear step: nested-block LU and GMRES.
+
+The implicit step's matrix on the contact nodes 0..n-1 is the leading n×n
+block of one matrix of the whole grid, because its factors T⁻¹ (lower) and
+P⁻¹ (upper) are triangular. An LU factorisation without pivoting has the
+same nesting: the factors of a leading block are the leading blocks of the
+factors. So one factorisation serves every contact set, and stored in packed
+triangular form the leading block is a prefix of the storage (BLAS tpsv).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import lu_factor, solve_triangular
+from scipy.linalg.blas import dtpsv
+
+from cases import SolverError
+
+
+def lu_nopivot(M: np.ndarray, block: int = 64) -> np.ndarray:
+    """In-place blocked LU without pivoting; returns L (unit, strictly lower) and U in one array."""
+    M = np.array(M, dtype=float, order="C")
+    n = len(M)
+    for k0 in range(0, n, block):
+        k1 = min(k0 + block, n)
+        for k in range(k0, k1):
+            piv = M[k, k]
+            if not abs(piv) > 0.0:
+                raise SolverError("implicit wear step: zero pivot in the contact matrix")
+            M[k + 1:, k] /= piv
+            if k + 1 < k1:
+                M[k + 1:, k + 1:k1] -= np.outer(M[k + 1:, k], M[k, k + 1:k1])
+        if k1 < n:
+            M[k0:k1, k1:] = solve_triangular(M[k0:k1, k0:k1], M[k0:k1, k1:], lower=True,
+                                             unit_diagonal=True, check_finite=False)
+            M[k1:, k1:] -= M[k1:, k0:k1] @ M[k0:k1, k1:]
+    return M
+
+
+class NestedLU:
+    """LU of a matrix whose leading blocks are solved as often as the whole.
+
+    ``solve(b)`` solves the leading len(b)×len(b) block.
+    """
+
+    def __init__(self, M: np.ndarray):
+        # LAPACK's partial pivoting leaves these matrices (a compliance plus a
+        # positive diagonal) unpermuted in practice; use it when it does
+        lu, piv = lu_factor(M, check_finite=False)
+        if np.any(piv != np.arange(len(piv))):
+            lu = lu_nopivot(M)
+        n = len(lu)
+        r, c = np.tril_indices(n)           # ordered by r, then c
+        # column-major packed upper storage of U and of Lᵀ: column j holds rows 0..j
+        self.U = np.ascontiguousarray(lu[c, r])
+        self.Lt = np.ascontiguousarray(lu[r, c])
+        self.Lt[np.cumsum(np.arange(1, n + 1)) - 1] = 1.0
+        self.n = n
+        if not (np.all(np.isfinite(self.U)) and np.all(np.isfinite(self.Lt))):
+            raise SolverError("implicit wear step: the contact matrix factorisation failed")
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        n = len(b)
+        k = n * (n + 1) // 2
+        y = dtpsv(n, self.Lt[:k], b, lower=0, trans=1, diag=1)
+        return dtpsv(n, self.U[:k], y, lower=0)
+
+
+def gmres(matvec, precond, b, x0=None, rtol=1e-11, restart=30, maxiter=10, stats=None):
+    """Right-preconditioned restarted GMRES (modified Gram–Schmidt).
+
+    Returns x with |b - A x| <= rtol |b|; raises SolverError otherwise.
+    """
+    bnorm = np.linalg.norm(b)
+    if bnorm == 0.0:
+        return np.zeros_like(b)
+    x = precond(b) if x0 is None else x0.copy()
+    its = 0
+    for _ in range(maxiter):
+        r = b - matvec(x)
+        beta = np.linalg.norm(r)
+        if beta <= rtol * bnorm:
+            break
+        V = np.empty((restart + 1, len(b)))
+        Z = np.empty((restart, len(b)))
+        H = np.zeros((restart + 1, restart))
+        V[0] = r / beta
+        e1 = np.zeros(restart + 1)
+        e1[0] = beta
+        y = None
+        for j in range(restart):
+            its += 1
+            Z[j] = precond(V[j])
+            w = matvec(Z[j])
+            for i in range(j + 1):
+                H[i, j] = w @ V[i]
+                w -= H[i, j] * V[i]
+            H[j + 1, j] = np.linalg.norm(w)
+            y, *_ = np.linalg.lstsq(H[:j + 2, :j + 1], e1[:j + 2], rcond=None)
+            res = np.linalg.norm(e1[:j + 2] - H[:j + 2, :j + 1] @ y)
+            if res <= rtol * bnorm or H[j + 1, j] == 0.0:
+                break
+            V[j + 1] = w / H[j + 1, j]
+        x = x + y @ Z[:len(y)]
+    else:
+        r = b - matvec(x)
+        if np.linalg.norm(r) > rtol * bnorm * 10:
+            raise SolverError(f"implicit wear step: GMRES did not converge "
+                              f"(residual {np.linalg.norm(r) / bnorm:.2e} after {its} iterations)")
+    if stats is not None:
+        stats["gmres_iterations"] = stats.get("gmres_iterations", 0) + its
+    return x

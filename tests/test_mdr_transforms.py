@@ -1,0 +1,121 @@
+"""MDR transforms (paper Eqs. 2, 3, 12, 13) against closed forms."""
+
+import math
+
+import numpy as np
+import pytest
+
+from cases import reference
+from mdr import transforms
+
+R = 0.01
+L = 2e-4
+
+
+def test_paraboloid_to_1d_is_exact():
+    # f = r²/2R is linear in t = r², which the segment-exact Eq. 2 integrates
+    # exactly: only round-off remains
+    x = transforms.grid(300, L)
+    g = transforms.to_1d(x**2 / (2 * R))
+    np.testing.assert_allclose(g, x**2 / R, rtol=1e-12, atol=1e-12 * L**2 / R)
+
+
+def test_tip_offset_is_kept():
+    # physics.md §2: a worn tip f(0) != 0 shifts g by the same constant
+    x = transforms.grid(200, L)
+    f = x**2 / (2 * R)
+    offset = 3e-7
+    np.testing.assert_allclose(transforms.to_1d(f + offset), transforms.to_1d(f) + offset,
+                               rtol=0, atol=1e-15)
+
+
+def test_cone_pair_converges_at_rate_one_half():
+    # r tanθ <-> (π/2)|x| tanθ. Linear interpolation in t of f ~ sqrt(t)
+    # misses the cone's tip on the first segment by O(sqrt(Δt)) = O(N^-1/2),
+    # and the Abel transforms carry that error everywhere: both directions
+    # converge at rate 1/2 (measured 0.50), with max errors 1.1 % (Eq. 2)
+    # and 0.54 % (Eq. 3) of the cone height at N = 1600.
+    theta = 0.2
+    Ns = np.array([200, 400, 800, 1600])
+    err2, err3 = [], []
+    for N in Ns:
+        x = transforms.grid(N, L)
+        f, g = x * math.tan(theta), 0.5 * math.pi * x * math.tan(theta)
+        err2.append(np.max(np.abs(transforms.to_1d(f) - g)) / f[-1])
+        err3.append(np.max(np.abs(transforms.to_3d(g) - f)) / f[-1])
+    for err, at_1600 in ((err2, 0.012), (err3, 0.006)):
+        rate = -np.polyfit(np.log(Ns), np.log(err), 1)[0]
+        assert 0.45 < rate < 0.6
+        assert err[-1] < at_1600
+
+
+def test_paraboloid_to_3d_converges():
+    # Eq. 3 takes g/sqrt(t) linear per segment, which sqrt(t)/R is not near
+    # t = 0: first-order convergence (measured error 1.5e-5 of f(L) at N = 800)
+    errs = []
+    Ns = np.array([200, 400, 800])
+    for N in Ns:
+        x = transforms.grid(N, L)
+        f = transforms.to_3d(x**2 / R)
+        errs.append(np.max(np.abs(f - x**2 / (2 * R))) / (L**2 / (2 * R)))
+    rate = -np.polyfit(np.log(Ns), np.log(errs), 1)[0]
+    assert rate > 0.9
+    assert errs[-1] < 2e-5
+
+
+def test_round_trip_sphere():
+    # Eq. 2 then Eq. 3 (independent discretisations) on the exact sphere:
+    # error 1.5e-5 of the largest height at N = 800, converging at first order
+    R0 = 1e-4
+    errs = []
+    Ns = np.array([200, 400, 800])
+    for N in Ns:
+        x = transforms.grid(N, 0.9 * R0)
+        f = R0 - np.sqrt(R0**2 - x**2)
+        errs.append(np.max(np.abs(transforms.to_3d(transforms.to_1d(f)) - f)) / f[-1])
+    rate = -np.polyfit(np.log(Ns), np.log(errs), 1)[0]
+    assert rate > 0.9
+    assert errs[-1] < 3e-5
+
+
+def test_exact_inverse_inverts_to_1d():
+    # the triangular Toeplitz inverse (power series by Newton's iteration)
+    # must undo Eq. 2 to round-off on any profile, and on leading blocks
+    rng = np.random.default_rng(1)
+    f = np.cumsum(rng.random(3001))
+    g = transforms.to_1d(f)
+    np.testing.assert_allclose(transforms.from_1d_exact(g), f, rtol=1e-11)
+    np.testing.assert_allclose(transforms.from_1d_exact(g[:1234]), f[:1234], rtol=1e-11)
+
+
+def test_hertz_pressure_and_force_from_line_load():
+    # q = E*(d - x²/R) is linear in t, so Eq. 13 and Eq. 12 are exact when
+    # the contact edge is a node (a² = t_160 here): round-off only
+    E = 2e11
+    N = 500
+    x = transforms.grid(N, L)
+    a = x[160]
+    d = a**2 / R
+    q = E * np.maximum(d - x**2 / R, 0.0)
+    dt = L**2 / N
+    p = transforms.pressure(q, dt)
+    p_ref = reference.hertz_pressure(x, E, R, a)
+    np.testing.assert_allclose(p, p_ref, rtol=0, atol=1e-11 * p_ref[0])
+    F = transforms.force(q, dt)
+    assert F == pytest.approx(reference.hertz(E, R, depth=d)["force"], rel=1e-12)
+    # the inverse of Eq. 13 on the contact nodes recovers q
+    np.testing.assert_allclose(transforms.line_load(p[:160], dt), q[:160], rtol=0,
+                               atol=1e-11 * q[0])
+
+
+def test_compliance_matrix_matches_operators():
+    # the dense leading-block matrix used by the implicit step is the same
+    # map as the FFT operators (checked on a random pressure)
+    n, dt, E = 257, 1e-10, 2e11
+    A = transforms.compliance_matrix(n, dt, E)
+    p = np.random.default_rng(2).random(n)
+    u = transforms.from_1d_exact(transforms.line_load(p, dt)) / E
+    np.testing.assert_allclose(A @ p, u, rtol=1e-12, atol=1e-12 * np.max(np.abs(u)))
+    np.testing.assert_allclose(A[:100, :100] @ p[:100],
+                               transforms.from_1d_exact(transforms.line_load(p[:100], dt)) / E,
+                               rtol=1e-12, atol=1e-12 * np.max(np.abs(u)))
