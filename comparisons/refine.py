@@ -170,7 +170,9 @@ def observed_order(h, error) -> tuple[float, float]:
     """Order p and constant C of error ≈ C h^p: ``np.polyfit`` of log error on log h.
 
     Points with a zero, negative or non-finite error (the reference level
-    itself, failed levels) are left out; fewer than two left give NaN.
+    itself, failed levels) are left out; fewer than two left give NaN. Fed the
+    differences between successive levels (h_i against ||u_i - u_{i+1}||),
+    the fit is unbiased: they are C (1 - r^-p) h_i^p for a constant ratio r.
     """
     h, e = np.asarray(h, float), np.asarray(error, float)
     use = np.isfinite(h) & np.isfinite(e) & (h > 0) & (e > 0)

@@ -129,13 +129,17 @@ def write_figures(out: str | Path) -> list[Path]:
                 continue
             fit = s["observed_order"][m]
             line, = ax.loglog(x, e, "o", label=f"{LABELS[m]}, p = {fit['order']:.2f}")
+            succ = np.array([r.get("successive", {}).get(m, np.nan) for r in rows], float)
+            ax.loglog(x, succ, "s", mfc="none", color=line.get_color(), ms=5)
             if math.isfinite(fit["order"]):
-                # e = C h^p with h = 1/resolution (or the step itself)
+                # the fit, e = C h^p with h = 1/resolution (or the step), is to
+                # the differences between successive levels (open squares)
                 h = 1.0 / x if by_res else x
                 ax.loglog(x, fit["constant"] * h ** fit["order"], "--", color=line.get_color())
         xlabel = (f"resolution ({s['resolution_key']})" if by_res else "step Δŝ")
-        ax.set(xlabel=xlabel, ylabel="max difference to the finest level",
-               title=f"{s['solver'].upper()}: finest {s['finest']}")
+        ax.set(xlabel=xlabel, ylabel="max difference",
+               title=f"{s['solver'].upper()}: ● to the finest level ({s['finest']}), "
+                     "□ to the next level", )
         ax.legend(fontsize=8)
     fig.tight_layout()
     paths.append(out / "convergence.png")

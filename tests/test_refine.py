@@ -153,7 +153,7 @@ def fake_study(cluster, tmp_path_factory):
     case = cases.shipped("paper")
     # level 1 is rejected by the case (mdr.elements >= 2); 24 fails in the solver
     summary = refine(case, ["stages.s_hat=[0.0, 0.5, 1.0]"], "mdr", out,
-                     levels=[1, 8, 16, 24, 32, 64, 1024], scheduler=cluster, quiet=True,
+                     levels=[1, 8, 16, 24, 32, 64, 128], scheduler=cluster, quiet=True,
                      solve=fake_solve)
     return out, summary
 
@@ -166,7 +166,7 @@ def test_study_reports_failed_levels_and_writes_the_others(fake_study):
     assert len(rows) == 7
     assert "mdr.elements" in status["mdr-elements-1"]
     assert "injected failure at 24" in status["mdr-elements-24"]
-    for n in (8, 16, 32, 64, 1024):
+    for n in (8, 16, 32, 64, 128):
         assert status[f"mdr-elements-{n}"] == "ok"
         run = Run(out / f"mdr-elements-{n}")  # complete and readable back
         assert run.case.mdr.elements == n
@@ -178,16 +178,17 @@ def test_study_reports_failed_levels_and_writes_the_others(fake_study):
 
 def test_study_recovers_the_known_order(fake_study):
     _, summary = fake_study
-    # differences to the finest level are C (h^2 - h_f^2): with h_f/h <= 1/16 the
-    # h_f term biases the slope by < 0.01
+    # the differences between successive levels (ratio 2, also across the failed
+    # level 24) are C (1 - 2^-p) h^p exactly: the fit recovers p to rounding
     for m in ("profile", "force"):
-        assert summary["observed_order"][m]["order"] == pytest.approx(ORDER, abs=0.01)
+        assert summary["observed_order"][m]["order"] == pytest.approx(ORDER, abs=1e-9)
     rich = summary["richardson"]
-    # three finest levels 32, 64, 1024 (unequal ratios); F/F0 at ŝ = 1 is e^-1 (1 + C h²)
+    # three finest levels 32, 64, 128; F/F0 at ŝ = 1 is e^-1 (1 + C h²)
     assert rich["order"] == pytest.approx(ORDER, abs=1e-6)
     assert rich["estimate"] == pytest.approx(math.exp(-1.0), abs=1e-10)
     # worst difference C (h² - h_f²) (profile: C h² r/2a0 with r/a0 up to 2, and
-    # force) is 5/32² = 0.0049 at N = 32 and 0.0195 at N = 16 against tolerance 0.01
+    # force) is 5 (1/32² - 1/128²) = 0.0046 at N = 32 and 0.0192 at N = 16, against
+    # the tolerance 0.01
     assert summary["converged"]["level"] == "mdr-elements-32"
 
 
@@ -256,3 +257,18 @@ def test_a_dead_worker_fails_only_its_level(tmp_path):
     for n in (8, 32, 64):
         assert status[f"mdr-elements-{n}"].ok
         assert Run(tmp_path / f"mdr-elements-{n}").case.mdr.elements == n
+
+
+def test_mdr_step_refinement_shows_backward_euler_first_order(cluster, tmp_path):
+    from comparisons.cli.refine import refine
+    # implicit (backward) Euler in ŝ has a global error Δŝ e1(ŝ) + O(Δŝ²): order
+    # 1. With Δŝ <= 0.2 the O(Δŝ²) part moves the fitted slope by O(0.1)
+    summary = refine(cases.shipped("paper"), ["sliding.force_fraction=0.3",
+                                              "stages.s_hat=[0.0, 1.0, 2.0]",
+                                              "sliding.scheme=implicit"],
+                     "mdr", tmp_path, levels=[50], steps=[0.2, 0.1, 0.05, 0.025],
+                     scheduler=cluster, quiet=True)
+    assert summary["refined"] == "step"
+    for m in ("profile", "force"):
+        assert summary["observed_order"][m]["order"] == pytest.approx(1.0, abs=0.1)
+    assert summary["richardson"]["by_stage"][1.0]["order"] == pytest.approx(1.0, abs=0.1)

@@ -64,6 +64,10 @@ def _float_list(text):
     return [float(v) for v in text.split(",") if v.strip()]
 
 
+_int_list.__name__ = "comma-separated integer"  # argparse names it in its error
+_float_list.__name__ = "comma-separated number"
+
+
 def main(args) -> int:
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-refine"
@@ -144,11 +148,16 @@ def summarize(case, solver, lvls, outcomes, varied, tolerance, stage) -> dict:
         rows[i]["differences"] = rf.differences(sols[i], sols[finest], edge)
     for row in rows:
         row.setdefault("differences", dict.fromkeys(rf.MEASURES, math.nan))
-    fit = [i for i in ok if i != finest]
+    # the order from differences between successive levels: for e = C h^p and a
+    # constant ratio they are exactly ∝ h^p, where differences to the finest
+    # level, C (h^p - h_f^p), bend the log-log line near the finest level
+    for i, j in zip(ok, ok[1:]):
+        rows[i]["successive"] = rf.differences(sols[i], sols[j], edge)
+    fit = ok[:-1]
     for m in rf.MEASURES:
         p, c = rf.observed_order([rows[i]["h"] for i in fit],
-                                 [rows[i]["differences"][m] for i in fit])
-        summary["observed_order"][m] = dict(order=p, constant=c, levels=len(fit))
+                                 [rows[i]["successive"][m] for i in fit])
+        summary["observed_order"][m] = dict(order=p, constant=c, levels=len(fit) + 1)
     # the stage shown and extrapolated: the last one every successful level reached
     if stage is None:
         reached = [s for s in stages if all(math.isfinite(rows[i]["stage_force"][s]) for i in ok)]
@@ -187,8 +196,8 @@ def csv_text(summary: dict) -> str:
             "F0; wall/cpu_seconds: the task in its worker (case, solve; not writing), "
             "peak_rss_mb: worker process RSS sampled every 10 ms during the task"]
     for m, fit in summary["observed_order"].items():
-        head.append(f"# observed order {m}: {_fmt(fit['order'], '.3f')} "
-                    f"(log-log fit over {fit['levels']} levels)")
+        head.append(f"# observed order {m}: {_fmt(fit['order'], '.3f')} (log-log fit of the "
+                    f"differences between successive levels, {fit['levels']} levels)")
     rich = summary["richardson"]
     if rich:
         head.append(f"# Richardson ({', '.join(rich['levels'])}): order "
@@ -232,8 +241,8 @@ def table(summary: dict) -> str:
                      + f"  {r['status']}")
     per = "1/resolution" if summary["refined"] == "resolution" else "step"
     for m, fit in summary["observed_order"].items():
-        lines.append(f"observed order, {m}: {_fmt(fit['order'], '.2f')} "
-                     f"(difference ∝ ({per})^p, fit over {fit['levels']} levels)")
+        lines.append(f"observed order, {m}: {_fmt(fit['order'], '.2f')} (difference between "
+                     f"successive levels ∝ ({per})^p, {fit['levels']} levels)")
     rich = summary["richardson"]
     if rich:
         lines.append(f"Richardson ({', '.join(rich['levels'])}), F/F0 at each stage ŝ "
