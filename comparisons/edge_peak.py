@@ -34,16 +34,20 @@ def find_edge_peak(r, p, a, *, outer=OUTER, min_prominence=MIN_PROMINENCE) -> di
     -------
     dict: present, r_over_a, height (p_peak / p(0)), prominence (/ p(0)),
     prominence_of_max (/ max p), at_last_node (the peak is the outermost node in
-    contact: not resolved by the grid), p_center [Pa].
+    contact: not resolved by the grid), edge_height (pressure of the outermost node
+    in contact / p(0): how abruptly p falls to zero at the edge), p_center [Pa].
     """
     r = np.asarray(r, float)
     p = np.asarray(p, float)
     none = dict(present=False, r_over_a=math.nan, height=math.nan, prominence=math.nan,
-                prominence_of_max=0.0, at_last_node=False, p_center=float(p[0]))
+                prominence_of_max=0.0, at_last_node=False, edge_height=math.nan,
+                p_center=float(p[0]))
     inside = np.flatnonzero((r < a) & (p > 0))
     if inside.size < 3 or a <= 0:
         return none
     last = inside[-1]
+    if p[0] > 0:
+        none["edge_height"] = float(p[last] / p[0])
     pp = np.append(p[: last + 1], 0.0)  # zero beyond the last node in contact
     i = np.arange(1, last + 1)
     is_max = (pp[i] > pp[i - 1]) & (pp[i] >= pp[i + 1]) & (r[i] >= outer * a)
@@ -59,7 +63,8 @@ def find_edge_peak(r, p, a, *, outer=OUTER, min_prominence=MIN_PROMINENCE) -> di
     return dict(present=bool(prom[j] >= min_prominence * pmax),
                 r_over_a=float(r[ipk] / a), height=float(rel(pp[ipk])),
                 prominence=float(rel(prom[j])), prominence_of_max=float(prom[j] / pmax),
-                at_last_node=bool(ipk == last), p_center=p_center)
+                at_last_node=bool(ipk == last), edge_height=none["edge_height"],
+                p_center=p_center)
 
 
 def stage_peaks(r, p, a, **kw) -> list[dict]:

@@ -62,7 +62,7 @@ def stage_figure(stem, stages, *, ylabel, title="", reference=(), vlines=(), xli
             ax.plot(*_thin(*st["fem"]), "o", color=colour, ms=3.5, mfc="none", mew=0.9,
                     label=st.get("fem_label", f"FEM {st['label']}"))
     for ref in reference:
-        ax.plot(ref["x"], ref["y"], "k--", lw=1.0, label=ref["label"])
+        ax.plot(ref["x"], ref["y"], "k--", lw=1.0, label=ref["label"], zorder=5)
     for x, label in vlines:
         ax.axvline(x, color="0.5", lw=0.8, ls=":", label=label)
     ax.set_xlabel("r / a0")
@@ -111,32 +111,38 @@ def history_figure(stem, curves, *, stage_s_hat=(), formats=("png", "pdf")) -> l
 def edge_study_figure(stem, panels, formats=("png",)) -> list[Path]:
     """Pressure near the edge at several resolutions, one panel per stage.
 
-    panels : list of dicts with ``title`` and ``curves``: list of (label, r/a, p/p(0), style)
-    where style is "line" (MDR) or "marker" (FEM).
+    panels : list of dicts with ``title`` and ``curves``: list of (label, r/a, p/p(0), solver);
+    MDR levels are drawn as blue lines, FEM levels as red markers, darker = finer/first.
     """
     plt = _pyplot()
     n = len(panels)
-    fig, axes = plt.subplots(1, n, figsize=(4.2 * n, 3.8), squeeze=False)
+    fig, axes = plt.subplots(1, n, figsize=(4.3 * n, 4.0), squeeze=False)
     for ax, panel in zip(axes[0], panels):
-        for colour, (label, x, y, style) in zip(_colours(len(panel["curves"])),
-                                                panel["curves"]):
-            if style == "marker":
-                ax.plot(x, y, "o", ms=2.5, mfc="none", color=colour, label=label)
-            else:
-                ax.plot(x, y, "-", lw=1.1, color=colour, label=label)
-        ax.set_xlim(OUTER_PLOT, 1.05)
+        by_solver = {}
+        for curve in panel["curves"]:
+            by_solver.setdefault(curve[3], []).append(curve)
+        for solver, curves in by_solver.items():
+            cmap = plt.get_cmap("Reds" if solver == "fem" else "Blues")
+            shades = np.linspace(0.95, 0.45, len(curves))
+            for shade, (label, x, y, _) in zip(shades, curves):
+                if solver == "fem":
+                    ax.plot(x, y, "o", ms=2.8, mfc="none", mew=0.8, color=cmap(shade),
+                            label=label)
+                else:
+                    ax.plot(x, y, "-", lw=1.1, color=cmap(shade), label=label)
+        ax.set_xlim(OUTER_PLOT, 1.03)
         ax.set_xlabel("r / a")
         ax.set_ylabel("p / p(0)")
         ax.set_title(panel["title"], fontsize=9)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=6)
+        ax.legend(fontsize=6, loc="lower left")
     out = _save(fig, stem, formats)
     plt.close(fig)
     return out
 
 
 #: the edge-study panels show the outer part of the contact only
-OUTER_PLOT = 0.4
+OUTER_PLOT = 0.7
 
 
 def sphere_sweep_figure(stem, ratio, rel_force, *, tolerance, shipped=(),

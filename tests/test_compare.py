@@ -133,3 +133,42 @@ def test_an_error_leaves_no_directory(tmp_path, monkeypatch):
     code = cli_main(["compare", HERTZ, "--out", str(out), "--quiet"])
     assert code == cases.SolverError.exit_code
     assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+# -- the real solvers --------------------------------------------------------
+
+PAPER = str(cases.shipped("paper"))
+# ŝ = 1 is reached after s = 1 / s_hat_per_m ≈ 0.029 m on paper.toml
+SMALL = ["--set", "stages.s_hat=[0.0, 0.5, 1.0]", "--set", 'sliding.until="distance"',
+         "--set", "sliding.distance=0.03", "--set", "mdr.elements=200",
+         "--set", "fem.contact_nodes=60", "--no-render", "--quiet"]
+
+
+def test_real_solvers_agree_on_a_small_paper_case(tmp_path):
+    out = tmp_path / "small"
+    code = cli_main(["compare", PAPER, "--out", str(out)] + SMALL)
+    m = json.loads((out / "metrics.json").read_text())
+    assert m["stages_compared"] == 3
+    # at this resolution the two independent solvers must still agree within the
+    # case's default tolerances (1 % d, 1 % F0, 2 % p0 interior, 2 % a0)
+    assert code == 0 and m["passed"], [st["checks"] for st in m["stages"]]
+    # the worn profiles genuinely changed between stages: the test compares wear, not
+    # three copies of the unworn contact (wear at r = 0 is > 10 % of d by ŝ = 1)
+    run = runio.Run(out / "mdr")
+    assert run.stages["f"][2][0] - run.stages["f"][0][0] > 0.1 * 1e-6
+
+
+def test_real_solvers_made_to_disagree_fail_with_exit_code_1(tmp_path, capsys):
+    # MDR with 10 springs over 1.77 a0 has about 6 inside the contact: spacing h = 0.18 a0.
+    # Linear interpolation of Hertz's p0·sqrt(1 - x²) alone errs by p''h²/8 ≈ 0.02-0.03 p0
+    # at x ≈ 0.85 (|p''| ≈ 5-10 p0/a0² there), at or beyond the 2 % p0 tolerance, before
+    # any discretisation error of the contact problem itself: the comparison must fail
+    out = tmp_path / "coarse"
+    code = cli_main(["compare", PAPER, "--out", str(out)] + SMALL
+                    + ["--set", "mdr.elements=10"])
+    assert code == 1
+    assert "FAILED" in capsys.readouterr().err
+    m = json.loads((out / "metrics.json").read_text())
+    assert not m["passed"]
+    assert not m["stages"][0]["checks"]["pressure_interior_max"]["passed"]
+    assert "**FAIL**" in (out / "report.md").read_text()

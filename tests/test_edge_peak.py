@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pytest
 
 from cases import reference
 from comparisons import edge_peak
@@ -15,6 +16,9 @@ def test_hertz_pressure_has_no_peak():
     r = np.linspace(0, 1.5 * a, 600)
     q = edge_peak.find_edge_peak(r, reference.hertz_pressure(r, E_STAR, 0.01, a), a)
     assert not q["present"] and math.isnan(q["r_over_a"])
+    # Hertz: p(r)/p(0) = sqrt(1 - (r/a)²) at the outermost node inside the contact
+    r_last = r[r < a][-1]
+    assert q["edge_height"] == pytest.approx(math.sqrt(1 - (r_last / a) ** 2), rel=1e-12)
 
 
 def test_grid_noise_below_the_prominence_threshold_is_not_a_peak():
