@@ -5,7 +5,8 @@ PNG paths:
 
 ``von_mises_stageKKK.png``  FEM runs: von Mises stress near the contact at the
                             first and the last stage (one picture if they are
-                            the same), both with the same colour range.
+                            the same), each coloured from 0 to its own maximum
+                            in the picture.
 ``worn_surface.png``        the worn indenter surface at the last stage, its
                             height exaggerated (the factor is in the title).
 """
@@ -26,6 +27,8 @@ WINDOW_SIZE = (1200, 800)
 #: half-width of the von Mises window, and its extent into the body, in a0
 ZOOM_HALF_WIDTH = 3.0
 ZOOM_DEPTH = 3.5
+#: rings and segments of the unworn surface's reference wireframe
+REFERENCE_RINGS, REFERENCE_SEGMENTS = 13, 36
 
 
 def _plotter():
@@ -75,20 +78,24 @@ def _von_mises_picture(run: Run, k: int, window, clim, path: Path) -> None:
                          show_scalar_bar=half is right,
                          scalar_bar_args=dict(title="von Mises [MPa]", color="black",
                                               vertical=True, position_x=0.86, position_y=0.15,
-                                              height=0.7, fmt="%.0f"))
+                                              height=0.7, fmt="%.3g"))
     plotter.add_text(f"von Mises stress near the contact, stage {k}: "
                      f"s^ = {run.stages['s_hat'][k]:.3g}, s = {run.stages['s'][k]:.3g} m\n"
-                     f"undeformed r-z section, lengths in a0 = {a0:.3g} m",
+                     f"undeformed r-z section, lengths in a0 = {a0:.3g} m; "
+                     "colours from 0 to this picture's maximum",
                      font_size=11, color="black", position="upper_left")
     plotter.show_bounds(bounds=(-r_max, r_max, z_lo, z_hi, 0.0, 0.0), xtitle="r / a0",
                         ytitle="z / a0", ztitle="y", color="black", location="outer",
                         show_zaxis=False, grid=False, font_size=12, use_2d=True)
     plotter.view_xy()
     plotter.enable_parallel_projection()
-    centre = (0.0, 0.5 * (z_lo + z_hi), 0.0)
+    # the window fills 72 % of the width, left of the colour bar
+    width = 2.0 * r_max / 0.72
+    height = width * WINDOW_SIZE[1] / WINDOW_SIZE[0]
+    centre = (0.06 * width, 0.5 * (z_lo + z_hi) + 0.03 * height, 0.0)
     plotter.camera.focal_point = centre
     plotter.camera.position = (centre[0], centre[1], 10.0 * r_max)
-    plotter.camera.parallel_scale = 0.62 * (z_hi - z_lo)
+    plotter.camera.parallel_scale = 0.5 * height
     plotter.screenshot(str(path))
     plotter.close()
 
@@ -105,21 +112,28 @@ def _surface_picture(run: Run, path: Path) -> None:
     xyz, cells, source = revolve_curve(r / a0, f * scale / a0, SURFACE_SEGMENTS)
     worn = grid(xyz, cells)
     worn.point_data["wear depth [um]"] = ((f - f0) * 1e6)[source]
-    ref_xyz, ref_cells, _ = revolve_curve(r / a0, f0 * scale / a0, SURFACE_SEGMENTS)
+    # a coarse wireframe of the unworn surface for reference (a fine one
+    # would alias, and would lie on the worn surface outside the wear scar)
+    r_ref = np.linspace(r[0], r[-1], REFERENCE_RINGS)
+    ref_xyz, ref_cells, _ = revolve_curve(r_ref / a0, unworn_profile(run, r_ref) * scale / a0,
+                                          REFERENCE_SEGMENTS)
     unworn = grid(ref_xyz, ref_cells)
     plotter = _plotter()
-    plotter.add_mesh(worn, scalars="wear depth [um]", cmap="plasma", smooth_shading=True,
+    plotter.add_mesh(worn, scalars="wear depth [um]", cmap="plasma", smooth_shading=True, ambient=0.4,
                      scalar_bar_args=dict(title="wear depth [um]", color="black",
                                           vertical=True, position_x=0.86, position_y=0.15,
                                           height=0.7, fmt="%.3g"))
-    plotter.add_mesh(unworn.extract_all_edges(), color="gray", opacity=0.25, line_width=1)
+    plotter.add_mesh(unworn.extract_all_edges(), color="gray", opacity=0.5, line_width=1)
     plotter.add_text(f"worn indenter surface, stage {k}: s^ = {st['s_hat'][k]:.3g}, "
                      f"s = {st['s'][k]:.3g} m ({run.solver})\n"
                      f"vertical scale x{scale:g}; lengths in a0 = {a0:.3g} m; "
                      "grey: unworn surface",
                      font_size=11, color="black", position="upper_left")
-    plotter.camera_position = [(2.2 * r[-1] / a0, 1.6 * r[-1] / a0, 2.6 * r[-1] / a0),
-                               (0.0, 0.25 * r[-1] / a0, 0.0), (0.0, 1.0, 0.0)]
+    # from below and aside: the indenter's face, worn scar at the pole
+    R = r[-1] / a0
+    plotter.camera_position = [(2.4 * R, -0.8 * R, 2.4 * R), (0.0, 0.3 * R, 0.0), (0.0, 1.0, 0.0)]
+    plotter.reset_camera()
+    plotter.camera.zoom(1.15)
     plotter.screenshot(str(path))
     plotter.close()
 
@@ -139,10 +153,10 @@ def render_run(run_dir) -> list[Path]:
             r_max, z_lo, z_hi = window
             inside = ((np.abs(points[:, 0]) <= r_max) & (points[:, 1] >= z_lo)
                       & (points[:, 1] <= z_hi))
-            stages = sorted({0, K - 1})
-            vmax = max(float(np.max(section_data(fields, k)["von_mises"][inside]))
-                       for k in stages) / 1e6
-            for k in stages:
+            for k in sorted({0, K - 1}):
+                # each its own colour range: the force, and with it the
+                # stress, falls by orders of magnitude as the tip wears flat
+                vmax = float(np.max(section_data(fields, k)["von_mises"][inside])) / 1e6
                 name = f"von_mises_stage{k:03d}.png"
                 _von_mises_picture(run, k, window, (0.0, vmax or 1.0), tmp / name)
                 names.append(name)

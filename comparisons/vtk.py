@@ -220,12 +220,14 @@ def revolve_curve(r, y, segments):
     def at(nodes, jj):
         return _at(start, stride, nodes, jj)
 
+    # ordered so that the normals point to -y for a rising curve: out of
+    # the indenter, whose material lies above its profile
     cells = {}
     if quad.any():
-        cells[VTK_QUAD] = np.stack([at(i0[quad], j), at(i1[quad], j), at(i1[quad], jn),
-                                    at(i0[quad], jn)], axis=-1).reshape(-1, 4)
+        cells[VTK_QUAD] = np.stack([at(i0[quad], j), at(i0[quad], jn), at(i1[quad], jn),
+                                    at(i1[quad], j)], axis=-1).reshape(-1, 4)
     if tri.any():
-        cells[VTK_TRIANGLE] = np.stack([at(i0[tri], j), at(i1[tri], j), at(i1[tri], jn)],
+        cells[VTK_TRIANGLE] = np.stack([at(i0[tri], j), at(i1[tri], jn), at(i1[tri], j)],
                                        axis=-1).reshape(-1, 3)
     return xyz, cells, source
 

@@ -1,9 +1,10 @@
 """VTK export (comparisons.vtk) on synthetic run directories with exact fields.
 
-The synthetic FEM run is a circular cylinder (radius Rc, height H, top held)
-whose flat base is pressed by a rigid frictionless plane raised by d and worn
-in gross slip, with a uniform pressure q on its mantle. Its field is exactly
-homogeneous: ε_zz = -e with e = (d - w)/H, u_r = α r, σ_rr = σ_θθ = -q,
+The synthetic FEM run is a circular cylinder (radius Rc, height H) whose
+top face is moved down by d onto a rigid frictionless plane z = 0 (the FEM's
+frame, fem/__init__.py), its flat base worn in gross slip, with a uniform
+pressure q on its mantle. Its field is exactly homogeneous: ε_zz = -e with
+e = (d - w)/H, u_z = (d - w)(1 - z/H) - d, u_r = α r, σ_rr = σ_θθ = -q,
 σ_rz = 0, p = -σ_zz = E e + 2ν q, and Reye–Archard wear dw/ds = k p gives
 w(s) = (d + 2ν q H/E)(1 - exp(-k E s/H)). Linear fields are exact on P1 and
 P2 meshes, so every exported value has a closed form to compare with.
@@ -82,7 +83,7 @@ class Cylinder:
 
     def displacement(self, s, r, z):
         e, alpha = self.strain(s)
-        return alpha * r, (self.d - self.wear(s)) * (1 - z / self.H)
+        return alpha * r, (self.d - self.wear(s)) * (1 - z / self.H) - self.d
 
     def stress(self, s):
         """σ_rr, σ_zz, σ_θθ, σ_rz (uniform)."""
@@ -145,16 +146,14 @@ FACES = {13: [(0, 1, 2), (3, 5, 4), (0, 3, 4, 1), (1, 4, 5, 2), (2, 5, 3, 0)],
          10: [(0, 1, 3), (1, 2, 3), (2, 0, 3), (0, 2, 1)]}
 
 
-def assert_valid_convex_cells(mesh):
-    """VTK's cell validator, and convexity checked face by face.
+def assert_convex_cells(mesh):
+    """Every wedge, pyramid and tetrahedron has planar faces and is convex.
 
-    VTK's own convexity test flags some of these wedges although every face
-    plane has all the cell's other points on one side (checked here
-    directly), and its face-intersection test uses an absolute tolerance
-    that trips on cells of 1e-4 m; those two checks are replaced by this one.
+    Checked face by face: all the cell's points lie on one side of each face's
+    plane, to 1e-9 of the cell's size (rounding). VTK's cell validator does
+    this too but takes minutes on the FEM's solids and flags, with absolute
+    tolerances, cells that pass this test (see ``assert_vtk_validator``).
     """
-    report = mesh.validate_mesh(exclude_fields=["non_convex", "intersecting_faces"])
-    assert report.is_valid, report.message
     conn = mesh.cell_connectivity
     offsets = mesh.cell_offsets
     for kind, faces in FACES.items():
@@ -162,17 +161,28 @@ def assert_valid_convex_cells(mesh):
         if not len(sel):
             continue
         n = {13: 6, 14: 5, 10: 4}[kind]
-        ids = conn[offsets[sel][:, None] + np.arange(n)]
-        P = mesh.points[ids]  # (cells, n, 3)
+        P = mesh.points[conn[offsets[sel][:, None] + np.arange(n)]]  # (cells, n, 3)
         size = np.max(np.ptp(P, axis=1), axis=1)
         for face in faces:
             a, b, c = (P[:, i] for i in face[:3])
             normal = np.cross(b - a, c - a)
             normal /= np.linalg.norm(normal, axis=1)[:, None]
             d = np.einsum("cnk,ck->cn", P - a[:, None, :], normal) / size[:, None]
-            # planar faces and all points on one side, to rounding (1e-9 of the cell)
             assert np.all((d <= 1e-9).all(axis=1) | (d >= -1e-9).all(axis=1))
             assert np.all(np.abs(d[:, list(face)]) <= 1e-9)
+
+
+def assert_vtk_validator(mesh):
+    """VTK's cell validator (small meshes only: it is slow).
+
+    Run on a copy scaled to unit size, as its tolerances are absolute. Its
+    convexity test is left out: it flags wedges that pass
+    ``assert_convex_cells``.
+    """
+    unit = mesh.copy()
+    unit.points = mesh.points / np.max(np.ptp(mesh.points, axis=0))
+    report = unit.validate_mesh(exclude_fields=["non_convex"])
+    assert report.is_valid, report.message
 
 
 def read_pvd(path):
@@ -226,7 +236,7 @@ def test_orient_triangles_keeps_nodes_and_midsides(order):
                                    vtk.signed_areas(points, out), rtol=1e-12)
 
 
-@pytest.mark.parametrize("segments", [3, 8, 64])
+@pytest.mark.parametrize("segments", [3, 8, 32])
 def test_revolved_quarter_disc_is_a_valid_solid_of_the_hemisphere_volume(segments):
     import pyvista as pv
     R = 2.0
@@ -241,7 +251,8 @@ def test_revolved_quarter_disc_is_a_valid_solid_of_the_hemisphere_volume(segment
     # VTK's own verdict: every cell has positive volume, no inverted faces
     volume = mesh.compute_cell_sizes().cell_data["Volume"]
     assert np.all(volume > 0)
-    assert_valid_convex_cells(mesh)
+    assert_convex_cells(mesh)
+    assert_vtk_validator(mesh)
     # a closed solid: no free faces
     assert mesh.extract_surface(algorithm="dataset_surface").n_open_edges == 0
     # The polygonal revolution has exactly N sin(2π/N)/(2π) times the volume
@@ -365,29 +376,36 @@ def test_section_fields_are_the_exact_solution(exported):
         np.testing.assert_allclose(g.point_data["wear_depth"], marker * cyl.wear(s), rtol=1e-14)
 
 
-def check_contact_against_run(run, directory, gap_tol, field_tol):
-    """The exported contact nodes against the run's own contact results.
+def check_contact_against_run(run, directory, gap_tol, field_tol, skip=()):
+    """The exported fields against the run's own contact results.
 
-    FEM convention (physics.md §7, fem/model.py): the top is held and the
-    plane rises by the depth d, so a node in contact closes its gap:
-    z + w + u_z = d. Its wear and pressure are those of the run's stages at
-    its radius. Tolerances: ``gap_tol`` (m) on the closed gap, ``field_tol``
-    relative to the largest stage value of wear and pressure.
+    FEM convention (fem/__init__.py): displacements in the frame of the rigid
+    plane z = 0, the top face moved down by the depth d; contact node i has
+    the initial gap f0(r_i) (the case's unworn profile), so a node in
+    contact closes its gap, f0 + w + u_z = 0, and the top face has u_z = -d.
+    Its wear and pressure are those of the run's stages at its radius.
+    Tolerances: ``gap_tol`` relative to d on the closed gap and the top
+    face's displacement, ``field_tol`` relative to the largest stage value
+    of wear and pressure. ``skip``: contact node positions left out of the
+    gap check.
     """
     contact = run.fields["contact_nodes"]
-    for k, s in enumerate(run.stages["s"]):
+    st = run.stages
+    f0 = vtk.unworn_profile(run, st["r"])
+    for k, s in enumerate(st["s"]):
         g = pv_read(directory / f"section_{k:03d}.vtu")
-        z = g.points[contact, 1]
+        r = g.points[contact, 0]
         u_z = g.point_data["displacement"][contact, 1]
         w = g.point_data["wear_depth"][contact]
         p = g.point_data["contact_pressure"][contact]
         depth = np.interp(s, run.history["s"], run.history["depth"])
         touching = p > 0
+        touching[list(skip)] = False
         assert touching.any()
-        np.testing.assert_allclose((z + w + u_z)[touching], depth, rtol=0, atol=gap_tol)
-        r = g.points[contact, 0]
-        st = run.stages
-        f0 = vtk.unworn_profile(run, st["r"])
+        gap = vtk.unworn_profile(run, r) + w + u_z
+        np.testing.assert_allclose(gap[touching], 0.0, rtol=0, atol=gap_tol * depth)
+        top = g.points[:, 1] == np.max(g.points[:, 1])
+        np.testing.assert_allclose(g.point_data["displacement"][top, 1], -depth, rtol=gap_tol)
         wear = np.interp(r, st["r"], st["f"][k] - f0)
         pressure = np.interp(r, st["r"], st["p"][k])
         scale_w = max(np.max(np.abs(st["f"] - f0)), 1e-300)
@@ -402,8 +420,8 @@ def pv_read(path):
 
 def test_contact_nodes_against_the_runs_contact_results(exported):
     run, cyl, directory = exported
-    # exact synthetic data: rounding of values ~1e-6 m and ~1e8 Pa
-    check_contact_against_run(run, directory, gap_tol=1e-18, field_tol=1e-12)
+    # exact synthetic data: rounding only
+    check_contact_against_run(run, directory, gap_tol=1e-12, field_tol=1e-12)
 
 
 def test_revolved_solid(exported):
@@ -415,7 +433,9 @@ def test_revolved_solid(exported):
         assert {c.type for c in m.cells} == {"wedge", "pyramid", "tetra"}
         volume = g.compute_cell_sizes().cell_data["Volume"]
         assert np.all(volume > 0)
-        assert_valid_convex_cells(g)
+        assert_convex_cells(g)
+        if k == 0:  # slow; the same cells in every stage
+            assert_vtk_validator(g)
         # the N-gon prism inscribed in the cylinder: (N/2) sin(2π/N) Rc² H
         # exactly (straight r–z boundaries), rounding only; the cylinder's
         # πRc²H is larger by the polygonal revolution factor
@@ -425,7 +445,7 @@ def test_revolved_solid(exported):
         # Cartesian displacement of the homogeneous field at each 3D point
         x, y, zc = g.points.T
         e, alpha = cyl.strain(s)
-        want = np.column_stack([alpha * x, (cyl.d - cyl.wear(s)) * (1 - y / cyl.H), alpha * zc])
+        want = np.column_stack([alpha * x, cyl.displacement(s, 0.0, y)[1], alpha * zc])
         np.testing.assert_allclose(m.point_data["displacement"], want, rtol=0, atol=1e-21)
         np.testing.assert_allclose(g.point_data["sigma_zz"], cyl.stress(s)[1], rtol=1e-14)
 
