@@ -31,11 +31,23 @@ class PrefixCholesky:
         except linalg.LinAlgError:
             raise SolverError("the contact compliance matrix is not positive definite") from None
         self.borderings = 0
+        self._prefix: dict[int, np.ndarray] = {}
+
+    def _leading(self, m: int) -> np.ndarray:
+        """The leading m×m block of L as a Fortran array (LAPACK would copy a
+        strided view on every solve; the active set keeps its size for many
+        steps, so a few recent blocks are kept)."""
+        L11 = self._prefix.get(m)
+        if L11 is None:
+            if len(self._prefix) >= 4:
+                self._prefix.pop(next(iter(self._prefix)))
+            L11 = self._prefix[m] = np.asfortranarray(self.L[:m, :m])
+        return L11
 
     def solver(self, A: np.ndarray):
         """A function b -> M_AA^{-1} b for the sorted index set A."""
         m = int(np.searchsorted(A - np.arange(len(A)), 1))  # length of the prefix 0..m-1
-        L11 = self.L[:m, :m]
+        L11 = self._leading(m)
         E = A[m:]
         if len(E) == 0:
             return lambda b: linalg.cho_solve((L11, True), b, check_finite=False)
@@ -96,7 +108,11 @@ def solve_lcp(factor: PrefixCholesky, z: np.ndarray, *, depth: float | None = No
         return sol(depth - z[A]), depth
 
     def gaps(fA, A, d):
-        return z - d + M[:, A] @ fA
+        # only columns up to the last active node enter (a view: no copy)
+        k = int(A[-1]) + 1 if len(A) else 0
+        f = np.zeros(k)
+        f[A] = fA
+        return z - d + M[:, :k] @ f
 
     A = np.array(sorted(set(np.asarray(active if active is not None else [], int).tolist())),
                  dtype=int)
