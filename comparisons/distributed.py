@@ -168,6 +168,9 @@ class _Client:
         import dask
         from distributed import Client, LocalCluster
         self.cluster = None
+        if scheduler and workers:
+            raise cases.CaseError("--workers sizes the embedded cluster; an existing one "
+                                  "(--scheduler) has the workers it has")
         if scheduler:
             try:
                 self.client = Client(scheduler, timeout="10s")

@@ -74,8 +74,10 @@ def levels(solver: str, resolutions=None, steps=None) -> list[Level]:
 
 
 def refined_parameter(lvls) -> str:
-    """"resolution" when the resolution varies across the levels, else "step"."""
-    return "resolution" if len({lv.resolution for lv in lvls}) > 1 else "step"
+    """"step" when only the step varies across the levels, else "resolution"."""
+    steps_only = (len({lv.resolution for lv in lvls}) == 1
+                  and len({lv.step_hat for lv in lvls}) > 1)
+    return "step" if steps_only else "resolution"
 
 
 def refinement_h(level: Level, varied: str) -> float:

@@ -59,7 +59,8 @@ def _with_differences(axes, study, curves):
             _, xf, yf = finest[0]
             keep = (xf >= x[0]) & (xf <= x[-1])
             axes[1].plot(xf[keep], np.interp(xf[keep], x, y) - yf[keep], color=line.get_color())
-    axes[0].legend(fontsize=8)
+    if curves:
+        axes[0].legend(fontsize=8)
     axes[1].axhline(0.0, color="0.6", lw=0.8)
 
 
@@ -70,7 +71,7 @@ def write_figures(out: str | Path) -> list[Path]:
     import matplotlib.pyplot as plt
 
     out = Path(out)
-    found = studies(out)
+    found = [s for s in studies(out) if s["finest"]]  # studies with a level that ran
     if not found:
         return []
     paths = []
@@ -125,7 +126,7 @@ def write_figures(out: str | Path) -> list[Path]:
         x = np.array([r["resolution"] if by_res else r["step_hat"] for r in rows], float)
         for m in MEASURES:
             e = np.array([r["differences"][m] for r in rows], float)
-            if not np.any(e > 0):
+            if not np.any(e > 0) or m not in s["observed_order"]:
                 continue
             fit = s["observed_order"][m]
             line, = ax.loglog(x, e, "o", label=f"{LABELS[m]}, p = {fit['order']:.2f}")
@@ -140,7 +141,8 @@ def write_figures(out: str | Path) -> list[Path]:
         ax.set(xlabel=xlabel, ylabel="max difference",
                title=f"{s['solver'].upper()}: ● to the finest level ({s['finest']}), "
                      "□ to the next level", )
-        ax.legend(fontsize=8)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=8)
     fig.tight_layout()
     paths.append(out / "convergence.png")
     _save(fig, paths[-1])

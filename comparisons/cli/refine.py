@@ -139,6 +139,8 @@ def summarize(case, solver, lvls, outcomes, varied, tolerance, stage) -> dict:
     summary = dict(study="refine", solver=solver, resolution_key=rf.RESOLUTION_KEY[solver],
                    refined=varied, tolerance=tolerance, levels=rows, finest=None,
                    stage_s_hat=stage, observed_order={}, richardson=None, converged=None)
+    for row in rows:
+        row["differences"] = dict.fromkeys(rf.MEASURES, math.nan)
     if not ok:
         return summary
     finest = ok[-1]
@@ -146,8 +148,6 @@ def summarize(case, solver, lvls, outcomes, varied, tolerance, stage) -> dict:
     edge = case.compare.edge_band
     for i in ok:
         rows[i]["differences"] = rf.differences(sols[i], sols[finest], edge)
-    for row in rows:
-        row.setdefault("differences", dict.fromkeys(rf.MEASURES, math.nan))
     # the order from differences between successive levels: for e = C h^p and a
     # constant ratio they are exactly ∝ h^p, where differences to the finest
     # level, C (h^p - h_f^p), bend the log-log line near the finest level
