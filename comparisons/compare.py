@@ -555,7 +555,7 @@ def R_fmt(v):
 def _peak_cell(q) -> str:
     """One peak in a table cell: position, height, prominence (relative to p(0))."""
     if not q["present"]:
-        return "none"
+        return f"none (p_edge/p(0)={report.fmt(q.get('edge_height'), 3)})"
     text = (f"r/a={report.fmt(q['r_over_a'], 4)}, p/p(0)={report.fmt(q['height'], 4)}, "
             f"prom.={report.fmt(q['prominence'], 2)}")
     return text + (" (last node)" if q["at_last_node"] else "")
@@ -570,8 +570,9 @@ def _edge_blocks(m) -> list:
                      f"{edge_peak.MIN_PROMINENCE:g} of max p. Cells give its position r/a, its "
                      "height p_peak/p(0) and its prominence relative to p(0); \"last node\": "
                      "the maximum is the outermost node in contact (not resolved by the grid). "
-                     "p_edge/p(0): pressure of the outermost node in contact, relative to p(0) "
-                     "(how abruptly the pressure falls to zero at the edge).")]
+                     f"p_edge/p(0): the pressure at r = {edge_peak.EDGE_PROBE:g}·a relative to "
+                     "p(0), how abruptly it falls to zero at the edge (Hertz: "
+                     f"{math.sqrt(1 - edge_peak.EDGE_PROBE ** 2):.3f}).")]
     peaks = m["edge_peaks"]
     K = max(len(v) for v in peaks.values())
     rows = []

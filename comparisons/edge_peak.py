@@ -15,6 +15,8 @@ import numpy as np
 OUTER = 0.5
 #: a local maximum counts as a peak when its prominence exceeds this fraction of max p
 MIN_PROMINENCE = 1e-3
+#: where the pressure just inside the edge is probed, r/a (Hertz: sqrt(1 - 0.98²) ≈ 0.2)
+EDGE_PROBE = 0.98
 
 
 def find_edge_peak(r, p, a, *, outer=OUTER, min_prominence=MIN_PROMINENCE) -> dict:
@@ -34,8 +36,8 @@ def find_edge_peak(r, p, a, *, outer=OUTER, min_prominence=MIN_PROMINENCE) -> di
     -------
     dict: present, r_over_a, height (p_peak / p(0)), prominence (/ p(0)),
     prominence_of_max (/ max p), at_last_node (the peak is the outermost node in
-    contact: not resolved by the grid), edge_height (pressure of the outermost node
-    in contact / p(0): how abruptly p falls to zero at the edge), p_center [Pa].
+    contact: not resolved by the grid), edge_height (p at r = EDGE_PROBE·a, linearly
+    interpolated, / p(0): how abruptly p falls to zero at the edge), p_center [Pa].
     """
     r = np.asarray(r, float)
     p = np.asarray(p, float)
@@ -47,7 +49,7 @@ def find_edge_peak(r, p, a, *, outer=OUTER, min_prominence=MIN_PROMINENCE) -> di
         return none
     last = inside[-1]
     if p[0] > 0:
-        none["edge_height"] = float(p[last] / p[0])
+        none["edge_height"] = float(np.interp(EDGE_PROBE * a, r, p) / p[0])
     pp = np.append(p[: last + 1], 0.0)  # zero beyond the last node in contact
     i = np.arange(1, last + 1)
     is_max = (pp[i] > pp[i - 1]) & (pp[i] >= pp[i + 1]) & (r[i] >= outer * a)
