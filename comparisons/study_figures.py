@@ -69,6 +69,7 @@ def write_figures(out: str | Path) -> list[Path]:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     out = Path(out)
     found = [s for s in studies(out) if s["finest"]]  # studies with a level that ran
@@ -138,11 +139,15 @@ def write_figures(out: str | Path) -> list[Path]:
                 h = 1.0 / x if by_res else x
                 ax.loglog(x, fit["constant"] * h ** fit["order"], "--", color=line.get_color())
         xlabel = (f"resolution ({s['resolution_key']})" if by_res else "step Δŝ")
+        finest = [r for r in s["levels"] if r["name"] == s["finest"]][0]
         ax.set(xlabel=xlabel, ylabel="max difference",
-               title=f"{s['solver'].upper()}: ● to the finest level ({s['finest']}), "
-                     "□ to the next level", )
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=8)
+               title=f"{s['solver'].upper()}: convergence, finest {_level_label(s, finest)}")
+        handles, labels = ax.get_legend_handles_labels()
+        if handles:
+            handles += [Line2D([], [], ls="", marker="o", color="0.3"),
+                        Line2D([], [], ls="", marker="s", mfc="none", color="0.3")]
+            labels += ["to the finest level", "to the next level (fitted)"]
+            ax.legend(handles, labels, fontsize=8)
     fig.tight_layout()
     paths.append(out / "convergence.png")
     _save(fig, paths[-1])
