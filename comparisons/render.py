@@ -74,8 +74,9 @@ def _von_mises_picture(run: Run, k: int, window, clim, path: Path) -> None:
     left = right.reflect((1.0, 0.0, 0.0), point=(0.0, 0.0, 0.0))
     plotter = _plotter()
     for half in (right, left):
+        # unlit: the colours are the colour bar's
         plotter.add_mesh(half, scalars="von Mises [MPa]", cmap="viridis", clim=clim,
-                         show_scalar_bar=half is right,
+                         lighting=False, show_scalar_bar=half is right,
                          scalar_bar_args=dict(title="von Mises [MPa]", color="black",
                                               vertical=True, position_x=0.86, position_y=0.15,
                                               height=0.7, fmt="%.3g"))
@@ -119,7 +120,8 @@ def _surface_picture(run: Run, path: Path) -> None:
                                           REFERENCE_SEGMENTS)
     unworn = grid(ref_xyz, ref_cells)
     plotter = _plotter()
-    plotter.add_mesh(worn, scalars="wear depth [um]", cmap="plasma", smooth_shading=True, ambient=0.4,
+    plotter.add_mesh(worn, scalars="wear depth [um]", cmap="plasma", smooth_shading=True,
+                     ambient=0.4,
                      scalar_bar_args=dict(title="wear depth [um]", color="black",
                                           vertical=True, position_x=0.86, position_y=0.15,
                                           height=0.7, fmt="%.3g"))

@@ -42,7 +42,7 @@ import numpy as np
 from cases import WearcheckError
 from cases.profiles import height
 
-from .runio import Run, atomic_directory, write_text_atomic
+from .runio import Run, atomic_directory
 
 FIELD_KEYS = ("points", "cells", "displacement", "stress", "contact_nodes",
               "contact_pressure", "wear_depth")
@@ -317,7 +317,8 @@ def _series(directory, name, mesh, run, data_of_stage):
         file = f"{name}_{k:03d}.vtu"
         _save(mesh, directory / file, data_of_stage(k), stage_field_data(run, k))
         entries.append((run.stages["s"][k], file))
-    write_text_atomic(directory / f"{name}.pvd", pvd_text(entries))
+    # plain writes: the caller builds the whole directory before renaming it
+    (directory / f"{name}.pvd").write_text(pvd_text(entries), encoding="utf-8")
     return directory / f"{name}.pvd"
 
 

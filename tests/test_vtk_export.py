@@ -456,7 +456,8 @@ def test_profile_pressure_and_surface(exported):
     M = len(st["r"])
     for k, s in enumerate(st["s"]):
         m, g = read_both(directory / f"profile_{k:03d}.vtu")
-        np.testing.assert_array_equal(m.points, np.column_stack([st["r"], st["f"][k], 0 * st["r"]]))
+        np.testing.assert_array_equal(m.points,
+                                      np.column_stack([st["r"], st["f"][k], 0 * st["r"]]))
         assert [c.type for c in m.cells] == ["line"] and len(m.cells[0].data) == M - 1
         # the case's unworn profile is flat out to the cylinder's radius
         np.testing.assert_allclose(g.point_data["wear_depth"], cyl.wear(s), rtol=1e-14)
