@@ -512,7 +512,9 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
     blocks.append(R.heading("Renders of the fields"))
     if renders:
         for name in renders:
-            blocks.append(R.image(name, name))
+            solver, stem = name.split("/")[0], Path(name).stem
+            blocks.append(R.image(name, f"{solver.upper()} run, rendered by comparisons.render: "
+                                        f"{stem.replace('_', ' ')} ({name})."))
     else:
         blocks.append(R.para("No renders in the run directories."))
     for note in render_notes:

@@ -49,7 +49,7 @@ def stage_figure(stem, stages, *, ylabel, title="", reference=(), vlines=(), xli
     stem : output path without suffix.
     stages : list of dicts with ``label`` and optional ``mdr`` / ``fem`` = (x, y)
         (and optional ``mdr_label`` / ``fem_label`` for the legend).
-    reference : list of dicts with ``label``, ``x``, ``y`` (drawn black, dashed).
+    reference : list of dicts with ``label``, ``x``, ``y`` (a wide grey band beneath).
     vlines : list of (x, label) vertical markers (e.g. a singularity).
     """
     plt = _pyplot()
@@ -62,7 +62,8 @@ def stage_figure(stem, stages, *, ylabel, title="", reference=(), vlines=(), xli
             ax.plot(*_thin(*st["fem"]), "o", color=colour, ms=3.5, mfc="none", mew=0.9,
                     label=st.get("fem_label", f"FEM {st['label']}"))
     for ref in reference:
-        ax.plot(ref["x"], ref["y"], "k--", lw=1.0, label=ref["label"], zorder=5)
+        # a wide grey band beneath: visible even where a solver's line covers it
+        ax.plot(ref["x"], ref["y"], "-", color="0.75", lw=5, label=ref["label"], zorder=0)
     for x, label in vlines:
         ax.axvline(x, color="0.5", lw=0.8, ls=":", label=label)
     ax.set_xlabel("r / a0")
