@@ -141,9 +141,14 @@ def _surface_picture(run: Run, path: Path) -> None:
 
 
 def render_run(run_dir) -> list[Path]:
-    """Write the PNGs of a run into ``RUN_DIR/render/`` atomically; returns their paths."""
+    """Write the PNGs of a run into ``RUN_DIR/render/`` atomically; returns their paths.
+
+    A run that stored no stage has nothing to draw: no directory, no paths.
+    """
     run = Run(run_dir)
     target = run.path / "render"
+    if not len(run.stages["s"]):
+        return []
     names = []
     with atomic_directory(target) as tmp:
         if run.fields is not None:

@@ -251,6 +251,10 @@ def check_fields(fields, n_stages):
     if np.ndim(cells) != 2 or np.shape(cells)[1] not in (3, 6):
         raise WearcheckError(f"fields.npz: 'cells' has shape {np.shape(cells)}, "
                              "expected (Nt, 3) or (Nt, 6)")
+    for key in ("cells", "contact_nodes"):
+        index = np.asarray(fields[key])
+        if index.size and not (index.min() >= 0 and index.max() < Np):
+            raise WearcheckError(f"fields.npz: '{key}' refers to nodes outside 0..{Np - 1}")
 
 
 def section_data(fields, k):
@@ -326,6 +330,10 @@ def write_vtk_files(directory, run: Run, revolve: int = 0) -> list[Path]:
     """Write every series of ``run`` into ``directory``; returns the .pvd paths."""
     directory = Path(directory)
     st = run.stages
+    if run.fields is not None:
+        check_fields(run.fields, len(st["s"]))
+    if not len(st["s"]):
+        return []  # an empty collection would be a time series without times
     r, f, p = st["r"], st["f"], st["p"]
     f0 = unworn_profile(run, r)
     p0 = run.scales["p0"]
@@ -356,7 +364,6 @@ def write_vtk_files(directory, run: Run, revolve: int = 0) -> list[Path]:
     if run.fields is None:
         return out
     fields = run.fields
-    check_fields(fields, len(st["s"]))
     points = np.asarray(fields["points"], dtype=float)
     cells = orient_triangles(points, fields["cells"])
     kind = VTK_TRIANGLE if cells.shape[1] == 3 else VTK_QUADRATIC_TRIANGLE

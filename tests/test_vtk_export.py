@@ -513,3 +513,18 @@ def test_export_command(tmp_path, capsys):
     assert "not a complete run directory" in capsys.readouterr().err
     assert main(["export", str(run.path), "--revolve", "2"]) != 0
     assert "at least 3 segments" in capsys.readouterr().err
+
+
+def test_run_that_stored_no_stage_exports_nothing(tmp_path):
+    from comparisons.render import render_run
+    run, _ = cylinder_run(tmp_path / "run", s_hat=(0.0,))
+    F = run.fields
+    empty = RunResult(history=run.history, stage_s=np.zeros(0), r=run.stages["r"],
+                      f=np.zeros((0, len(run.stages["r"]))),
+                      p=np.zeros((0, len(run.stages["r"]))), solve_seconds=0.0,
+                      fields=dict(F, **{k: F[k][:0] for k in ("displacement", "stress",
+                                                               "contact_pressure",
+                                                               "wear_depth")}))
+    path = write_run(tmp_path / "empty", run.case, empty, "fem", argv=["test"])
+    assert list(vtk.export_run(path, revolve=4).iterdir()) == []
+    assert render_run(path) == []

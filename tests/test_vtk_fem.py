@@ -113,3 +113,15 @@ def test_fem_von_mises_on_the_axis_is_hertz(fem_run):
     assert axis.sum() >= 5
     np.testing.assert_allclose(g.point_data["von_mises"][axis] / p0, np.abs(s_z - s_r),
                                rtol=0, atol=0.03)
+
+
+def test_run_command_writes_vtk_into_the_run_directory(tmp_path):
+    from comparisons.cli import main
+    out = tmp_path / "hertz-fem"
+    assert main(["run", str(cases.shipped("hertz")), "--solver", "fem", "--out", str(out),
+                 "--set", "fem.contact_nodes=30", "--vtk", "--revolve", "6", "--quiet"]) == 0
+    run = Run(out)
+    check_series(out / "vtk", run, SERIES_FIELDS)
+    # nothing half-written is left beside or inside the run directory
+    assert [p.name for p in tmp_path.iterdir()] == ["hertz-fem"]
+    assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []

@@ -19,7 +19,9 @@ def add_parser(sub):
 def main(args) -> int:
     from ..vtk import export_run
     out = export_run(args.run_dir, revolve=args.revolve)
-    if args.revolve and not (out / "solid.pvd").exists():
+    if not any(out.glob("*.pvd")):
+        print("export: note: the run stored no stage; nothing to export", file=sys.stderr)
+    elif args.revolve and not (out / "solid.pvd").exists():
         print("export: note: the run has no FEM fields; --revolve applies to them only "
               "(the worn surface used it)", file=sys.stderr)
     if not args.quiet:

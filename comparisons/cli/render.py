@@ -17,6 +17,8 @@ def add_parser(sub):
 def main(args) -> int:
     from ..render import render_run
     paths = render_run(args.run_dir)
+    if not paths:
+        print("render: note: the run stored no stage; nothing to draw", file=sys.stderr)
     if not args.quiet:
         for path in paths:
             print(path)
