@@ -22,6 +22,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.linalg import lu_factor, lu_solve
 from scipy.sparse.linalg import LinearOperator, eigs
 
 from cases import SolverError
@@ -93,78 +94,96 @@ def explicit_step(model: Model, state: State, h: float) -> State:
     return new
 
 
-#: largest grid factorised densely; finer grids use it as a coarse-grid preconditioner
+#: largest grid factorised densely (nested LU, exact); finer grids use GMRES
 DENSE_MAX = 1024
+#: relative tolerance of the contact conditions (gap and line load, times d)
+EDGE_TOL = 1e-9
+#: nodes of the coarse grid that preconditions GMRES on finer grids
+COARSE_NODES = 256
 
 
 class ImplicitSystem:
     """(T⁻¹ P⁻¹/E* + σ) p = r on the contact nodes, σ = h K S, for any contact set.
 
-    Preconditioner: the nested LU of the same operator (σ = h K) on a grid of
-    at most DENSE_MAX + 1 nodes — the grid itself when it is that small, so
-    the preconditioner is the exact inverse; otherwise every k-th node, with
-    linear interpolation in t between the grids and 1/σ on what the coarse
-    grid cannot represent (grid-scale modes, where the wear compliance σ
-    dominates the elastic one).
+    Up to DENSE_MAX nodes: the nested LU of the whole grid's matrix for the
+    run's regular step, exact for every contact set. Finer grids: GMRES,
+    preconditioned by the same operator on a coarse t-uniform grid whose
+    contact edge coincides with the fine one (linear interpolation in t
+    between the grids) plus 1/σ on what the coarse grid cannot represent
+    (grid-scale modes, where the wear compliance σ dominates the elastic one).
+    Stage-landing steps (another σ) use the regular step's factors as a
+    preconditioner.
     """
 
     def __init__(self, model: "Model", h: float, nodes: int | None = None):
         N = len(model.x) - 1
         self.sigma = h * model.wear_rate
         self.dt, self.E = model.dt, model.E_star
-        self.k = 1
-        while N // self.k > DENSE_MAX:
-            self.k *= 2
-        self.nc_max = N // self.k + 1
+        self.nested = N <= DENSE_MAX
+        self.N = N
         self.lu = None
-        # factorise only the contact sets the run is likely to need; grow on demand
-        self._factor(self.nc_max if nodes is None else -(-nodes // self.k) + 1)
-        l = np.arange(self.k) / self.k
-        self.w0, self.w1 = 1.0 - l, l
+        if self.nested:
+            # factorise only the contact sets the run is likely to need; grow on demand
+            self._factor(N + 1 if nodes is None else nodes)
+        else:
+            self.A1 = transforms.compliance_matrix(COARSE_NODES, 1.0, self.E)
+            self._coarse = (None, None)
 
-    def _factor(self, nc: int) -> None:
-        nc = min(nc, self.nc_max)
-        A = transforms.compliance_matrix(nc, self.k * self.dt, self.E)
-        A[np.diag_indices(nc)] += self.sigma
+    def _factor(self, n: int) -> None:
+        n = min(n, self.N + 1)
+        A = transforms.compliance_matrix(n, self.dt, self.E)
+        A[np.diag_indices(n)] += self.sigma
         self.lu = linalg.NestedLU(A)
 
-    def _coarse_solve(self, rc: np.ndarray) -> np.ndarray:
-        if len(rc) > self.lu.n:
-            self._factor(max(len(rc), int(1.5 * self.lu.n)))
-        return self.lu.solve(rc)
+    def _nested_solve(self, r: np.ndarray) -> np.ndarray:
+        if len(r) > self.lu.n:
+            self._factor(max(len(r), int(1.5 * self.lu.n)))
+        return self.lu.solve(r)
 
-    def matvec(self, p: np.ndarray, sigma: np.ndarray) -> np.ndarray:
+    def matvec(self, p: np.ndarray, sigma) -> np.ndarray:
         return transforms.from_1d_exact(transforms.line_load(p, self.dt)) / self.E + sigma * p
 
-    def _prolong(self, ec: np.ndarray, n: int) -> np.ndarray:
-        e = (np.outer(ec[:-1], self.w0) + np.outer(ec[1:], self.w1)).ravel()
-        return np.r_[e, ec[-1]][:n]
+    def _coarse_lu(self, n: int, sigma: float):
+        key = (n, sigma)
+        if self._coarse[0] != key:
+            nc = COARSE_NODES
+            # the coarse grid spans the contact: Δt_c = n Δt / nc; the matrix scales as sqrt(Δt)
+            A = self.A1 * math.sqrt(n * self.dt / nc)
+            A[np.diag_indices(nc)] += sigma
+            self._coarse = (key, lu_factor(A, check_finite=False))
+        return self._coarse[1]
 
-    def _restrict(self, r: np.ndarray, nc: int) -> np.ndarray:
-        rp = np.zeros((nc - 1) * self.k + 1)
-        rp[:len(r)] = r
-        Rm = rp[:-1].reshape(nc - 1, self.k)
-        rc = np.zeros(nc)
-        rc[:-1] += Rm @ self.w0
-        rc[1:] += Rm @ self.w1
-        rc[-1] += rp[-1]
-        return rc / self.k
+    def _twolevel(self, r: np.ndarray, sigma: float) -> np.ndarray:
+        n, nc = len(r), COARSE_NODES
+        xi = np.arange(n) * (nc / n)          # fine node -> coarse coordinate
+        j = xi.astype(np.int64)
+        w1 = xi - j
+        w0 = 1.0 - w1
 
-    def precond(self, r: np.ndarray) -> np.ndarray:
-        if self.k == 1:
-            return self._coarse_solve(r)
-        n = len(r)
-        nc = -(-(n - 1) // self.k) + 1
-        rc = self._restrict(r, nc)
-        smooth = self._prolong(rc, n)
-        return self._prolong(self._coarse_solve(rc), n) + (r - smooth) / self.sigma
+        def restrict(v):
+            return (np.bincount(j, w0 * v, nc + 1) + np.bincount(j + 1, w1 * v, nc + 1))[:nc] \
+                * (nc / n)
+
+        def prolong(vc):
+            vc = np.r_[vc, 0.0]               # the pressure vanishes at the contact edge
+            return w0 * vc[j] + w1 * vc[j + 1]
+
+        rc = restrict(r)
+        ec = lu_solve(self._coarse_lu(n, sigma), rc, check_finite=False)
+        return prolong(ec) + (r - prolong(rc)) / sigma
 
     def solve(self, r, sigma, x0=None, stats=None):
         """Solve on the contact nodes 0..len(r)-1; sigma is h K S there."""
-        exact = self.k == 1 and np.all(sigma == self.sigma)
-        if exact:
-            return self._coarse_solve(r)
-        return linalg.gmres(lambda v: self.matvec(v, sigma), self.precond, r, x0=x0,
+        if self.nested:
+            if np.all(sigma == self.sigma):
+                return self._nested_solve(r)
+            precond = self._nested_solve
+        else:
+            s0 = float(np.mean(sigma))
+
+            def precond(v):
+                return self._twolevel(v, s0)
+        return linalg.gmres(lambda v: self.matvec(v, sigma), precond, r, x0=x0,
                             rtol=1e-9, stats=stats)
 
 
@@ -180,10 +199,16 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
     E, K = model.E_star, model.wear_rate
     S = np.ones(N + 1) if state.slip is None else state.slip
     system = system or ImplicitSystem(model, h)
-    m = max(state.m if m_guess is None else m_guess, 0)
+    if m_guess is None:
+        # explicit predictor of the contact edge
+        g_pred = transforms.to_1d(state.f + h * K * S * state.p)
+        below = np.flatnonzero(state.depth - g_pred[:N - 1] > 0.0)
+        m_guess = int(below[-1]) if below.size else state.m
+    m = max(m_guess, 0)
     stats = {"gmres_iterations": 0, "contact_iterations": 0}
     seen = set()
-    tol = 1e-9
+    tried = []
+    tol = EDGE_TOL
     while True:
         stats["contact_iterations"] += 1
         if m >= N - 1:
@@ -216,10 +241,24 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
             m_new = int(pos[-1]) if pos.size else 0
         else:
             break
-        if (m_new, m) in seen or stats["contact_iterations"] > 50:
-            raise SolverError(f"implicit wear step: the contact set did not settle "
-                              f"(nodes {m} <-> {m_new}); reduce sliding.step_hat")
-        seen.add((m_new, m))
+        # the edge iteration m -> m_new contracts geometrically: Aitken's
+        # extrapolation of the last three iterates jumps close to its limit
+        tried.append(m)
+        if len(tried) >= 2:
+            m0, m1, m2 = tried[-2], tried[-1], m_new
+            denom = m2 - 2 * m1 + m0
+            if (m1 - m0) * (m2 - m1) > 0 and denom != 0:
+                jump = int(round(m0 - (m1 - m0) ** 2 / denom))
+                if min(m1, m2) <= jump <= m2 + 4 * abs(m2 - m1) or \
+                        max(m1, m2) >= jump >= m2 - 4 * abs(m2 - m1):
+                    if jump not in tried:
+                        m_new = jump
+        if m_new in tried or stats["contact_iterations"] > 50:
+            if m_new in tried and (m_new, m) not in seen:
+                seen.add((m_new, m))
+            else:
+                raise SolverError(f"implicit wear step: the contact set did not settle "
+                                  f"(nodes {m} <-> {m_new}); reduce sliding.step_hat")
         m = m_new
     qq = np.zeros(N + 1)
     qq[:n] = np.maximum(q, 0.0)
