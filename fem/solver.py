@@ -12,6 +12,7 @@ from cases import CaseError, RunResult, reference
 from cases.profiles import height
 
 from . import wear
+from ._blas import single_threaded_blas
 from .model import build
 
 #: growth of the element size away from the contact arc, per element order:
@@ -68,7 +69,16 @@ def mesh_parameters(case) -> meshes.SphereMeshParameters:
 
 
 def solve(case, progress=None) -> RunResult:
-    """Run the FEM superelement model on ``case``; see :mod:`fem`."""
+    """Run the FEM superelement model on ``case``; see :mod:`fem`.
+
+    Dense algebra runs on one BLAS thread (:mod:`fem._blas`: several times
+    faster here for these small matrices on a shared 2-core machine).
+    """
+    with single_threaded_blas():
+        return _solve(case, progress)
+
+
+def _solve(case, progress=None) -> RunResult:
     t_start = time.perf_counter()
     params = mesh_parameters(case)
     sc = reference.scales(case)
