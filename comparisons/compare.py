@@ -443,7 +443,9 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
                       "run's history at the stage's sliding distance. The pressure is compared "
                       f"in the interior r < (1 − {case.compare.edge_band:g})·a (a: the smaller "
                       "of the two contact radii) and reported separately in the edge band up "
-                      f"to (1 + {case.compare.edge_band:g})·a of the larger one."),
+                      f"to (1 + {case.compare.edge_band:g})·a of the larger one. F0 and a0 are "
+                      "the analytic half-space values of the unworn contact, so at ŝ = 0 the "
+                      "columns F/F0 and a/a0 measure each solver against that solution."),
                R.para(f"Stages requested (ŝ): {', '.join(f'{s:g}' for s in case.stages.s_hat)}; "
                       f"reached: MDR {m['stages_reached']['mdr']}, "
                       f"FEM {m['stages_reached']['fem']}; compared: {K}.")]
@@ -535,23 +537,19 @@ def _failure_text(m) -> str:
         for name, c in st["checks"].items():
             if not c["passed"]:
                 failed.append(f"stage {st['index']} (ŝ={st['s_hat_mdr']:.3g}) {name} "
-                              f"{R_fmt(c['value'])} > {c['tolerance']:g}")
+                              f"{report.fmt(c['value'])} > {c['tolerance']:g}")
     tr = m.get("truncated_reference")
     if tr is not None:
         for n, v in tr["solvers"].items():
             for name, c in v["checks"].items():
                 if not c["passed"]:
-                    failed.append(f"{n.upper()} vs reference {name} {R_fmt(c['value'])} > "
+                    failed.append(f"{n.upper()} vs reference {name} {report.fmt(c['value'])} > "
                                   f"{c['tolerance']:g}")
         if not tr["solvers"]:
             failed.append("no solver has an ŝ = 0 stage to compare with the reference")
     if m["stages_compared"] == 0:
         failed.append("no stage reached by both solvers")
     return "failed: " + "; ".join(failed)
-
-
-def R_fmt(v):
-    return report.fmt(v)
 
 
 def _peak_cell(q) -> str:

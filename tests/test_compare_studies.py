@@ -1,8 +1,6 @@
 """The edge study and the finite-sphere sweep of ``wearcheck compare``, orchestrated
 around stand-in solvers whose answers are known by construction."""
 
-import math
-
 import numpy as np
 import pytest
 

@@ -72,7 +72,8 @@ def _hertz_result(case_scales, r, n_stages, *, pressure_factor=1.0, force_factor
     a = sc["a0"] * radius_factor
     p = reference.hertz_pressure(r, sc["E_star"], R, sc["a0"]) * pressure_factor
     f = r**2 / (2 * R) + profile_offset
-    hist = dict(s=s, force=np.full(n_stages, sc["F0"] * force_factor), depth=np.full(n_stages, 1e-6),
+    hist = dict(s=s, force=np.full(n_stages, sc["F0"] * force_factor),
+                depth=np.full(n_stages, 1e-6),
                 contact_radius=np.full(n_stages, a), wear_center=np.zeros(n_stages),
                 wear_volume=np.zeros(n_stages))
     return RunResult(history=hist, stage_s=s, r=r, f=np.tile(f, (n_stages, 1)),

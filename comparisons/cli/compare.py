@@ -6,6 +6,7 @@ the comparison fails (DIR is still written, with the failing verdict).
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -17,10 +18,10 @@ def _ratios(text):
     try:
         values = tuple(float(v) for v in text.split(","))
     except ValueError:
-        raise SystemExit(f"wearcheck compare: --sphere-ratios '{text}': expected numbers "
-                         "separated by commas, e.g. 0.005,0.01,0.02")
+        raise argparse.ArgumentTypeError(f"'{text}': expected numbers separated by commas, "
+                                         "e.g. 0.005,0.01,0.02") from None
     if not values or any(not 0 < v < 1 for v in values):
-        raise SystemExit(f"wearcheck compare: --sphere-ratios '{text}': each a0/R must be in (0, 1)")
+        raise argparse.ArgumentTypeError(f"'{text}': each a0/R must be in (0, 1)")
     return values
 
 
