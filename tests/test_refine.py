@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import csv
 import json
+import sys
 import math
 
+import cloudpickle
 import numpy as np
 import pytest
 
@@ -14,6 +16,10 @@ import cases
 from cases import reference
 from comparisons import refine as rf
 from comparisons.runio import Run
+
+# the stand-in solvers below travel to the Dask workers by value, so the
+# workers need not import this test module
+cloudpickle.register_pickle_by_value(sys.modules[__name__])
 
 # ----------------------------------------------------------------------------
 # The pure part against problems of known order

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import csv
 import json
+import sys
 
+import cloudpickle
 import numpy as np
 import pytest
 
@@ -12,6 +14,10 @@ import cases
 from cases import reference
 from comparisons.cli.sweep import parse_vary, split_values, sweep
 from comparisons.runio import Run
+
+# the stand-in solvers below travel to the Dask workers by value, so the
+# workers need not import this test module
+cloudpickle.register_pickle_by_value(sys.modules[__name__])
 
 
 def fake_solve(case, solver, progress=None):
