@@ -48,7 +48,13 @@ def main(args) -> int:
         print(f"wearcheck sweep: interrupted; the runs finished are in {out}, "
               "no sweep.csv was written", file=sys.stderr)
         return 130
-    print(Path(out) / "sweep.csv")
+    names = [n for n, _ in (parse_vary(v) for v in args.vary)]
+    print(f"{'run':<40} {'wall s':>8} {'final ŝ':>8} {'final F/F0':>10}  status")
+    for r in rows:
+        print(f"{r['run']:<40} {fmt(r['wall_seconds'], '.3g'):>8} "
+              f"{fmt(r['final_s_hat'], '.4g'):>8} {fmt(r['final_F_over_F0'], '.4g'):>10}  "
+              f"{r['status']}")
+    print(f"-> {Path(out) / 'sweep.csv'} ({', '.join(names)})")
     failed = [r for r in rows if r["status"] != "ok"]
     if failed and not args.quiet:
         print(f"{len(failed)} of {len(rows)} runs failed", file=sys.stderr)
