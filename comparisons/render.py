@@ -85,6 +85,7 @@ def _von_mises_picture(run: Run, k: int, window, clim, path: Path) -> None:
                      f"undeformed r-z section, lengths in a0 = {a0:.3g} m; "
                      "colours from 0 to this picture's maximum",
                      font_size=11, color="black", position="upper_left")
+    # (the hidden z axis still needs a non-empty title: VTK errors on "")
     plotter.show_bounds(bounds=(-r_max, r_max, z_lo, z_hi, 0.0, 0.0), xtitle="r / a0",
                         ytitle="z / a0", ztitle="y", color="black", location="outer",
                         show_zaxis=False, grid=False, font_size=12, use_2d=True)
