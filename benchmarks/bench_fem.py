@@ -1,0 +1,244 @@
+"""Speed and accuracy tables of the FEM superelement model (prints Markdown).
+
+    python benchmarks/bench_fem.py            # everything (~1-2 min)
+    python benchmarks/bench_fem.py --quick    # sizes 125, 250 only
+
+Each size runs in a fresh process (peak memory = its maximum resident set),
+with a fresh mesh cache so that gmsh's time is included. Not a test: numbers
+depend on the machine and its load (printed with the tables).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+PAPER = ROOT / "cases" / "paper.toml"
+
+
+def one_size(n: int) -> dict:
+    """Timings of one contact-node count (run in a child process)."""
+    import numpy as np
+
+    import cases
+    import fem
+    import meshes
+    from cases import reference
+    from fem._blas import single_threaded_blas
+    from fem.contact import PrefixCholesky, solve_lcp
+    from fem.model import build
+    from fem.solver import mesh_parameters
+
+    case = cases.load(PAPER, [f"fem.contact_nodes={n}"])
+    out = {"n": n}
+    with single_threaded_blas():
+        params = mesh_parameters(case)
+        t = time.perf_counter()
+        sm = meshes.sphere_mesh(params)
+        out["mesh"] = time.perf_counter() - t
+        model = build(sm, case.indenter.youngs_modulus, case.indenter.poisson_ratio, 2)
+        out["assembly"] = model.timings["assembly"]
+        model.factorise()
+        out["factorisation"] = model.timings["factorisation"]
+        C = model.compliance()
+        out["compliance"] = model.timings["compliance"]
+        out.update(model.stats())
+        # one implicit wear step at the unworn state: C + D factor, warm start
+        sc = reference.scales(case)
+        Ci = C[1:, 1:]
+        z = cases.profiles.height(case.indenter, model.r[1:])
+        area = model.area_rowsum[1:]
+        D = case.wear_rate * 0.02 / sc["s_hat_per_m"] / area
+        t = time.perf_counter()
+        fac = PrefixCholesky(Ci + np.diag(D))
+        out["factor_C_plus_K"] = time.perf_counter() - t
+        res = solve_lcp(fac, z, depth=case.loading.depth, gap_scale=sc["d0"],
+                        force_scale=sc["F0"])
+        reps = 20
+        t = time.perf_counter()
+        for _ in range(reps):
+            solve_lcp(fac, z, depth=case.loading.depth, active=res.active, gap_scale=sc["d0"],
+                      force_scale=sc["F0"])
+        out["wear_step"] = (time.perf_counter() - t) / reps
+        # the same active block factorised from scratch, for comparison
+        A = res.active
+        t = time.perf_counter()
+        for _ in range(reps):
+            from scipy import linalg
+            linalg.cho_solve(linalg.cho_factor(fac.M[np.ix_(A, A)]), z[A])
+        out["refactor_active_block"] = (time.perf_counter() - t) / reps
+    # the whole run, case file to F < 1 % F0 (fresh model, mesh from the cache)
+    t = time.perf_counter()
+    r = fem.solve(cases.load(PAPER, [f"fem.contact_nodes={n}"]))
+    out["paper_run"] = time.perf_counter() - t
+    out["steps"] = r.info["steps"]
+    out["wear_loop"] = r.info["timings"]["wear_loop"]
+    out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    return out
+
+
+def factorisation_options(n: int) -> list[dict]:
+    """Factorise + compliance with each scipy option (run in a child process)."""
+    import numpy as np
+
+    import cases
+    import meshes
+    from fem._blas import single_threaded_blas
+    from fem.model import FACTORISATIONS, build
+    from fem.solver import mesh_parameters
+
+    case = cases.load(PAPER, [f"fem.contact_nodes={n}"])
+    sm = meshes.sphere_mesh(mesh_parameters(case))
+    rows, ref = [], None
+    with single_threaded_blas():
+        for method in FACTORISATIONS[:3]:
+            for route in ("schur", "columns"):
+                model = build(sm, case.indenter.youngs_modulus, case.indenter.poisson_ratio, 2)
+                model.factorise(method, contact_last=route == "schur")
+                C = model.compliance(route)
+                ref = C if ref is None else ref
+                rows.append(dict(method=method, route=model.timings["compliance_method"],
+                                 factorisation=model.timings["factorisation"],
+                                 compliance=model.timings["compliance"],
+                                 nnz=int(model.lu.L.nnz + model.lu.U.nnz),
+                                 diff=float(np.max(np.abs(C - ref)) / np.max(np.abs(ref)))))
+    return rows
+
+
+def child(what: str, n: int):
+    env = dict(os.environ)
+    with tempfile.TemporaryDirectory() as cache:
+        env["WEARCHECK_CACHE"] = cache
+        proc = subprocess.run([sys.executable, __file__, "--child", what, str(n)], env=env,
+                              capture_output=True, text=True, check=False)
+    if proc.returncode != 0:
+        raise RuntimeError(proc.stderr)
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def step_accuracy():
+    """Implicit step size against a fine-step reference at ŝ = 2 (paper case)."""
+    import numpy as np
+
+    import cases
+    import fem
+    from cases import reference
+
+    base = cases.load(PAPER)
+    sc = reference.scales(base)
+    dist = 2.0 / sc["s_hat_per_m"]
+    runs = {}
+    for st in (0.0025, 0.01, 0.02, 0.04, 0.08):
+        c = cases.load(PAPER, ["sliding.until=distance", f"sliding.distance={dist!r}",
+                               f"sliding.step_hat={st}", "stages.s_hat=[2.0]"])
+        runs[st] = fem.solve(c)
+    ref = runs[0.0025]
+    rows = []
+    for st in (0.01, 0.02, 0.04, 0.08):
+        r = runs[st]
+        rows.append((st, (r.history["force"][-1] - ref.history["force"][-1]) / sc["F0"],
+                     np.max(np.abs(r.f[-1] - ref.f[-1])) / sc["d0"], r.info["steps"]))
+    return rows
+
+
+def recovery_wiggle():
+    """Odd-even component of the nodal pressure near the worn contact edge."""
+    import numpy as np
+
+    import cases
+    import fem
+    from cases import reference
+
+    out = []
+    for rec in ("lumped", "consistent"):
+        c = cases.load(PAPER, [f"fem.pressure_recovery={rec}"])
+        r = fem.solve(c)
+        sc = reference.scales(c)
+        for k, s in enumerate(r.stage_s):
+            a = np.interp(s, r.history["s"], r.history["contact_radius"])
+            p = r.p[k]
+            odd = np.abs(p[1:-1] - 0.5 * (p[:-2] + p[2:]))
+            band = (r.r[1:-1] > 0.8 * a) & (r.r[1:-1] < a)
+            inner = r.r[1:-1] < 0.5 * a
+            out.append((rec, s * sc["s_hat_per_m"], odd[band].max() / sc["p0"],
+                        odd[inner].max() / sc["p0"], p.max() / sc["p0"], p.min() / sc["p0"]))
+    return out
+
+
+def cli_run():
+    """``wearcheck run cases/paper.toml --solver fem``, wall clock, cold and warm cache."""
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, WEARCHECK_CACHE=str(Path(tmp) / "cache"))
+        for label in ("cold mesh cache", "warm mesh cache"):
+            t = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "comparisons.cli", "run", str(PAPER),
+                            "--solver", "fem", "--out", str(Path(tmp) / "run"), "--quiet"],
+                           cwd=ROOT, env=env, check=True)
+            rows.append((label, time.perf_counter() - t))
+    return rows
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--child", nargs=2, metavar=("WHAT", "N"), help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        what, n = args.child[0], int(args.child[1])
+        print(json.dumps(one_size(n) if what == "size" else factorisation_options(n)))
+        return
+    sizes = (125, 250) if args.quick else (125, 250, 500, 1000)
+    print(f"# FEM benchmark ({os.cpu_count()} CPUs, load average "
+          f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}, {time.strftime('%Y-%m-%d %H:%M')})\n")
+    print("## Superelement and wear loop by contact-node count (paper case, P2)\n")
+    print("| contact nodes | DOFs | mesh s | assembly s | factorisation s | compliance s "
+          "| C+K factor s | wear step ms | refactor active block ms | paper run s | steps "
+          "| peak RSS MB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for n in sizes:
+        o = child("size", n)
+        print(f"| {o['contact_nodes']} | {o['dofs']} | {o['mesh']:.3f} | {o['assembly']:.3f} "
+              f"| {o['factorisation']:.3f} | {o['compliance']:.3f} | {o['factor_C_plus_K']:.3f} "
+              f"| {1e3 * o['wear_step']:.2f} | {1e3 * o['refactor_active_block']:.2f} "
+              f"| {o['paper_run']:.2f} | {o['steps']} | {o['peak_rss_mb']:.0f} |")
+    print("\nwear step: one warm-started implicit LCP solve (prefix factor of C + K); "
+          "refactor active block: a fresh Cholesky of the active block instead.\n")
+
+    print("## Factorisation options (scipy SuperLU orderings; compliance route)\n")
+    print("| contact nodes | ordering | route | factorisation s | compliance s | nnz(L+U) "
+          "| max rel. diff of C |")
+    print("|---|---|---|---|---|---|---|")
+    for n in (sizes[1], sizes[-1]):
+        for row in child("factor", n):
+            print(f"| {n} | {row['method']} | {row['route']} | {row['factorisation']:.3f} "
+                  f"| {row['compliance']:.3f} | {row['nnz']} | {row['diff']:.1e} |")
+
+    print("\n## `wearcheck run cases/paper.toml --solver fem` (wall clock, incl. start-up)\n")
+    print("| mesh cache | seconds |\n|---|---|")
+    for label, sec in cli_run():
+        print(f"| {label} | {sec:.2f} |")
+
+    print("\n## Implicit Euler step (paper case, ŝ = 2) against Δŝ = 0.0025\n")
+    print("| step_hat | ΔF / F0 | max Δprofile / d | steps |\n|---|---|---|---|")
+    for st, dF, df, steps in step_accuracy():
+        print(f"| {st} | {dF:+.2e} | {df:.2e} | {steps} |")
+
+    print("\n## Pressure recovery: odd-even component |p_i - (p_i-1 + p_i+1)/2| / p0\n")
+    print("| recovery | ŝ | near edge (0.8a-a) | inside (r < 0.5a) | max p/p0 | min p/p0 |")
+    print("|---|---|---|---|---|---|")
+    for rec, sh, edge, inner, pmax, pmin in recovery_wiggle():
+        print(f"| {rec} | {sh:g} | {edge:.2e} | {inner:.2e} | {pmax:.3f} | {pmin:+.3f} |")
+
+
+if __name__ == "__main__":
+    main()
