@@ -42,8 +42,9 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
         force_fraction: float, progress=None, check_oscillation: bool = True) -> dict:
     """Step the wear from the unworn state; the numerics without case handling.
 
-    h, stage_s, s_end in metres of sliding. Returns the history (lists),
-    the stages reached (s, f, p) and counters.
+    h, stage_s, s_end in metres of sliding. Returns the history (arrays),
+    the stages reached (s, f, p) and counters. ``check_oscillation=False``
+    lets a test see what an unstable explicit run returns when nobody looks.
     """
     state = wear.contact_state(model, model.f0.copy())
     F_start = state.force
@@ -66,10 +67,8 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
         m_prev = [state.m, state.m]
 
         def step(model, state, hn):
-            # the contact edge moves smoothly, decelerating: extrapolate its
-            # last move geometrically
-            d1, d2 = state.m - m_prev[-1], m_prev[-1] - m_prev[-2]
-            guess = state.m + d1
+            # the contact edge moves smoothly: extrapolate its last move
+            guess = 2 * state.m - m_prev[-1]
             m_prev[:] = [m_prev[-1], state.m]
             return wear.implicit_step(model, state, hn, m_guess=guess, system=system)
     dt = model.dt
@@ -100,8 +99,11 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
         target = s_end
         if stage_s:
             target = min(target, stage_s[0])
-        hn = min(h, target - s)
-        s_new = target if target - s <= h * (1 + 1e-9) else s + h
+        # land exactly on the next stage or the end (never a sliver of a step after it)
+        if target - s <= h * (1 + 1e-9):
+            hn, s_new = target - s, target
+        else:
+            hn, s_new = h, s + h
         if scheme == "explicit":
             new = step(model, state, hn)
             if check_oscillation and wear.oscillation(new.p, new.m):

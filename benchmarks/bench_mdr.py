@@ -1,0 +1,234 @@
+"""MDR solver benchmark on cases/paper.toml (issue 2, §7). Prints tables.
+
+    python benchmarks/bench_mdr.py [--max-n 102400] [--explicit-max-n 3200] [--quick]
+
+1. Resolution ladder N = 200 ... 102400, run to F < 1 % F0: solve time,
+   steps, peak memory (each run in a fresh process), implicit (auto step)
+   and explicit (auto: half the stability limit), and the error of the
+   F/F0 history against the finest implicit level (same step, so the
+   difference is spatial).
+2. The paper's explicit scheme in plain vectorised numpy (uniform x grid,
+   dense Eq. 2 / Eq. 13 matrices, forward Euler at half its stability
+   limit) side by side at N = 800 and 3200.
+3. Time-discretisation error against space error at N = 800.
+4. The ŝ at which F/F0 falls to 0.8, 0.5, 0.3, 0.15, 0.05, 0.02, 0.01.
+
+BLAS runs single-threaded (OPENBLAS_NUM_THREADS=1) unless set otherwise:
+on a shared 2-core machine a multithreaded BLAS spins against other
+processes and slows the small dense factorisation ten-fold.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import cases  # noqa: E402
+from cases import reference  # noqa: E402
+
+PAPER = ROOT / "cases" / "paper.toml"
+S_GRID = np.linspace(0.0, 11.0, 221)       # ŝ at which histories are compared
+
+
+def _history_on_grid(h) -> list:
+    F = np.asarray(h["force"]) / h["force"][0]
+    return np.interp(S_GRID, h["s_hat"], F, right=np.nan).tolist()
+
+
+def one(N: int, scheme: str, step: str, extra=()) -> dict:
+    """One MDR run in this process; returns timings, memory and the history."""
+    import resource
+
+    import mdr
+    overrides = [f"mdr.elements={N}", f'sliding.scheme="{scheme}"', f"sliding.step_hat={step}",
+                 "stages.s_hat=[0.0]", *extra]
+    case = cases.load(PAPER, overrides)
+    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    t = time.perf_counter()
+    res = mdr.solve(case)
+    wall = time.perf_counter() - t
+    rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    h = res.history
+    return dict(N=N, scheme=scheme, wall=wall, solve_seconds=res.solve_seconds,
+                steps=res.info["steps"], step_hat=res.info["step_hat"],
+                limit=res.info.get("stability_limit_hat"),
+                peak_mb=rss1 / 1024, added_mb=(rss1 - rss0) / 1024,
+                F=_history_on_grid(h), s_hat=h["s_hat"].tolist(),
+                force=(h["force"] / h["force"][0]).tolist())
+
+
+def run_child(N, scheme, step="auto", extra=(), timeout=3600):
+    cmd = [sys.executable, __file__, "--one", str(N), scheme, str(step), *extra]
+    out = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+    if out.returncode != 0:
+        return dict(N=N, scheme=scheme, error=out.stderr.strip().splitlines()[-1])
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+# -- the paper's scheme in plain numpy -----------------------------------------
+
+def paper_explicit(N: int) -> dict:
+    """Forward Euler on a uniform x grid with dense transforms (the paper's way).
+
+    Springs at x_i = i Δx; Eq. 2 and Eq. 13 as dense matrices, integrating
+    the kernels exactly over each segment of a piecewise-linear f or q;
+    step at half the stability limit (power iteration on the rate matrix).
+    """
+    case = cases.load(PAPER, [f"mdr.elements={N}"])
+    sc = reference.scales(case)
+    from cases import profiles
+    L = case.mdr.domain_factor * math.sqrt(2.0) * sc["a0"]
+    x = np.linspace(0.0, L, N + 1)
+    E, K, d = case.E_star, case.wear_rate, case.loading.depth
+    t0 = time.perf_counter()
+    xi, xj = x[:, None], x[None, :]
+    # Eq. 2: g_i = f_0 + x_i Σ_j (f_{j+1}-f_j)/Δx [asin(x_{j+1}/x_i) - asin(x_j/x_i)]
+    # (segments beyond x_i contribute asin(1) - asin(1) = 0; row 0 is g_0 = f_0)
+    ratio = np.divide(xj, xi, out=np.zeros((N + 1, N + 1)), where=xi > 0)
+    A = np.arcsin(np.minimum(ratio, 1.0))
+    W = (A[:, 1:] - A[:, :-1]) * x[:, None] / (x[1] - x[0])      # weight of f_{j+1}-f_j
+    # Eq. 13: p_i = -(1/π) Σ_j (q_{j+1}-q_j)/Δx [acosh(x_{j+1}/r_i) - acosh(x_j/r_i)], x_j >= r_i
+    r = x.copy()
+    r[0] = 0.5 * x[1]                     # the log-singular r = 0 is taken half a cell out
+    with np.errstate(divide="ignore", invalid="ignore"):
+        C = np.arccosh(np.maximum(xj / r[:, None], 1.0))
+    P = -(C[:, 1:] - C[:, :-1]) / (math.pi * (x[1] - x[0]))
+    f = profiles.height(case.indenter, x)
+
+    def rate(f):
+        g = f[0] + W @ np.diff(f)
+        q = E * np.maximum(d - g, 0.0)
+        return K * (P @ np.diff(q)), q
+
+    # stability: largest eigenvalue of the linearised rate, by power iteration
+    v = np.random.default_rng(0).random(N + 1)
+    lam = 0.0
+    for _ in range(200):
+        w = K * E * (P @ np.diff(W @ np.diff(v) + v[0]))
+        lam, v = np.linalg.norm(w) / np.linalg.norm(v), w / np.linalg.norm(w)
+    h = 1.0 / lam                          # half of 2/λ
+    dx = x[1] - x[0]
+    wq = np.full(N + 1, dx)
+    wq[[0, -1]] = dx / 2
+    F_hist, s_hist = [], []
+    s = 0.0
+    F0 = None
+    while True:
+        dfds, q = rate(f)
+        F = 2.0 * (wq @ q)
+        F0 = F if F0 is None else F0
+        F_hist.append(F / F0)
+        s_hist.append(s * sc["s_hat_per_m"])
+        if F < 0.01 * F0:
+            break
+        f = f + h * dfds
+        s += h
+    wall = time.perf_counter() - t0
+    return dict(N=N, wall=wall, steps=len(F_hist) - 1, step_hat=h * sc["s_hat_per_m"],
+                F=np.interp(S_GRID, s_hist, F_hist, right=np.nan).tolist())
+
+
+# -- tables ------------------------------------------------------------------------
+
+def err(a, b):
+    a, b = np.asarray(a), np.asarray(b)
+    ok = np.isfinite(a) & np.isfinite(b)
+    return float(np.max(np.abs(a[ok] - b[ok])))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--max-n", type=int, default=102400)
+    ap.add_argument("--explicit-max-n", type=int, default=3200)
+    ap.add_argument("--paper-max-n", type=int, default=3200)
+    ap.add_argument("--quick", action="store_true", help="N <= 6400, no N = 3200 paper scheme")
+    ap.add_argument("--one", nargs="+", help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.one:
+        N, scheme, step, *extra = args.one
+        print(json.dumps(one(int(N), scheme, step, extra)))
+        return
+    if args.quick:
+        args.max_n, args.paper_max_n = 6400, 800
+    print(f"# MDR benchmark on {PAPER.name}, load average {os.getloadavg()[0]:.1f}, "
+          f"OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']}\n")
+    Ns = [n for n in (200, 400, 800, 1600, 3200, 6400, 12800, 25600, 51200, 102400)
+          if n <= args.max_n]
+    imp = {N: run_child(N, "implicit") for N in Ns}
+    exp = {N: run_child(N, "explicit") for N in Ns if N <= args.explicit_max_n}
+    finest = imp[Ns[-1]]["F"]
+    # time-accurate reference at N = 800: Richardson in Δŝ (implicit Euler is
+    # first order, so 2 F(Δ/2) - F(Δ) removes the leading term)
+    steps = [0.4, 0.2, 0.1, 0.05, 0.025, 0.0125]
+    runs = {st: run_child(800, "implicit", st) for st in steps}
+    ref_t = 2 * np.asarray(runs[steps[-1]]["F"]) - np.asarray(runs[steps[-2]]["F"])
+    print("## 1. Resolution ladder (to F < 1 % F0)\n")
+    print("| N | scheme | Δŝ | steps | solve s | peak RSS MB | +MB in solve | "
+          "err vs finest | err vs time-accurate N=800 |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for N in Ns:
+        for r in (imp[N], exp.get(N)):
+            if r is None:
+                continue
+            if "error" in r:
+                print(f"| {N} | {r['scheme']} | | | failed: {r['error']} | | | | |")
+                continue
+            e = err(r["F"], finest) if r is not imp[Ns[-1]] else 0.0
+            print(f"| {N} | {r['scheme']} | {r['step_hat']:.4g} | {r['steps']} | "
+                  f"{r['solve_seconds']:.3g} | {r['peak_mb']:.0f} | {r['added_mb']:.0f} | "
+                  f"{e:.2e} | {err(r['F'], ref_t):.2e} |")
+    print("\nerr = max over ŝ in [0, 11] of |F/F0 - reference|. Implicit rows share Δŝ with "
+          "the finest level, so 'err vs finest' is their spatial error; the explicit rows' "
+          "small steps make 'err vs time-accurate' their total error.\n")
+
+    print("## 2. The paper's explicit scheme in plain numpy, side by side\n")
+    print("| N | scheme | Δŝ | steps | solve s | err vs time-accurate N=800 | time / paper's |")
+    print("|---|---|---|---|---|---|---|")
+    for N in (800, 3200):
+        if N > args.paper_max_n or N not in imp:
+            continue
+        pe = paper_explicit(N)
+        mine = imp[N]
+        print(f"| {N} | paper explicit, numpy | {pe['step_hat']:.3g} | {pe['steps']} | "
+              f"{pe['wall']:.3g} | {err(pe['F'], ref_t):.2e} | |")
+        print(f"| {N} | mdr implicit (auto) | {mine['step_hat']:.3g} | {mine['steps']} | "
+              f"{mine['solve_seconds']:.3g} | {err(mine['F'], ref_t):.2e} | "
+              f"{mine['solve_seconds'] / pe['wall']:.3f} |")
+    print()
+
+    print("## 3. Time against space error of F/F0 at N = 800\n")
+    print("| Δŝ | steps | solve s | time error (vs Richardson) |")
+    print("|---|---|---|---|")
+    for st in steps:
+        r = runs[st]
+        print(f"| {st} | {r['steps']} | {r['solve_seconds']:.3g} | {err(r['F'], ref_t):.2e} |")
+    if Ns[-1] > 800:
+        print(f"\nspace error at N = 800 (Δŝ = 0.1 on both): "
+              f"{err(runs[0.1]['F'], finest):.2e} against N = {Ns[-1]}")
+    print("\n## 4. ŝ at which F/F0 falls to a fraction (N = 800, Richardson in Δŝ)\n")
+    s_fine = np.linspace(0, 11.5, 23001)
+    F_a = np.interp(s_fine, runs[steps[-1]]["s_hat"], runs[steps[-1]]["force"])
+    F_b = np.interp(s_fine, runs[steps[-2]]["s_hat"], runs[steps[-2]]["force"])
+    F_r = 2 * F_a - F_b
+    print("| F/F0 | ŝ |")
+    print("|---|---|")
+    for frac in (0.8, 0.5, 0.3, 0.15, 0.05, 0.02, 0.01):
+        k = int(np.argmax(F_r < frac))
+        print(f"| {frac} | {s_fine[k]:.3f} |")
+
+
+if __name__ == "__main__":
+    main()
