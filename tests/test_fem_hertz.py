@@ -87,3 +87,21 @@ def test_hertz_error_decreases_under_h_refinement():
     slope = np.polyfit(np.log(levels), np.log(errors), 1)[0]
     assert slope < -1.0, (slope, errors)
     assert errors[-1] < 2e-3
+
+
+def test_truncated_paraboloid_against_quadrature():
+    # The flattened tip of paper Eq. 17 (cases/truncated.toml, a0/R = 0.011):
+    # force within the finite-body excess (0 .. 1.2 a0/R) of the half-space
+    # closed form; pressure against the quadrature of Eqs. 13/19 within 1 %
+    # p0 away from the log singularity at r = b and from the edge (measured
+    # 0.5 %: finite body plus discretisation, as for Hertz).
+    case = cases.load(cases.shipped("truncated"), ["fem.contact_nodes=121"])
+    res = fem.solve(case)
+    sc = reference.scales(case)
+    ind = case.indenter
+    a0, p0 = sc["a0"], sc["p0"]
+    assert 0.0 < res.history["force"][0] / sc["F0"] - 1.0 < 1.2 * a0 / ind.radius
+    pt = reference.truncated_paraboloid_pressure(res.r, sc["E_star"], ind.radius,
+                                                 ind.flat_radius, a0)
+    away = (np.abs(res.r - ind.flat_radius) > 0.1 * a0) & (res.r < 0.9 * a0)
+    assert np.max(np.abs(res.p[0] - pt)[away]) < 0.01 * p0

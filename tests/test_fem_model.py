@@ -151,3 +151,16 @@ def test_rigid_indenter_and_missing_radius_are_rejected():
                        "poisson_ratio": NU}
     with pytest.raises(CaseError, match=r"indenter\.radius"):
         fem.solve(cases.from_dict(raw))
+
+
+def test_single_threaded_blas_restores_thread_counts():
+    # best effort: where OpenBLAS is found, one thread inside, the old count after
+    from fem._blas import _openblas_handles, single_threaded_blas
+
+    handles = _openblas_handles()
+    before = [g() for _, g in handles]
+    with single_threaded_blas():
+        assert all(g() == 1 for _, g in handles)
+        A = np.eye(3) @ np.ones(3)  # BLAS still works
+        assert np.allclose(A, 1.0)
+    assert [g() for _, g in handles] == before
