@@ -188,7 +188,7 @@ def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
                 progress(min(s / s_end, 1.0) if s_end > 0 else 1.0, f"s = {s:.3g} m")
             else:
                 F = max(out.force[-1], 1e-300)
-                progress(min(math.log(F / F_start) / math.log(force_fraction), 1.0),
+                progress(min(max(math.log(F / F_start) / math.log(force_fraction), 0.0), 1.0),
                          f"F/F0 = {F / F_start:.3g}")
     out.borderings = sum(f.borderings for f in factors.values())
     return out

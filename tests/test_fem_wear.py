@@ -167,3 +167,24 @@ def test_consistent_recovery_matches_lumped_inside_unworn_contact():
     inside = cons.r < 0.8 * sc["a0"]
     assert np.max(np.abs(cons.p[0] - lump.p[0])[inside]) < 1e-2 * sc["p0"]
     assert cons.info["pressure_recovery"] == "consistent"
+
+
+def test_contact_outgrowing_the_arc_is_an_error():
+    # An arc of 0.8·√2·a0 = 1.13 a0 holds the unworn contact, but under depth
+    # control the worn contact grows towards √2 a0: the run must stop with a
+    # SolverError naming fem.contact_factor, not return a clipped contact.
+    with pytest.raises(SolverError, match=r"end of the candidate arc.*fem\.contact_factor"):
+        fem.solve(_case("fem.contact_factor=0.8", "sliding.step_hat=0.05", s_hat_end=8.0))
+
+
+def test_run_command_writes_fem_run(tmp_path):
+    from comparisons.cli import main as cli
+    from comparisons.runio import Run
+
+    out = tmp_path / "run"
+    assert cli(["run", str(cases.shipped("hertz")), "--solver", "fem", "--quiet",
+                "--set", "fem.contact_nodes=41", "--out", str(out)]) == 0
+    run = Run(out)
+    assert run.solver == "fem" and run.fields is not None
+    assert run.meta["info"]["mesh"]["contact_nodes"] == 41
+    assert np.array_equal(run.stages["r"], run.fields["points"][run.fields["contact_nodes"], 0])
