@@ -552,9 +552,11 @@ def _failure_text(m) -> str:
     return "failed: " + "; ".join(failed)
 
 
-def _peak_cell(q) -> str:
+def _peak_cell(q, with_edge=True) -> str:
     """One peak in a table cell: position, height, prominence (relative to p(0))."""
     if not q["present"]:
+        if not with_edge:
+            return "none"
         return f"none (p_edge/p(0)={report.fmt(q.get('edge_height'), 3)})"
     text = (f"r/a={report.fmt(q['r_over_a'], 4)}, p/p(0)={report.fmt(q['height'], 4)}, "
             f"prom.={report.fmt(q['prominence'], 2)}")
@@ -582,7 +584,7 @@ def _edge_blocks(m) -> list:
             q = peaks[name][k] if k < len(peaks[name]) else None
             if name == "mdr":
                 row.append(fmt(q["s_hat"]) if q else "—")
-            row += [_peak_cell(q), fmt(q["edge_height"])] if q else ["—", "—"]
+            row += [_peak_cell(q, False), fmt(q["edge_height"])] if q else ["—", "—"]
         rows.append(row)
     blocks.append(R.table(["stage", "ŝ", "MDR peak", "MDR p_edge/p(0)", "FEM peak",
                            "FEM p_edge/p(0)"], rows))
@@ -632,6 +634,11 @@ def summarise_edge_study(es) -> str:
             text += ("; " if conv or dep else "") + f"no peak at stage(s) {none}"
         if not verdicts:
             text += "no stage"
+        last = sol["stages"][-1]["levels"] if sol["stages"] else []
+        edge = [d["edge_height"] for d in last if math.isfinite(d.get("edge_height", math.nan))]
+        if edge:
+            text += (f"; at the last stage p(r = {edge_peak.EDGE_PROBE:g} a)/p(0) = "
+                     f"{min(edge):.3g} to {max(edge):.3g} over the levels")
         parts.append(text)
     return ". ".join(parts) + "."
 
