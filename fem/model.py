@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from skfem import (Basis, ElementTriP1, ElementTriP2, ElementVector, FacetBasis, MeshTri,
-                   asm)
+from skfem import (Basis, ElementTriP1, ElementTriP2, ElementVector, FacetBasis, LinearForm,
+                   MeshTri, asm)
 from skfem.models.poisson import mass
 
 from cases import SolverError
@@ -52,12 +52,13 @@ def factorise(A, method: str = DEFAULT_FACTORISATION):
     kind, _, perm = method.partition("-")
     if kind != "splu" or perm.upper() not in ("COLAMD", "MMD_ATA", "MMD_AT_PLUS_A", "NATURAL"):
         raise ValueError(f"unknown factorisation {method!r}; one of {FACTORISATIONS}")
+    symmetric = perm.upper() in ("MMD_AT_PLUS_A", "NATURAL")
     try:
-        # symmetric-structure ordering with a small pivot threshold keeps
-        # SuperLU close to a Cholesky on this SPD matrix
+        # for a symmetric ordering, diagonal pivots (stable for SPD K) keep
+        # SuperLU a Cholesky in disguise and leave the ordering untouched
         return spla.splu(sp.csc_matrix(A), permc_spec=perm.upper(),
-                         diag_pivot_thresh=0.0 if perm.upper() == "MMD_AT_PLUS_A" else 1.0,
-                         options=dict(SymmetricMode=perm.upper() == "MMD_AT_PLUS_A"))
+                         diag_pivot_thresh=0.0 if symmetric else 1.0,
+                         options=dict(SymmetricMode=symmetric))
     except RuntimeError as exc:
         raise SolverError(f"the stiffness matrix could not be factorised ({exc}); "
                           "is the sphere constrained?") from None
@@ -198,9 +199,6 @@ class SphereModel:
         sq = stress_at_quadrature(self.basis, u, self.E, self.nu)
         rhs = np.column_stack([asm(_project_form, self.scalar, s=s) for s in sq])
         return self._mass_lu.solve(rhs)
-
-
-from skfem import LinearForm  # noqa: E402
 
 
 @LinearForm

@@ -164,3 +164,16 @@ def test_single_threaded_blas_restores_thread_counts():
         A = np.eye(3) @ np.ones(3)  # BLAS still works
         assert np.allclose(A, 1.0)
     assert [g() for _, g in handles] == before
+
+
+def test_schur_and_column_compliance_agree(model):
+    # The Schur complement read off the contact-last LU and one sparse solve
+    # per contact node are two routes to the same matrix: round-off (1e-12).
+    assert model.timings["compliance_method"] == "schur"
+    other = build(meshes.sphere_mesh(meshes.SphereMeshParameters(
+        radius=R, contact_radius=1.77e-4, contact_edges=20,
+        growth=fem.solver.GROWTH[model.order])), E, NU, model.order)
+    other.factorise(contact_last=False)
+    C = other.compliance("columns")
+    assert other.timings["compliance_method"] == "columns"
+    assert np.max(np.abs(C - model.C)) < 1e-12 * np.max(model.C)
