@@ -138,28 +138,36 @@ def mdr_transform_quad(indenter, x, table=None):
 
 
 def general(E_star, indenter, table, depth=None, force=None):
-    """Any profile with a monotonic g(x), by quadrature and root finding."""
+    """Any profile with a monotonic g(x), by Gauss–Legendre quadrature and root finding.
+
+    g(x) = x ∫_0^{π/2} f'(x sin φ) dφ (paper Eq. 2 after r = x sin φ), evaluated
+    with a fixed rule: a tabulated profile's slope is only piecewise smooth, so an
+    adaptive rule would subdivide at every knot.
+    """
+    phi, wphi = np.polynomial.legendre.leggauss(800)
+    phi, wphi = (phi + 1) * np.pi / 4, wphi * np.pi / 4
+    t, wt = np.polynomial.legendre.leggauss(400)
+    t, wt = (t + 1) / 2, wt / 2
+
     def g(x):
-        return mdr_transform_quad(indenter, x, table)
+        x = np.atleast_1d(np.asarray(x, dtype=float))
+        return x * (slope(indenter, x[:, None] * np.sin(phi), table) @ wphi)
 
     def F_of(a):
-        d = g(a)
-        val, _ = integrate.quad(lambda x: d - g(x), 0.0, a, epsabs=0, epsrel=1e-10, limit=200)
-        return 2.0 * E_star * val
+        return 2.0 * E_star * a * float(wt @ (g(a)[0] - g(a * t)))
 
-    rmax = table[0][-1] if table is not None else 1.0
-    hi = rmax
+    hi = table[0][-1] if table is not None else 1.0
     if depth is not None:
-        if g(hi) < depth:
+        if g(hi)[0] < depth:
             raise CaseError(f"key 'loading.depth' = {depth!r}: deeper than the tabulated profile "
-                            f"reaches (g at its last radius is {g(hi):.4g} m)")
-        a = optimize.brentq(lambda x: g(x) - depth, 0.0, hi, xtol=1e-14 * hi, rtol=1e-12)
+                            f"reaches (g at its last radius is {g(hi)[0]:.4g} m)")
+        a = optimize.brentq(lambda x: g(x)[0] - depth, 0.0, hi, xtol=1e-14 * hi, rtol=1e-12)
     else:
         if F_of(hi) < force:
             raise CaseError(f"key 'loading.force' = {force!r}: larger than the tabulated profile "
                             "can carry within its last radius")
         a = optimize.brentq(lambda x: F_of(x) - force, 0.0, hi, xtol=1e-14 * hi, rtol=1e-12)
-    return dict(contact_radius=a, depth=g(a), force=F_of(a))
+    return dict(contact_radius=a, depth=float(g(a)[0]), force=F_of(a))
 
 
 def unworn_contact(case):
