@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from cases import WearcheckError
+
 from ..progress import ProgressBar
 from ..runio import atomic_directory, write_run_files
 from ..solvers import SOLVERS, solve
@@ -20,11 +22,15 @@ def add_parser(sub):
                    help="output directory (default: runs/<case name>-<solver>)")
     p.add_argument("--vtk", action="store_true", help="also write ParaView files into DIR/vtk")
     p.add_argument("--revolve", type=int, default=0, metavar="N_SEGMENTS",
-                   help="with --vtk: also revolve the FEM fields into a 3D solid")
+                   help="also revolve the FEM fields into a 3D solid of N >= 3 segments "
+                        "(implies --vtk)")
     return p
 
 
 def main(args) -> int:
+    if args.revolve < 0 or 0 < args.revolve < 3:
+        raise WearcheckError(f"--revolve {args.revolve}: need 0 (no solid) or at least 3 segments")
+    args.vtk = args.vtk or args.revolve > 0
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-{args.solver}"
     bar = ProgressBar(f"{args.solver}", quiet=args.quiet)
