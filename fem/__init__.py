@@ -12,13 +12,28 @@ paraboloid and truncated paraboloid the elastic body is still the sphere,
 whose compliance differs negligibly at a0/R <= 0.01). Only the sphere's E1,
 ν1 enter: the counterface must be rigid.
 
+The stiffness (:mod:`fem.axisym`, :mod:`fem.model`) is factorised once, with
+the contact nodes' axial DOFs eliminated last, so that the compliance C of
+those DOFs is the inverse of the trailing Schur block; the wear loop only
+touches C. Full fields are recovered for the stored stages only.
+
 Contact is node-to-node: gap_i = z_i + w_i − d + (C f)_i >= 0, f_i >= 0,
-f_i gap_i = 0, solved by a warm-started active-set method (:mod:`fem.contact`).
+f_i gap_i = 0, solved by a warm-started active-set method (:mod:`fem.contact`)
+to a complementarity residual below 1e-9 (forces over F0, gaps over d);
+depth or force control (then d is the extra unknown).
 Nodal pressure p_i = f_i / A_i with A_i = ∫ φ_i 2πr ds (row-sum lumping).
 With quadratic elements the node on the axis has A = 0 exactly and carries
 no force; it is left out of the contact problem and its pressure and wear
 are reported as the even extrapolation v(0) = (v1 r2² − v2 r1²)/(r2² − r1²).
-Wear w_i += (k μ/σ0) p_i Δs, explicit or implicit Euler (:mod:`fem.wear`).
+(HRZ lumping gives that node an area, but its force stays zero unworn, so
+p(0) = 0, and a bump of ~0.25 % d grows there under wear: measured, not used.)
+``fem.pressure_recovery = "consistent"`` reports p = M⁻¹ f with the
+consistent 2πr-weighted boundary mass instead; it ripples odd-even (0.7 % p0
+unworn, up to 7 % p0 and negative values near a worn edge) and does not
+drive the wear, which always uses the lumped p.
+Wear w_i += (k μ/σ0) p_i Δs, explicit or implicit Euler (:mod:`fem.wear`);
+the contact radius is interpolated between the last loaded and the first
+free node from the free nodes' gaps (gap^{2/3} linear near a smooth edge).
 Not modelled: wear.tangential_correction (frictionless normal FEM).
 
 ``RunResult.fields`` (for export): ``points`` (Np, 2) undeformed r, z of the
