@@ -176,3 +176,18 @@ def test_real_solvers_made_to_disagree_fail_with_exit_code_1(tmp_path, capsys):
     assert not m["passed"]
     assert not m["stages"][0]["checks"]["pressure_interior_max"]["passed"]
     assert "**FAIL**" in (out / "report.md").read_text()
+
+
+def test_real_solvers_match_the_flattened_sphere_reference(tmp_path):
+    # paper Fig. 3: each solver against the quadrature of paper Eqs. 13/19, away from
+    # the singularity at r = b and from the edge, within the default 2 % p0 and 1 % F0
+    out = tmp_path / "trunc"
+    code = cli_main(["compare", TRUNCATED, "--out", str(out), "--set", "mdr.elements=200",
+                     "--set", "fem.contact_nodes=80", "--no-render", "--quiet"])
+    m = json.loads((out / "metrics.json").read_text())
+    tr = m["truncated_reference"]
+    assert set(tr["solvers"]) == {"mdr", "fem"}
+    for name, v in tr["solvers"].items():
+        assert v["pressure_interior_max"] < 0.02, name
+        assert v["force"] < 0.01, name
+    assert code == 0 and m["passed"]
