@@ -98,8 +98,11 @@ def git_revision() -> str | None:
 def provenance(argv=None) -> dict:
     """What every output directory records: versions, command line, revision, time."""
     argv = sys.argv if argv is None else argv
+    prog = Path(argv[0]).name if argv else ""
+    if prog == "__main__.py":  # python -m comparisons.cli is the wearcheck command
+        prog = "wearcheck"
     return dict(
-        command=shlex.join([Path(argv[0]).name] + list(argv[1:])) if argv else "",
+        command=shlex.join([prog] + list(argv[1:])) if argv else "",
         cwd=os.getcwd(),
         git_revision=git_revision(),
         versions=versions(),
