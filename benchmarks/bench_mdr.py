@@ -57,12 +57,12 @@ def one(N: int, scheme: str, step: str, extra=()) -> dict:
                  "stages.s_hat=[0.0]", *extra]
     case = cases.load(PAPER, overrides)
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     res = mdr.solve(case)
-    wall = time.perf_counter() - t
+    wall, cpu = time.perf_counter() - t, time.process_time() - c
     rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     h = res.history
-    return dict(N=N, scheme=scheme, wall=wall, solve_seconds=res.solve_seconds,
+    return dict(N=N, scheme=scheme, wall=wall, cpu=cpu, solve_seconds=res.solve_seconds,
                 steps=res.info["steps"], step_hat=res.info["step_hat"],
                 limit=res.info.get("stability_limit_hat"),
                 peak_mb=rss1 / 1024, added_mb=(rss1 - rss0) / 1024,
@@ -93,7 +93,7 @@ def paper_explicit(N: int) -> dict:
     L = case.mdr.domain_factor * math.sqrt(2.0) * sc["a0"]
     x = np.linspace(0.0, L, N + 1)
     E, K, d = case.E_star, case.wear_rate, case.loading.depth
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     xi, xj = x[:, None], x[None, :]
     # Eq. 2: g_i = f_0 + x_i Σ_j (f_{j+1}-f_j)/Δx [asin(x_{j+1}/x_i) - asin(x_j/x_i)]
     # (segments beyond x_i contribute asin(1) - asin(1) = 0; row 0 is g_0 = f_0)
@@ -136,8 +136,8 @@ def paper_explicit(N: int) -> dict:
             break
         f = f + h * dfds
         s += h
-    wall = time.perf_counter() - t0
-    return dict(N=N, wall=wall, steps=len(F_hist) - 1, step_hat=h * sc["s_hat_per_m"],
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    return dict(N=N, wall=wall, cpu=cpu, steps=len(F_hist) - 1, step_hat=h * sc["s_hat_per_m"],
                 F=np.interp(S_GRID, s_hist, F_hist, right=np.nan).tolist())
 
 
@@ -176,45 +176,48 @@ def main():
     runs = {st: run_child(800, "implicit", st) for st in steps}
     ref_t = 2 * np.asarray(runs[steps[-1]]["F"]) - np.asarray(runs[steps[-2]]["F"])
     print("## 1. Resolution ladder (to F < 1 % F0)\n")
-    print("| N | scheme | Δŝ | steps | solve s | peak RSS MB | +MB in solve | "
+    print("| N | scheme | Δŝ | steps | solve s (wall) | CPU s | peak RSS MB | +MB in solve | "
           "err vs finest | err vs time-accurate N=800 |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for N in Ns:
         for r in (imp[N], exp.get(N)):
             if r is None:
                 continue
             if "error" in r:
-                print(f"| {N} | {r['scheme']} | | | failed: {r['error']} | | | | |")
+                print(f"| {N} | {r['scheme']} | | | failed: {r['error']} | | | | | |")
                 continue
             e = err(r["F"], finest) if r is not imp[Ns[-1]] else 0.0
             print(f"| {N} | {r['scheme']} | {r['step_hat']:.4g} | {r['steps']} | "
-                  f"{r['solve_seconds']:.3g} | {r['peak_mb']:.0f} | {r['added_mb']:.0f} | "
+                  f"{r['solve_seconds']:.3g} | {r['cpu']:.3g} | {r['peak_mb']:.0f} | "
+                  f"{r['added_mb']:.0f} | "
                   f"{e:.2e} | {err(r['F'], ref_t):.2e} |")
     print("\nerr = max over ŝ in [0, 11] of |F/F0 - reference|. Implicit rows share Δŝ with "
           "the finest level, so 'err vs finest' is their spatial error; the explicit rows' "
           "small steps make 'err vs time-accurate' their total error.\n")
 
     print("## 2. The paper's explicit scheme in plain numpy, side by side\n")
-    print("| N | scheme | Δŝ | steps | solve s | err vs time-accurate N=800 | time / paper's |")
-    print("|---|---|---|---|---|---|---|")
+    print("| N | scheme | Δŝ | steps | solve s (wall) | CPU s | err vs time-accurate N=800 "
+          "| CPU time / paper's |")
+    print("|---|---|---|---|---|---|---|---|")
     for N in (800, 3200):
         if N > args.paper_max_n or N not in imp:
             continue
         pe = paper_explicit(N)
         mine = imp[N]
         print(f"| {N} | paper explicit, numpy | {pe['step_hat']:.3g} | {pe['steps']} | "
-              f"{pe['wall']:.3g} | {err(pe['F'], ref_t):.2e} | |")
+              f"{pe['wall']:.3g} | {pe['cpu']:.3g} | {err(pe['F'], ref_t):.2e} | |")
         print(f"| {N} | mdr implicit (auto) | {mine['step_hat']:.3g} | {mine['steps']} | "
-              f"{mine['solve_seconds']:.3g} | {err(mine['F'], ref_t):.2e} | "
-              f"{mine['solve_seconds'] / pe['wall']:.3f} |")
+              f"{mine['solve_seconds']:.3g} | {mine['cpu']:.3g} | {err(mine['F'], ref_t):.2e} | "
+              f"{mine['cpu'] / pe['cpu']:.3f} |")
     print()
 
     print("## 3. Time against space error of F/F0 at N = 800\n")
-    print("| Δŝ | steps | solve s | time error (vs Richardson) |")
-    print("|---|---|---|---|")
+    print("| Δŝ | steps | solve s (wall) | CPU s | time error (vs Richardson) |")
+    print("|---|---|---|---|---|")
     for st in steps:
         r = runs[st]
-        print(f"| {st} | {r['steps']} | {r['solve_seconds']:.3g} | {err(r['F'], ref_t):.2e} |")
+        print(f"| {st} | {r['steps']} | {r['solve_seconds']:.3g} | {r['cpu']:.3g} | "
+              f"{err(r['F'], ref_t):.2e} |")
     if Ns[-1] > 800:
         print(f"\nspace error at N = 800 (Δŝ = 0.1 on both): "
               f"{err(runs[0.1]['F'], finest):.2e} against N = {Ns[-1]}")
