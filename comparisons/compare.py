@@ -144,6 +144,9 @@ def analyse(case, results) -> dict:
     m["solve_seconds"] = {k: float(v.solve_seconds) for k, v in results.items()}
     m["grid_spacing_over_a0"] = {k: grid_spacing(v, sc["a0"]) for k, v in results.items()}
     m["step_hat"] = {k: step_hat_used(v, sc["s_hat_per_m"]) for k, v in results.items()}
+    m["run_end"] = {k: dict(s_hat=float(v.history["s"][-1] * sc["s_hat_per_m"]),
+                            force=float(v.history["force"][-1] / sc["F0"]))
+                    for k, v in results.items()}
     ref = truncated_reference(case, results, sc)
     if ref is not None:
         m["truncated_reference"] = ref
@@ -448,7 +451,9 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
                       "columns F/F0 and a/a0 measure each solver against that solution."),
                R.para(f"Stages requested (ŝ): {', '.join(f'{s:g}' for s in case.stages.s_hat)}; "
                       f"reached: MDR {m['stages_reached']['mdr']}, "
-                      f"FEM {m['stages_reached']['fem']}; compared: {K}.")]
+                      f"FEM {m['stages_reached']['fem']}; compared: {K}. Runs ended at "
+                      + ", ".join(f"ŝ = {e['s_hat']:.4g} with F/F0 = {e['force']:.4g} ({n.upper()})"
+                                  for n, e in m["run_end"].items()) + ".")]
     for w in case.warnings:
         blocks.append(R.para(f"Note: {w}"))
     tol = m["tolerances"]
@@ -471,6 +476,10 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
                      mark("pressure_interior_max", st["pressure_interior_max"]),
                      fmt(st["pressure_interior_rms"]), fmt(st["pressure_edge_max"]),
                      fmt(st["pressure_edge_rms"]), "pass" if st["passed"] else "FAIL"])
+    blocks.append(R.para("Largest share of each tolerance used: " + "; ".join(
+        f"{name} {100 * w['used']:.0f}% (stage {w['stage']}, {fmt(w['value'])} of "
+        f"{fmt(w['tolerance'])})" for name, w in m["worst"].items()
+        if w["stage"] is not None) + "."))
     blocks.append(R.table(["stage", "ŝ MDR", "ŝ FEM", "F/F0 MDR", "F/F0 FEM", "|ΔF|/F0",
                            "a/a0 MDR", "a/a0 FEM", "|Δa|/a0", "max|Δf|/d", "rms Δf/d",
                            "max|Δp|/p0 interior", "rms Δp/p0 interior", "max|Δp|/p0 edge",

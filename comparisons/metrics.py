@@ -151,10 +151,28 @@ def compare_results(mdr, fem, *, s_hat_per_m, a0, F0, p0, depth, tolerances, edg
         st["passed"] = all(c["passed"] for c in st["checks"].values())
         stages.append(st)
     hist = history_differences(mdr.history, fem.history, F0=F0, a0=a0)
-    return dict(stages=stages, stages_compared=K,
+    return dict(stages=stages, stages_compared=K, worst=worst(stages),
                 stages_reached=dict(mdr=len(mdr.stage_s), fem=len(fem.stage_s)),
                 history=hist,
                 passed=bool(K > 0 and all(st["passed"] for st in stages)))
+
+
+def worst(stages) -> dict:
+    """Per check, the stage using the largest fraction of its tolerance.
+
+    {name: {stage, value, tolerance, used}} with used = value / tolerance (NaN if none).
+    """
+    out = {}
+    for name, _ in CHECKS:
+        rows = [(st["checks"][name]["value"], st["checks"][name]["tolerance"], st["index"])
+                for st in stages]
+        rows = [r for r in rows if np.isfinite(r[0])]
+        if not rows:
+            out[name] = dict(stage=None, value=math.nan, tolerance=math.nan, used=math.nan)
+            continue
+        value, tol, k = max(rows, key=lambda r: r[0] / r[1])
+        out[name] = dict(stage=k, value=value, tolerance=tol, used=value / tol)
+    return out
 
 
 def history_differences(h_1, h_2, *, F0, a0) -> dict:

@@ -109,6 +109,9 @@ def test_compare_results_recovers_constructed_differences(hertz_scales):
         assert st["pressure_interior_max"] == pytest.approx(0.01, abs=1e-5)
         assert st["passed"]
     assert m["passed"]
+    # the largest share of each tolerance: 0.004 of 0.01 F0, 0.015 of 0.02 a0
+    assert m["worst"]["force"]["used"] == pytest.approx(0.4, rel=1e-9)
+    assert m["worst"]["contact_radius"]["used"] == pytest.approx(0.75, rel=1e-9)
     tight = dict(TOL, force_tolerance=0.003)
     m = metrics.compare_results(mdr, fem, s_hat_per_m=sc["s_hat_per_m"], a0=a0, F0=sc["F0"],
                                 p0=sc["p0"], depth=1e-6, tolerances=tight, edge_band=0.1)
