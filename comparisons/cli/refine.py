@@ -28,7 +28,7 @@ def add_parser(sub):
                        description=__doc__)
     add_case_arguments(p)
     p.add_argument("--solver", choices=SOLVERS, default="mdr", help="which solver (default: mdr)")
-    p.add_argument("--out", type=Path, default=None,
+    p.add_argument("--out", type=Path, default=None, metavar="DIR",
                    help="study directory, shared by the MDR and FEM studies "
                         "(default: runs/<case name>-refine)")
     p.add_argument("--levels", type=_int_list, default=None, metavar="N1,N2,...",

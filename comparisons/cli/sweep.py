@@ -32,7 +32,7 @@ def add_parser(sub):
     p.add_argument("--vary", action="append", required=True, metavar="SECTION.KEY=V1,V2,...",
                    help="a case key and its values (repeatable: all combinations run)")
     p.add_argument("--solver", choices=SOLVERS, default="mdr", help="which solver (default: mdr)")
-    p.add_argument("--out", type=Path, default=None,
+    p.add_argument("--out", type=Path, default=None, metavar="DIR",
                    help="sweep directory (default: runs/<case name>-sweep)")
     add_cluster_arguments(p)
     return p
