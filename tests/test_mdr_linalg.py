@@ -1,0 +1,41 @@
+"""Nested-block LU and GMRES of the implicit wear step, against numpy.linalg.solve."""
+
+import numpy as np
+
+from mdr import linalg, transforms
+
+
+def test_nested_lu_solves_every_leading_block():
+    # the implicit step's matrix (compliance + wear compliance) and one that
+    # LAPACK would pivot (large sub-diagonal), which takes the unpivoted path
+    rng = np.random.default_rng(3)
+    A = transforms.compliance_matrix(150, 1e-10, 2e11)
+    A[np.diag_indices(150)] += 0.05 * A[0, 0]
+    B = rng.random((150, 150)) + 150 * np.eye(150)
+    B[1, 0] = 1000.0
+    for M in (A, B):
+        lu = linalg.NestedLU(M)
+        for n in (150, 97, 3, 1):
+            b = rng.random(n)
+            np.testing.assert_allclose(lu.solve(b), np.linalg.solve(M[:n, :n], b),
+                                       rtol=1e-10, atol=1e-12 * np.max(np.abs(b)))
+
+
+def test_lu_without_pivoting_matches_numpy():
+    rng = np.random.default_rng(4)
+    M = rng.random((200, 200)) + 200 * np.eye(200)
+    lu = linalg.lu_nopivot(M, block=16)
+    L = np.tril(lu, -1) + np.eye(200)
+    U = np.triu(lu)
+    np.testing.assert_allclose(L @ U, M, rtol=1e-12, atol=1e-10)
+
+
+def test_gmres_reaches_its_tolerance():
+    rng = np.random.default_rng(5)
+    n = 120
+    M = transforms.compliance_matrix(n, 1e-10, 2e11)
+    M[np.diag_indices(n)] += 0.1 * M[0, 0]
+    b = rng.random(n)
+    d = 1.0 / np.diag(M)
+    x = linalg.gmres(lambda v: M @ v, lambda v: d * v, b, rtol=1e-10, restart=10, maxiter=50)
+    assert np.linalg.norm(M @ x - b) <= 1e-10 * np.linalg.norm(b) * 1.0001
