@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import os
 
 
@@ -25,7 +26,10 @@ _NAMES = (("scipy_openblas_set_num_threads64_", "scipy_openblas_get_num_threads6
           ("openblas_set_num_threads", "openblas_get_num_threads"))
 
 
+@functools.lru_cache(maxsize=1)
 def _openblas_handles():
+    # numpy and scipy.linalg (imported by fem) have loaded their libraries by
+    # the first call, so the search runs once
     try:
         with open("/proc/self/maps", encoding="utf-8") as fh:
             paths = {line.split()[-1] for line in fh if "openblas" in line and ".so" in line}
@@ -43,7 +47,7 @@ def _openblas_handles():
                 getter.restype = ctypes.c_int
                 handles.append((setter, getter))
                 break
-    return handles
+    return tuple(handles)
 
 
 @contextlib.contextmanager
