@@ -200,9 +200,11 @@ def csv_text(summary: dict) -> str:
                     f"differences between successive levels, {fit['levels']} levels)")
     rich = summary["richardson"]
     if rich:
-        head.append(f"# Richardson ({', '.join(rich['levels'])}): order "
-                    f"{_fmt(rich['order'], '.3f')}, {rich['quantity']} -> "
-                    f"{_fmt(rich['estimate'], '.6g')}")
+        head.append(f"# Richardson ({', '.join(rich['levels'])}), F/F0 at each stage "
+                    "(order -> estimate; nan: not monotone): "
+                    + "; ".join(f"s_hat={float(st):g}: {_fmt(r['order'], '.3f')} -> "
+                                f"{_fmt(r['estimate'], '.7g')}"
+                                for st, r in rich["by_stage"].items()))
     conv = summary["converged"]
     if conv:
         head.append(f"# coarsest converged level within {conv['tolerance']:g}: "
