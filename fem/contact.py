@@ -184,7 +184,7 @@ def solve_lcp(factor: PrefixCholesky, z: np.ndarray, *, depth: float | None = No
                 break
     f = np.zeros(n)
     f[A] = fA
-    g = gaps(fA, A, d)
+    # g: the gaps of this (A, fA, d), computed at the top of the last pass
     res = complementarity_residual(f, g, force_scale, gap_scale)
     if not res <= tol * 10:
         raise SolverError(f"contact solution fails complementarity: residual {res:.3e} "
