@@ -183,6 +183,7 @@ def _solve(case, progress=None) -> RunResult:
         lcp_iterations=out.lcp_iterations, lcp_tolerance=wear.LCP_TOL,
         max_complementarity_residual=out.max_residual,
         refactorisations=out.refactorisations, borderings=out.borderings,
+        compliance_route=model.timings["compliance_method"],
         mesh=dict(model.stats(), growth=params.growth, contact_arc_radius=rc,
                   cache_file=str(sm.path), generated=sm.generate_seconds > 0),
         timings=dict(mesh=t_mesh, assembly=model.timings["assembly"],
