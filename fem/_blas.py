@@ -17,6 +17,7 @@ import contextlib
 import ctypes
 import functools
 import os
+import threading
 
 
 #: (setter, getter) symbol names: numpy's and scipy's bundled OpenBLAS, plain OpenBLAS
@@ -50,19 +51,35 @@ def _openblas_handles():
     return tuple(handles)
 
 
+_lock = threading.Lock()
+_depth = 0
+_saved: list = []
+
+
 @contextlib.contextmanager
 def single_threaded_blas():
-    """Context manager: OpenBLAS uses one thread inside the block."""
-    saved = []
-    try:
-        for setter, getter in _openblas_handles():
-            saved.append((setter, int(getter())))
-            setter(ctypes.c_int(1))
-    except Exception:  # never let a thread-count tweak break a solve
-        pass
+    """Context manager: OpenBLAS uses one thread inside the block.
+
+    Re-entrant and thread-safe: the first block to enter saves the thread
+    counts, the last to leave restores them.
+    """
+    global _depth
+    with _lock:
+        if _depth == 0:
+            _saved.clear()
+            try:
+                for setter, getter in _openblas_handles():
+                    _saved.append((setter, int(getter())))
+                    setter(ctypes.c_int(1))
+            except Exception:  # never let a thread-count tweak break a solve
+                pass
+        _depth += 1
     try:
         yield
     finally:
-        for setter, n in saved:
-            with contextlib.suppress(Exception):
-                setter(ctypes.c_int(n))
+        with _lock:
+            _depth -= 1
+            if _depth == 0:
+                for setter, n in _saved:
+                    with contextlib.suppress(Exception):
+                        setter(ctypes.c_int(n))

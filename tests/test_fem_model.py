@@ -177,3 +177,29 @@ def test_schur_and_column_compliance_agree(model):
     C = other.compliance("columns")
     assert other.timings["compliance_method"] == "columns"
     assert np.max(np.abs(C - model.C)) < 1e-12 * np.max(model.C)
+
+
+def test_single_threaded_blas_is_reentrant_across_threads():
+    # overlapping blocks in two threads: the counts come back only when the
+    # last block leaves
+    import threading
+
+    from fem._blas import _openblas_handles, single_threaded_blas
+
+    handles = _openblas_handles()
+    before = [g() for _, g in handles]
+    inside, leave = threading.Event(), threading.Event()
+
+    def worker():
+        with single_threaded_blas():
+            inside.set()
+            leave.wait(5)
+
+    t = threading.Thread(target=worker)
+    with single_threaded_blas():
+        t.start()
+        inside.wait(5)
+    assert all(g() == 1 for _, g in handles)  # the worker is still inside
+    leave.set()
+    t.join(5)
+    assert [g() for _, g in handles] == before
