@@ -82,6 +82,10 @@ def one_size(n: int) -> dict:
     out["paper_run"] = time.perf_counter() - t
     out["steps"] = r.info["steps"]
     out["wear_loop"] = r.info["timings"]["wear_loop"]
+    t = time.perf_counter()
+    r = fem.solve(cases.load(PAPER, [f"fem.contact_nodes={n}", "sliding.scheme=explicit"]))
+    out["paper_run_explicit"] = time.perf_counter() - t
+    out["steps_explicit"] = r.info["steps"]
     out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return out
 
@@ -202,17 +206,20 @@ def main():
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}, {time.strftime('%Y-%m-%d %H:%M')})\n")
     print("## Superelement and wear loop by contact-node count (paper case, P2)\n")
     print("| contact nodes | DOFs | mesh s | assembly s | factorisation s | compliance s "
-          "| C+K factor s | wear step ms | refactor active block ms | paper run s | steps "
-          "| peak RSS MB |")
+          "| C+K factor s | wear step ms | refactor active block ms | paper run s (steps) "
+          "| explicit run s (steps) | peak RSS MB |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for n in sizes:
         o = child("size", n)
         print(f"| {o['contact_nodes']} | {o['dofs']} | {o['mesh']:.3f} | {o['assembly']:.3f} "
               f"| {o['factorisation']:.3f} | {o['compliance']:.3f} | {o['factor_C_plus_K']:.3f} "
               f"| {1e3 * o['wear_step']:.2f} | {1e3 * o['refactor_active_block']:.2f} "
-              f"| {o['paper_run']:.2f} | {o['steps']} | {o['peak_rss_mb']:.0f} |")
+              f"| {o['paper_run']:.2f} ({o['steps']}) "
+              f"| {o['paper_run_explicit']:.2f} ({o['steps_explicit']}) | {o['peak_rss_mb']:.0f} |")
     print("\nwear step: one warm-started implicit LCP solve (prefix factor of C + K); "
-          "refactor active block: a fresh Cholesky of the active block instead.\n")
+          "refactor active block: a fresh Cholesky of the active block instead. paper run: "
+          "cases/paper.toml in-process (mesh from the cache) to F < 1 % F0, implicit "
+          "(default) and explicit at half its stability limit.\n")
 
     print("## Factorisation options (scipy SuperLU orderings; compliance route)\n")
     print("| contact nodes | ordering | route | factorisation s | compliance s | nnz(L+U) "
