@@ -1,8 +1,15 @@
 """MDR solver of gross-slip Reye–Archard wear (paper Sections 2 and 4).
 
-``solve(case)`` runs a case; :mod:`mdr.transforms` holds the MDR transforms
-(paper Eqs. 2, 3, 12, 13) as pure functions, :mod:`mdr.contact` the normal
-contact, :mod:`mdr.wear` the explicit and implicit wear steps.
+``solve(case, progress=None) -> cases.RunResult`` runs a case: N springs on
+0 <= x <= L = domain_factor·√2·a0, nodes uniform in t = x² (the 3D radii r
+share them), paper Eqs. 2, 3, 12, 13 integrated exactly over each segment,
+wear Δf = (k μ/σ0) p · slip (physics.md §3) by explicit Euler (the paper's;
+stable below a step limit it estimates and enforces) or implicit Euler
+(unconditionally stable).
+
+Modules: :mod:`mdr.transforms` (the MDR transforms, pure functions),
+:mod:`mdr.contact` (normal contact), :mod:`mdr.wear` (the wear steps),
+:mod:`mdr.linalg` (nested-block LU, GMRES), :mod:`mdr.solver` (the run).
 """
 
 from .solver import solve
