@@ -278,7 +278,10 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
                         max(m1, m2) >= jump >= m2 - 4 * abs(m2 - m1):
                     if jump not in tried:
                         m_new = jump
-        if m_new in tried and abs(m_new - m) == 1 and marginal is None:
+        if m_new in tried and not accurate:
+            # a cycle while solving loosely may be the solver's error: go on accurately
+            accurate, tried, seen = True, [], set()
+        elif m_new in tried and abs(m_new - m) == 1 and marginal is None:
             # a two-cycle over one node: nodal contact conditions cannot
             # place the edge between nodes, so neither set satisfies them
             marginal = m_new = max(m, m_new)
