@@ -222,6 +222,9 @@ def pressure(q: np.ndarray, dt: float) -> np.ndarray:
     if n > 1:
         p[:-1] = upper(_kernel(abel_kernel, n - 1), np.diff(q), key="c")
         p[:-1] *= -2.0 / (math.pi * math.sqrt(dt))
+        # beyond the last loaded node p is exactly 0: clear the FFT's round-off there
+        loaded = np.flatnonzero(q)
+        p[(loaded[-1] + 1) if loaded.size else 0:] = 0.0
     return p
 
 
