@@ -103,14 +103,22 @@ def git_revision() -> str | None:
         return None
 
 
+#: the command line of this process as the user typed it; set by the CLI
+_COMMAND: list[str] | None = None
+
+
+def set_command(argv: list[str]) -> None:
+    """Record the command line that outputs of this process will name."""
+    global _COMMAND
+    _COMMAND = list(argv)
+
+
 def provenance(argv=None) -> dict:
     """What every output directory records: versions, command line, revision, time."""
-    argv = sys.argv if argv is None else argv
-    prog = Path(argv[0]).name if argv else ""
-    if prog == "__main__.py":  # python -m comparisons.cli is the wearcheck command
-        prog = "wearcheck"
+    if argv is None:
+        argv = _COMMAND if _COMMAND is not None else sys.argv
     return dict(
-        command=shlex.join([prog] + list(argv[1:])) if argv else "",
+        command=shlex.join(argv),
         cwd=os.getcwd(),
         git_revision=git_revision(),
         versions=versions(),
