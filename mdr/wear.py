@@ -44,13 +44,9 @@ class Model:
     force: float | None     # force control
     tangential: float = 0.0  # μ/G* with the tangential correction, else 0
 
-    @property
-    def t(self) -> np.ndarray:
-        return self.x**2
-
-    @property
-    def dt(self) -> float:
-        return float(self.x[-1] ** 2 / (len(self.x) - 1))
+    def __post_init__(self):
+        self.t = self.x**2                              # nodes in t = r²
+        self.dt = float(self.t[-1] / (len(self.x) - 1))  # their spacing
 
 
 @dataclass
@@ -207,12 +203,7 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
     E, K = model.E_star, model.wear_rate
     S = np.ones(N + 1) if state.slip is None else state.slip
     system = system or ImplicitSystem(model, h)
-    if m_guess is None:
-        # explicit predictor of the contact edge
-        g_pred = transforms.to_1d(state.f + h * K * S * state.p)
-        below = np.flatnonzero(state.depth - g_pred[:N - 1] > 0.0)
-        m_guess = int(below[-1]) if below.size else state.m
-    m = max(m_guess, 0)
+    m = max(state.m if m_guess is None else m_guess, 0)
     stats = {"gmres_iterations": 0, "contact_iterations": 0}
     seen = set()
     tried = []
