@@ -124,9 +124,11 @@ class Sliding:
     distance: float | None = key(None, unit="m", minimum=0.0,
                                  doc="until = distance: total sliding distance s (0: no sliding, "
                                      "the unworn contact only)")
-    scheme: str = key("implicit", choices=("implicit", "explicit"),
-                      doc="time scheme: implicit (backward) Euler, unconditionally stable, or "
-                          "explicit (forward) Euler as in the paper, stable below a step limit")
+    scheme: str = key("implicit", choices=("implicit", "bdf2", "explicit"),
+                      doc="time scheme: implicit (backward) Euler, unconditionally stable, "
+                          "first order; bdf2, the variable-step second-order backward "
+                          "differentiation formula, L-stable; or explicit (forward) Euler as "
+                          "in the paper, stable below a step limit")
     step_hat: float | str = key("auto", positive=True,
                                 doc="sliding step in units of the dimensionless sliding "
                                     "ŝ = k μ E* s / (σ0 a0), or \"auto\": the solver's "
