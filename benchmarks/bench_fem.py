@@ -33,14 +33,14 @@ def one_size(n: int) -> dict:
     import fem
     import meshes
     from cases import reference
-    from fem._blas import single_threaded_blas
+    from threadpoolctl import threadpool_limits
     from fem.contact import PrefixCholesky, solve_lcp
     from fem.model import build
     from fem.solver import mesh_parameters
 
     case = cases.load(PAPER, [f"fem.contact_nodes={n}"])
     out = {"n": n}
-    with single_threaded_blas():
+    with threadpool_limits(limits=1, user_api="blas"):
         params = mesh_parameters(case)
         t = time.perf_counter()
         sm = meshes.sphere_mesh(params)
@@ -96,14 +96,14 @@ def factorisation_options(n: int) -> list[dict]:
 
     import cases
     import meshes
-    from fem._blas import single_threaded_blas
+    from threadpoolctl import threadpool_limits
     from fem.model import FACTORISATIONS, build
     from fem.solver import mesh_parameters
 
     case = cases.load(PAPER, [f"fem.contact_nodes={n}"])
     sm = meshes.sphere_mesh(mesh_parameters(case))
     rows, ref = [], None
-    with single_threaded_blas():
+    with threadpool_limits(limits=1, user_api="blas"):
         for method in FACTORISATIONS[:3]:
             for route in ("schur", "columns"):
                 model = build(sm, case.indenter.youngs_modulus, case.indenter.poisson_ratio, 2)

@@ -31,7 +31,8 @@ p(0) = 0, and a bump of ~0.25 % d grows there under wear: measured, not used.)
 consistent 2πr-weighted boundary mass instead; it ripples odd-even (0.7 % p0
 unworn, up to 7 % p0 and negative values near a worn edge) and does not
 drive the wear, which always uses the lumped p.
-Wear w_i += (k μ/σ0) p_i Δs, explicit or implicit Euler (:mod:`fem.wear`);
+Wear dw_i/ds = (k μ/σ0) p_i by explicit or implicit Euler or variable-step
+BDF2 (:mod:`fem.wear`);
 the contact radius is interpolated between the last loaded and the first
 free node from the free nodes' gaps (gap^{2/3} linear near a smooth edge).
 Not modelled: wear.tangential_correction (frictionless normal FEM).

@@ -20,8 +20,6 @@ from scipy import linalg
 
 from cases import SolverError
 
-from ._blas import single_threaded_blas
-
 
 class PrefixCholesky:
     """Cholesky factors of principal submatrices M_AA of one SPD matrix M."""
@@ -85,7 +83,6 @@ def complementarity_residual(f, gap, force_scale, gap_scale) -> float:
     return float(np.max(np.abs(np.minimum(f / force_scale, gap / gap_scale)), initial=0.0))
 
 
-@single_threaded_blas()
 def solve_lcp(factor: PrefixCholesky, z: np.ndarray, *, depth: float | None = None,
               force: float | None = None, active=None, gap_scale: float, force_scale: float,
               tol: float = 1e-9, max_iter: int | None = None) -> ContactResult:

@@ -7,7 +7,14 @@ nodal pressure p_i = f_i / A_i (A_i: lumped 2πr-weighted area).
 * explicit (forward) Euler: p from the contact at the start of the step;
   stable for Δs < 2 / (rate · λ_max(A⁻¹ C⁻¹)) (:func:`explicit_limit`);
 * implicit (backward) Euler: w_{n+1} = w_n + D f_{n+1}, D = rate Δs / A, so
-  one LCP with compliance C + D per step, no stability limit (physics.md §4).
+  one LCP with compliance C + D per step, no stability limit (physics.md §4);
+* bdf2: the variable-step second-order backward differentiation formula,
+  w_{n+1} = a w_n + b w_{n−1} + c D f_{n+1} with ω = Δs_n/Δs_{n−1},
+  a = (1+ω)²/(1+2ω), b = −ω²/(1+2ω), c = (1+ω)/(1+2ω): the implicit step
+  with compliance C + c D and the previous wear a w_n + b w_{n−1}; the first
+  step is backward Euler. L-stable; zero-stable while ω < 1 + √2, so steps
+  grow by at most a factor 2 and the last two steps before a stage or the
+  end share the remaining distance when it is less than two steps.
 """
 
 from __future__ import annotations
@@ -90,8 +97,8 @@ def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
     ----------
     C : (n, n) compliance [m/N]; z : (n,) unworn heights [m]; r, area : (n,)
     radii [m] and lumped areas [m²]; rate : k μ / σ0 [1/Pa]; control : "depth"
-    or "force" with its ``value``; step : Δs [m]; scheme : "explicit" or
-    "implicit"; stage_s : increasing stage distances [m]; until : "distance"
+    or "force" with its ``value``; step : Δs [m]; scheme : "explicit",
+    "implicit" or "bdf2"; stage_s : increasing stage distances [m]; until : "distance"
     (stop exactly at ``distance``) or "force_fraction" (stop at the first step
     with F < force_fraction · F(0)); center : (n,) weights giving the wear at
     r = 0 as center @ w (default: node 0).
@@ -104,15 +111,20 @@ def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
     kw = {control: value}
     factors: dict[float, PrefixCholesky] = {}
 
-    def factor_for(ds):
-        key = 0.0 if scheme == "explicit" else ds
-        if key not in factors:
-            if len(factors) > 3:
-                factors.pop(next(iter(factors)))
-            M = C if key == 0.0 else C + np.diag(rate * ds / area)
-            factors[key] = PrefixCholesky(M)
+    def factor_for(eff):
+        """Factor of C + rate·eff/A (eff: the step times the scheme's c; 0: C).
+
+        Least recently used out: the running step's factor is used every step
+        and must survive the few factors of a stage landing.
+        """
+        fac = factors.pop(eff, None)
+        if fac is None:
+            if len(factors) >= 4:
+                out.borderings += factors.pop(next(iter(factors))).borderings
+            fac = PrefixCholesky(C if eff == 0.0 else C + np.diag(rate * eff / area))
             out.refactorisations += 1
-        return factors[key]
+        factors[eff] = fac
+        return fac
 
     def contact(zz, fac, active):
         res = solve_lcp(fac, zz, active=active, gap_scale=gap_scale, force_scale=force_scale,
@@ -148,6 +160,8 @@ def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
     dp_prev = np.zeros(n)
     p_prev = res.f / area
     osc = np.zeros(n, dtype=int)
+    bdf2 = scheme == "bdf2"
+    ds_prev, w_prev = None, None
     while True:
         if until == "distance" and s >= s_end:
             break
@@ -158,17 +172,33 @@ def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
                               f"F = {out.force[-1]:.4g} N); the step is too small")
         target = min(stages[0] if stages else math.inf, s_end)
         ds = step
-        land = target - s <= step * (1 + 1e-9)
+        if bdf2 and ds_prev is not None:
+            ds = min(ds, 2.0 * ds_prev)  # ω <= 2 < 1 + √2 (zero stability)
+        rem = target - s
+        land = rem <= ds * (1 + 1e-9)
         if land:
-            ds = target - s
-        fac = factor_for(ds)
+            # a remainder equal to this or the last step up to round-off
+            # keeps that step (and its factor); s lands exactly on the target
+            same = [h for h in (ds, ds_prev) if h is not None and abs(rem - h) <= 1e-9 * h]
+            ds = same[0] if same else rem
+        elif bdf2 and rem < 2.0 * ds * (1 - 1e-9):
+            ds = 0.5 * rem  # no sliver step before the target: ω stays in [1/2, 2]
         if scheme == "explicit":
+            fac = factor_for(0.0)
             w = w + rate * ds * res.f / area
             res = contact(z + w, fac, res.active)
         else:
-            res = contact(z + w, fac, res.active)
-            w = w + rate * ds * res.f / area
-            # the gap of the new geometry is the LCP's gap (C + D) f + q
+            if bdf2 and ds_prev is not None:
+                om = ds / ds_prev
+                c = (1.0 + om) / (1.0 + 2.0 * om)
+                # a w_n + b w_{n−1} = w_n − b (w_n − w_{n−1}), since a + b = 1
+                base = w + (om * om / (1.0 + 2.0 * om)) * (w - w_prev)
+            else:
+                c, base = 1.0, w  # backward Euler (and the first bdf2 step)
+            res = contact(z + base, factor_for(c * ds), res.active)
+            w_prev, w = w, base + rate * (c * ds) * res.f / area
+            # the gap of the new geometry is the LCP's gap (C + c D) f + q
+        ds_prev = ds
         s = target if land else s + ds
         out.steps += 1
         record(res)
@@ -192,5 +222,5 @@ def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
                 F = max(out.force[-1], 1e-300)
                 progress(min(max(math.log(F / F_start) / math.log(force_fraction), 0.0), 1.0),
                          f"F/F0 = {F / F_start:.3g}")
-    out.borderings = sum(f.borderings for f in factors.values())
+    out.borderings += sum(f.borderings for f in factors.values())
     return out

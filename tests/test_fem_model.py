@@ -153,19 +153,6 @@ def test_rigid_indenter_and_missing_radius_are_rejected():
         fem.solve(cases.from_dict(raw))
 
 
-def test_single_threaded_blas_restores_thread_counts():
-    # best effort: where OpenBLAS is found, one thread inside, the old count after
-    from fem._blas import _openblas_handles, single_threaded_blas
-
-    handles = _openblas_handles()
-    before = [g() for _, g in handles]
-    with single_threaded_blas():
-        assert all(g() == 1 for _, g in handles)
-        A = np.eye(3) @ np.ones(3)  # BLAS still works
-        assert np.allclose(A, 1.0)
-    assert [g() for _, g in handles] == before
-
-
 def test_schur_and_column_compliance_agree(model):
     # The Schur complement read off the contact-last LU and one sparse solve
     # per contact node are two routes to the same matrix: round-off (1e-12).
@@ -179,27 +166,28 @@ def test_schur_and_column_compliance_agree(model):
     assert np.max(np.abs(C - model.C)) < 1e-12 * np.max(model.C)
 
 
-def test_single_threaded_blas_is_reentrant_across_threads():
-    # overlapping blocks in two threads: the counts come back only when the
-    # last block leaves
-    import threading
+def _blas_threads():
+    from threadpoolctl import threadpool_info
 
-    from fem._blas import _openblas_handles, single_threaded_blas
+    return [(m["filepath"], m["num_threads"]) for m in threadpool_info()
+            if m["user_api"] == "blas"]
 
-    handles = _openblas_handles()
-    before = [g() for _, g in handles]
-    inside, leave = threading.Event(), threading.Event()
 
-    def worker():
-        with single_threaded_blas():
-            inside.set()
-            leave.wait(5)
+def test_solve_runs_single_threaded_blas_and_restores_thread_counts():
+    # fem.solve limits BLAS to one thread (threadpoolctl) while it runs and
+    # restores every library's count afterwards, also when it fails. The
+    # outer limit of 2 makes "before" differ from 1 on any machine that lets
+    # OpenBLAS use 2 threads, so that a restore to 1 would be caught.
+    from threadpoolctl import threadpool_limits
 
-    t = threading.Thread(target=worker)
-    with single_threaded_blas():
-        t.start()
-        inside.wait(5)
-    assert all(g() == 1 for _, g in handles)  # the worker is still inside
-    leave.set()
-    t.join(5)
-    assert [g() for _, g in handles] == before
+    case = cases.load(cases.shipped("hertz"), ["fem.contact_nodes=41"])
+    with threadpool_limits(limits=2, user_api="blas"):
+        before = _blas_threads()
+        assert before, "no BLAS library found by threadpoolctl"
+        inside = []
+        fem.solve(case, progress=lambda frac, text: inside.append(_blas_threads()))
+        assert _blas_threads() == before
+        assert inside and all(n == 1 for seen in inside for _path, n in seen)
+        with pytest.raises(CaseError):
+            fem.solve(cases.load(cases.shipped("hertz"), ["fem.contact_nodes=5"]))
+        assert _blas_threads() == before
