@@ -2,6 +2,7 @@
 
     python benchmarks/bench_fem.py            # everything (~1-2 min)
     python benchmarks/bench_fem.py --quick    # sizes 125, 250 only
+    python benchmarks/bench_fem.py --steps    # the time-error table only
 
 Each size runs in a fresh process (peak memory = its maximum resident set),
 with a fresh mesh cache so that gmsh's time is included. Not a test: numbers
@@ -86,6 +87,10 @@ def one_size(n: int) -> dict:
     r = fem.solve(cases.load(PAPER, [f"fem.contact_nodes={n}", "sliding.scheme=explicit"]))
     out["paper_run_explicit"] = time.perf_counter() - t
     out["steps_explicit"] = r.info["steps"]
+    t = time.perf_counter()
+    r = fem.solve(cases.load(PAPER, [f"fem.contact_nodes={n}", "sliding.scheme=bdf2"]))
+    out["paper_run_bdf2"] = time.perf_counter() - t
+    out["steps_bdf2"] = r.info["steps"]
     out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return out
 
@@ -129,28 +134,57 @@ def child(what: str, n: int):
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
-def step_accuracy():
-    """Implicit step size against a fine-step reference at ŝ = 2 (paper case)."""
+#: time-step table: schemes and steps Δŝ (paper case, default mesh)
+STEP_TABLE = (("implicit", (0.005, 0.01, 0.02, 0.04, 0.08)),
+              ("bdf2", (0.005, 0.01, 0.02, 0.025, 0.04, 0.05, 0.1, 0.2)))
+#: the time-converged reference step (bdf2) and the end of the compared runs
+REFERENCE_STEP, S_HAT_END = 0.0025, 4.0
+
+
+def step_accuracy(n: int = 250):
+    """Time error against a fine bdf2 step, and the mesh's spatial error.
+
+    Paper case on ``n`` contact nodes, ŝ <= 4 (stages 0.5, 2, 4): the largest
+    force difference over the history (the reference interpolated to each
+    run's s) and profile difference over the stages, against bdf2 at
+    Δŝ = 0.0025 on the same mesh; plus the wall time and steps of the full
+    paper run (to F < 1 % F0) with that scheme and step. The spatial line
+    compares the reference with the same run on 1000 nodes (profile
+    interpolated in r).
+    """
     import numpy as np
 
     import cases
     import fem
     from cases import reference
 
-    base = cases.load(PAPER)
-    sc = reference.scales(base)
-    dist = 2.0 / sc["s_hat_per_m"]
-    runs = {}
-    for st in (0.0025, 0.01, 0.02, 0.04, 0.08):
-        c = cases.load(PAPER, ["sliding.until=distance", f"sliding.distance={dist!r}",
-                               f"sliding.step_hat={st}", "stages.s_hat=[2.0]"])
-        runs[st] = fem.solve(c)
-    ref = runs[0.0025]
-    rows = []
-    for st in (0.01, 0.02, 0.04, 0.08):
-        r = runs[st]
-        rows.append((st, (r.history["force"][-1] - ref.history["force"][-1]) / sc["F0"],
-                     np.max(np.abs(r.f[-1] - ref.f[-1])) / sc["d0"], r.info["steps"]))
+    sc = reference.scales(cases.load(PAPER))
+    dist = S_HAT_END / sc["s_hat_per_m"]
+
+    def run(scheme, st, nodes=n):
+        return fem.solve(cases.load(PAPER, [
+            f"fem.contact_nodes={nodes}", "sliding.until=distance", f"sliding.distance={dist!r}",
+            f"sliding.scheme={scheme}", f"sliding.step_hat={st}", "stages.s_hat=[0.5, 2.0, 4.0]"]))
+
+    def error(r, ref):
+        F = np.interp(r.history["s"], ref.history["s"], ref.history["force"])
+        dF = np.max(np.abs(r.history["force"] - F)) / sc["F0"]
+        df = max(np.max(np.abs(r.f[k] - np.interp(r.r, ref.r, ref.f[k])))
+                 for k in range(len(r.stage_s))) / sc["d0"]
+        return dF, df
+
+    ref = run("bdf2", REFERENCE_STEP)
+    rows = [("spatial: reference vs 1001 nodes", REFERENCE_STEP,
+             *error(ref, run("bdf2", REFERENCE_STEP, 1000)), None, None, None)]
+    for scheme, steps in STEP_TABLE:
+        for st in steps:
+            dF, df = error(run(scheme, st), ref)
+            full = cases.load(PAPER, [f"fem.contact_nodes={n}", f"sliding.scheme={scheme}",
+                                      f"sliding.step_hat={st}"])
+            t = time.perf_counter()
+            r = fem.solve(full)
+            rows.append((scheme, st, dF, df, time.perf_counter() - t, r.info["steps"],
+                         r.info["refactorisations"]))
     return rows
 
 
@@ -192,9 +226,28 @@ def cli_run():
     return rows
 
 
+def print_step_table():
+    """Print the time-error table of :func:`step_accuracy` (Markdown)."""
+    print(f"\n## Time error (paper case, 251 contact nodes, ŝ <= {S_HAT_END:g}) against "
+          f"bdf2 at Δŝ = {REFERENCE_STEP}\n")
+    print("| scheme | step_hat | max ΔF / F0 | max Δprofile / d | paper run s "
+          "| steps | factorisations |\n|---|---|---|---|---|---|---|")
+    for scheme, st, dF, df, sec, steps, refac in step_accuracy():
+        if sec is None:
+            print(f"| {scheme} | {st} | {dF:.2e} | {df:.2e} | | | |")
+        else:
+            print(f"| {scheme} | {st} | {dF:.2e} | {df:.2e} | {sec:.2f} | {steps} | {refac} |")
+    print("\nΔF: largest over the history; Δprofile: largest over the stages ŝ = 0.5, 2, 4. "
+          "The spatial line compares the reference with the same run on 1001 nodes (the "
+          "default mesh's spatial error, for scale). paper run: cases/paper.toml to "
+          "F < 1 % F0 with that scheme and step, in-process, mesh cached; factorisations: "
+          "Cholesky factors of C + c·K (stage landings change ω).\n")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--steps", action="store_true", help="the time-error table only")
     ap.add_argument("--child", nargs=2, metavar=("WHAT", "N"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
@@ -204,22 +257,28 @@ def main():
     sizes = (125, 250) if args.quick else (125, 250, 500, 1000)
     print(f"# FEM benchmark ({os.cpu_count()} CPUs, load average "
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}, {time.strftime('%Y-%m-%d %H:%M')})\n")
+    if args.steps:
+        print_step_table()
+        return
     print("## Superelement and wear loop by contact-node count (paper case, P2)\n")
     print("| contact nodes | DOFs | mesh s | assembly s | factorisation s | compliance s "
           "| C+K factor s | wear step ms | refactor active block ms | paper run s (steps) "
-          "| explicit run s (steps) | peak RSS MB |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+          "| bdf2 run s (steps) | explicit run s (steps) | peak RSS MB |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for n in sizes:
         o = child("size", n)
         print(f"| {o['contact_nodes']} | {o['dofs']} | {o['mesh']:.3f} | {o['assembly']:.3f} "
               f"| {o['factorisation']:.3f} | {o['compliance']:.3f} | {o['factor_C_plus_K']:.3f} "
               f"| {1e3 * o['wear_step']:.2f} | {1e3 * o['refactor_active_block']:.2f} "
               f"| {o['paper_run']:.2f} ({o['steps']}) "
-              f"| {o['paper_run_explicit']:.2f} ({o['steps_explicit']}) | {o['peak_rss_mb']:.0f} |")
+              f"| {o['paper_run_bdf2']:.2f} ({o['steps_bdf2']}) "
+              f"| {o['paper_run_explicit']:.2f} ({o['steps_explicit']}) "
+              f"| {o['peak_rss_mb']:.0f} |")
     print("\nwear step: one warm-started implicit LCP solve (prefix factor of C + K); "
           "refactor active block: a fresh Cholesky of the active block instead. paper run: "
           "cases/paper.toml in-process (mesh from the cache) to F < 1 % F0, implicit "
-          "(default) and explicit at half its stability limit.\n")
+          "(default), bdf2 and explicit at their auto steps (explicit: half its stability "
+          "limit).\n")
 
     print("## Factorisation options (scipy SuperLU orderings; compliance route)\n")
     print("| contact nodes | ordering | route | factorisation s | compliance s | nnz(L+U) "
@@ -235,10 +294,7 @@ def main():
     for label, sec in cli_run():
         print(f"| {label} | {sec:.2f} |")
 
-    print("\n## Implicit Euler step (paper case, ŝ = 2) against Δŝ = 0.0025\n")
-    print("| step_hat | ΔF / F0 | max Δprofile / d | steps |\n|---|---|---|---|")
-    for st, dF, df, steps in step_accuracy():
-        print(f"| {st} | {dF:+.2e} | {df:.2e} | {steps} |")
+    print_step_table()
 
     print("\n## Pressure recovery: odd-even component |p_i - (p_i-1 + p_i+1)/2| / p0\n")
     print("| recovery | ŝ | near edge (0.8a-a) | inside (r < 0.5a) | max p/p0 | min p/p0 |")
