@@ -10,11 +10,46 @@ triangular form the leading block is a prefix of the storage (BLAS tpsv).
 
 from __future__ import annotations
 
+import contextlib
+import threading
+
 import numpy as np
+from threadpoolctl import threadpool_limits
 from scipy.linalg import lu_factor, solve_triangular
 from scipy.linalg.blas import dtpsv
 
 from cases import SolverError
+
+
+_blas_lock = threading.Lock()
+_blas_users = 0
+_blas_limiter = None
+
+
+@contextlib.contextmanager
+def single_threaded_blas():
+    """Run a block with every loaded BLAS limited to one thread (threadpoolctl).
+
+    The solver's dense algebra is small (factorisations of at most ~2000²,
+    triangular solves, matrix-vector products); threaded OpenBLAS spins
+    against other processes on a shared machine and was measured ten times
+    slower under load. Re-entrant and thread-safe: the first user in sets the
+    limit, the last out restores the previous counts, so concurrent solves
+    never restore each other's limit mid-run.
+    """
+    global _blas_users, _blas_limiter
+    with _blas_lock:
+        if _blas_users == 0:
+            _blas_limiter = threadpool_limits(limits=1, user_api="blas")
+        _blas_users += 1
+    try:
+        yield
+    finally:
+        with _blas_lock:
+            _blas_users -= 1
+            if _blas_users == 0:
+                _blas_limiter.restore_original_limits()
+                _blas_limiter = None
 
 
 def lu_nopivot(M: np.ndarray, block: int = 64) -> np.ndarray:

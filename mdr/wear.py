@@ -10,7 +10,8 @@ uses the pressure at its end: on the contact nodes 0..m it solves
     T⁻¹[q/E*] + h K S p = d - f_n,      q = P⁻¹ p,
 
 the contact problem of the 3D compliance plus a diagonal wear compliance
-(physics.md §4). T⁻¹ and P⁻¹ are triangular, so on the contact set only their
+(physics.md §4). The variable-step BDF2 is the same problem with f_n replaced
+by a f_n + b f_{n-1} and h by c h (:func:`bdf2_coefficients`). T⁻¹ and P⁻¹ are triangular, so on the contact set only their
 leading blocks enter: up to DENSE_MAX nodes one LU factorisation without
 pivoting serves every contact set (its factors' leading blocks); finer grids
 apply each operator as one FFT convolution and solve by GMRES with a
@@ -90,6 +91,18 @@ def explicit_step(model: Model, state: State, h: float) -> State:
     new = contact_state(model, f)
     new.slip = _slip(model, state, new, h)
     return new
+
+
+def bdf2_coefficients(h: float, h_prev: float | None) -> tuple[float, float, float]:
+    """Variable-step BDF2: f_{n+1} = a f_n + b f_{n-1} + c h f'_{n+1}.
+
+    With ω = h/h_prev: a = (1+ω)²/(1+2ω), b = -ω²/(1+2ω), c = (1+ω)/(1+2ω)
+    (a + b = 1). ``h_prev=None`` (no history) gives backward Euler (1, 0, 1).
+    """
+    if h_prev is None:
+        return 1.0, 0.0, 1.0
+    w = h / h_prev
+    return (1.0 + w) ** 2 / (1.0 + 2.0 * w), -w * w / (1.0 + 2.0 * w), (1.0 + w) / (1.0 + 2.0 * w)
 
 
 #: largest grid factorised densely (nested LU, exact); finer grids use GMRES
@@ -172,6 +185,10 @@ class ImplicitSystem:
         ec = lu_solve(self._coarse_lu(n, sigma), rc, check_finite=False)
         return prolong(ec) + (r - prolong(rc)) / sigma
 
+    def exact(self, sigma) -> bool:
+        """Whether :meth:`solve` with this sigma is a direct solve (no GMRES)."""
+        return self.nested and bool(np.all(sigma == self.sigma))
+
     def solve(self, r, sigma, x0=None, stats=None, rtol=1e-9):
         """Solve on the contact nodes 0..len(r)-1; sigma is h K S there.
 
@@ -179,7 +196,7 @@ class ImplicitSystem:
         which is 2e-5 of F0 at N = 800 and falls as N^-1.5).
         """
         if self.nested:
-            if np.all(sigma == self.sigma):
+            if self.exact(sigma):
                 return self._nested_solve(r)
             precond = self._nested_solve
         else:
@@ -192,8 +209,16 @@ class ImplicitSystem:
 
 
 def implicit_step(model: Model, state: State, h: float, m_guess: int | None = None,
-                  system: ImplicitSystem | None = None) -> State:
-    """Backward Euler: wear by the pressure at the end of the step.
+                  system: ImplicitSystem | None = None,
+                  previous: tuple[np.ndarray, float] | None = None) -> State:
+    """Backward Euler, or BDF2 with ``previous``: wear by the pressure at the end of the step.
+
+    ``previous = (f_{n-1}, h_{n-1})``, the profile one step before ``state``
+    and the step from it, makes this the variable-step BDF2 step: the same
+    contact problem from a f_n + b f_{n-1} with wear compliance c h K S
+    (:func:`bdf2_coefficients`). The slip factor S (tangential correction)
+    is the lagged first-order one of either scheme. ``system`` must be built
+    for c h when it is to be used for the regular step directly.
 
     The contact set (nodes 0..m) is found by iterating: solve on a guess,
     grow it where the new 1D profile dips below the depth, shrink it where
@@ -202,7 +227,12 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
     N = len(model.x) - 1
     E, K = model.E_star, model.wear_rate
     S = np.ones(N + 1) if state.slip is None else state.slip
-    system = system or ImplicitSystem(model, h)
+    if previous is None:
+        base, hc = state.f, h
+    else:
+        a, b, c = bdf2_coefficients(h, previous[1])
+        base, hc = a * state.f + b * previous[0], c * h
+    system = system or ImplicitSystem(model, hc)
     m = max(state.m if m_guess is None else m_guess, 0)
     stats = {"gmres_iterations": 0, "contact_iterations": 0}
     seen = set()
@@ -219,24 +249,26 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
             raise SolverError("the contact has reached the edge of the MDR domain during "
                               "wear; raise mdr.domain_factor")
         n = m + 1
-        sigma = h * K * S[:n]
+        sigma = hc * K * S[:n]
         if len(x0) != n:
             x0 = np.r_[state.p[:n], np.zeros(max(n - len(state.p[:n]), 0))][:n]
+        # the nested LU of the regular step is exact: no loose pass to redo
+        accurate = accurate or system.exact(sigma)
         rtol = 1e-9 if accurate else LOOSE_RTOL
         if model.force is None:
             d = model.depth
-            p = system.solve(d - state.f[:n], sigma, x0, stats, rtol)
+            p = system.solve(d - base[:n], sigma, x0, stats, rtol)
         else:
             # p = d p1 + p2 is linear in the unknown depth; the force fixes d
             p1 = system.solve(np.ones(n), sigma, None, stats, rtol)
-            p2 = system.solve(-state.f[:n], sigma, x0 - state.depth * p1, stats, rtol)
+            p2 = system.solve(-base[:n], sigma, x0 - state.depth * p1, stats, rtol)
             w = transforms.force_weights(N, model.dt)[:n]
             F1 = w @ transforms.line_load(p1, model.dt)
             F2 = w @ transforms.line_load(p2, model.dt)
             d = (model.force - F2) / F1
             p = d * p1 + p2
         q = transforms.line_load(p, model.dt)
-        f = state.f.copy()
+        f = base.copy()
         f[:n] += sigma * p
         g = transforms.to_1d(f)
         below = np.flatnonzero(d - g[n:] > tol * d)
