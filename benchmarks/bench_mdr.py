@@ -1,21 +1,27 @@
 """MDR solver benchmark on cases/paper.toml (issue 2, §7). Prints tables.
 
-    python benchmarks/bench_mdr.py [--max-n 102400] [--explicit-max-n 3200] [--quick]
+    python benchmarks/bench_mdr.py [--max-n 102400] [--ns 800,6400,102400]
+                                   [--explicit-max-n 3200] [--quick]
 
-1. Resolution ladder N = 200 ... 102400, run to F < 1 % F0: solve time,
-   steps, peak memory (each run in a fresh process), implicit (auto step)
-   and explicit (auto: half the stability limit), and the error of the
-   F/F0 history against the finest implicit level (same step, so the
-   difference is spatial).
+1. Resolution ladder N = 200 ... 102400 (or the sizes of --ns), run to
+   F < 1 % F0: solve time, steps, peak memory (each run in a fresh process),
+   implicit and bdf2 (auto steps) and explicit (auto: half the stability
+   limit), and the error of the F/F0 history against the finest level of the
+   same scheme (same steps, so the difference is spatial).
 2. The paper's explicit scheme in plain vectorised numpy (uniform x grid,
    dense Eq. 2 / Eq. 13 matrices, forward Euler at half its stability
    limit) side by side at N = 800 and 3200.
-3. Time-discretisation error against space error at N = 800.
+3. Time error against step for implicit Euler and BDF2 at N = 800, and the
+   space error there.
 4. The ŝ at which F/F0 falls to 0.8, 0.5, 0.3, 0.15, 0.05, 0.02, 0.01.
 
-BLAS runs single-threaded (OPENBLAS_NUM_THREADS=1) unless set otherwise:
-on a shared 2-core machine a multithreaded BLAS spins against other
-processes and slows the small dense factorisation ten-fold.
+Errors are max |F/F0 - reference| over the run's own history points (no
+interpolation of the run under test; the reference is interpolated, its
+step being fine enough for that to cost < 2e-6). The time-accurate
+reference at N = 800 is BDF2 at Δŝ = 1/80 and 1/160, Richardson-extrapolated.
+
+mdr.solve runs BLAS single-threaded itself (threadpoolctl); the plain-numpy
+paper scheme of table 2 is given the same limit here.
 """
 
 from __future__ import annotations
@@ -29,9 +35,8 @@ import sys
 import time
 from pathlib import Path
 
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-
 import numpy as np  # noqa: E402
+from threadpoolctl import threadpool_info, threadpool_limits  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -40,12 +45,8 @@ import cases  # noqa: E402
 from cases import reference  # noqa: E402
 
 PAPER = ROOT / "cases" / "paper.toml"
-S_GRID = np.linspace(0.0, 11.0, 221)       # ŝ at which histories are compared
-
-
-def _history_on_grid(h) -> list:
-    F = np.asarray(h["force"]) / h["force"][0]
-    return np.interp(S_GRID, h["s_hat"], F, right=np.nan).tolist()
+#: time-accurate reference at N = 800: BDF2 at these steps, Richardson-extrapolated
+REF_STEPS = (0.0125, 0.00625)
 
 
 def one(N: int, scheme: str, step: str, extra=()) -> dict:
@@ -66,7 +67,7 @@ def one(N: int, scheme: str, step: str, extra=()) -> dict:
                 steps=res.info["steps"], step_hat=res.info["step_hat"],
                 limit=res.info.get("stability_limit_hat"),
                 peak_mb=rss1 / 1024, added_mb=(rss1 - rss0) / 1024,
-                F=_history_on_grid(h), s_hat=h["s_hat"].tolist(),
+                s_hat=h["s_hat"].tolist(),
                 force=(h["force"] / h["force"][0]).tolist())
 
 
@@ -138,20 +139,51 @@ def paper_explicit(N: int) -> dict:
         s += h
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     return dict(N=N, wall=wall, cpu=cpu, steps=len(F_hist) - 1, step_hat=h * sc["s_hat_per_m"],
-                F=np.interp(S_GRID, s_hist, F_hist, right=np.nan).tolist())
+                s_hat=s_hist, force=F_hist)
 
 
 # -- tables ------------------------------------------------------------------------
 
-def err(a, b):
-    a, b = np.asarray(a), np.asarray(b)
-    ok = np.isfinite(a) & np.isfinite(b)
-    return float(np.max(np.abs(a[ok] - b[ok])))
+class Reference:
+    """F/F0 as a function of ŝ from one history, or Richardson from two (order p)."""
+
+    def __init__(self, fine, coarse=None, order=2):
+        self.fine, self.coarse, self.order = fine, coarse, order
+        self.end = fine["s_hat"][-1] if coarse is None else min(fine["s_hat"][-1],
+                                                                 coarse["s_hat"][-1])
+
+    def __call__(self, s):
+        f = np.interp(s, self.fine["s_hat"], self.fine["force"])
+        if self.coarse is None:
+            return f
+        c = np.interp(s, self.coarse["s_hat"], self.coarse["force"])
+        return f + (f - c) / (2.0**self.order - 1.0)
+
+
+def err(run, ref) -> float:
+    """max |F/F0 - reference| over the run's history points within the reference's range."""
+    s = np.asarray(run["s_hat"])
+    F = np.asarray(run["force"])
+    k = s <= ref.end
+    return float(np.max(np.abs(F[k] - ref(s[k]))))
+
+
+def blas_threads() -> str:
+    return ",".join(str(i["num_threads"]) for i in threadpool_info() if i["user_api"] == "blas")
+
+
+def row(r, e_space, e_time) -> str:
+    if "error" in r:
+        return f"| {r['N']} | {r['scheme']} | | | failed: {r['error']} | | | | | |"
+    return (f"| {r['N']} | {r['scheme']} | {r['step_hat']:.4g} | {r['steps']} | "
+            f"{r['solve_seconds']:.3g} | {r['cpu']:.3g} | {r['peak_mb']:.0f} | "
+            f"{r['added_mb']:.0f} | {e_space} | {e_time} |")
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--max-n", type=int, default=102400)
+    ap.add_argument("--ns", help="comma-separated ladder sizes (instead of 200 ... --max-n)")
     ap.add_argument("--explicit-max-n", type=int, default=3200)
     ap.add_argument("--paper-max-n", type=int, default=3200)
     ap.add_argument("--quick", action="store_true", help="N <= 6400, no N = 3200 paper scheme")
@@ -164,68 +196,84 @@ def main():
     if args.quick:
         args.max_n, args.paper_max_n = 6400, 800
     print(f"# MDR benchmark on {PAPER.name}, load average {os.getloadavg()[0]:.1f}, "
-          f"OPENBLAS_NUM_THREADS={os.environ['OPENBLAS_NUM_THREADS']}\n")
-    Ns = [n for n in (200, 400, 800, 1600, 3200, 6400, 12800, 25600, 51200, 102400)
-          if n <= args.max_n]
-    imp = {N: run_child(N, "implicit") for N in Ns}
+          f"{os.cpu_count()} CPUs, BLAS threads outside mdr.solve: {blas_threads()} "
+          "(1 inside)\n")
+    if args.ns:
+        Ns = sorted(int(n) for n in args.ns.split(","))
+    else:
+        Ns = [n for n in (200, 400, 800, 1600, 3200, 6400, 12800, 25600, 51200, 102400)
+              if n <= args.max_n]
+    ladder = {sch: {N: run_child(N, sch) for N in Ns} for sch in ("implicit", "bdf2")}
     exp = {N: run_child(N, "explicit") for N in Ns if N <= args.explicit_max_n}
-    finest = imp[Ns[-1]]["F"]
-    # time-accurate reference at N = 800: Richardson in Δŝ (implicit Euler is
-    # first order, so 2 F(Δ/2) - F(Δ) removes the leading term)
-    steps = [0.4, 0.2, 0.1, 0.05, 0.025, 0.0125]
-    runs = {st: run_child(800, "implicit", st) for st in steps}
-    ref_t = 2 * np.asarray(runs[steps[-1]]["F"]) - np.asarray(runs[steps[-2]]["F"])
+    # time-accurate reference at N = 800
+    steps = [0.4, 0.2, 0.1, 0.05, 0.025]
+    ref_runs = [run_child(800, "bdf2", st) for st in REF_STEPS]
+    ref_t = Reference(ref_runs[1], ref_runs[0], order=2)
     print("## 1. Resolution ladder (to F < 1 % F0)\n")
     print("| N | scheme | Δŝ | steps | solve s (wall) | CPU s | peak RSS MB | +MB in solve | "
-          "err vs finest | err vs time-accurate N=800 |")
+          "err vs finest (same scheme) | err vs time-accurate N=800 |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for N in Ns:
-        for r in (imp[N], exp.get(N)):
-            if r is None:
-                continue
-            if "error" in r:
-                print(f"| {N} | {r['scheme']} | | | failed: {r['error']} | | | | | |")
-                continue
-            e = err(r["F"], finest) if r is not imp[Ns[-1]] else 0.0
-            print(f"| {N} | {r['scheme']} | {r['step_hat']:.4g} | {r['steps']} | "
-                  f"{r['solve_seconds']:.3g} | {r['cpu']:.3g} | {r['peak_mb']:.0f} | "
-                  f"{r['added_mb']:.0f} | "
-                  f"{e:.2e} | {err(r['F'], ref_t):.2e} |")
-    print("\nerr = max over ŝ in [0, 11] of |F/F0 - reference|. Implicit rows share Δŝ with "
-          "the finest level, so 'err vs finest' is their spatial error; the explicit rows' "
-          "small steps make 'err vs time-accurate' their total error.\n")
+        for sch in ("implicit", "bdf2"):
+            r = ladder[sch][N]
+            finest = ladder[sch][Ns[-1]]
+            e_s = ("" if "error" in r or "error" in finest else
+                   "—" if N == Ns[-1] else f"{err(r, Reference(finest)):.2e}")
+            print(row(r, e_s, "" if "error" in r else f"{err(r, ref_t):.2e}"))
+        if N in exp:
+            print(row(exp[N], "", "" if "error" in exp[N] else f"{err(exp[N], ref_t):.2e}"))
+    print("\nerr = max over the run's history points of |F/F0 - reference|. Rows of one "
+          "scheme share Δŝ with its finest level, so 'err vs finest' is their spatial error "
+          f"(relative to N = {Ns[-1]}); at N = 800 'err vs time-accurate' is the time error, "
+          "elsewhere time plus space.\n")
 
     print("## 2. The paper's explicit scheme in plain numpy, side by side\n")
     print("| N | scheme | Δŝ | steps | solve s (wall) | CPU s | err vs time-accurate N=800 "
           "| CPU time / paper's |")
     print("|---|---|---|---|---|---|---|---|")
     for N in (800, 3200):
-        if N > args.paper_max_n or N not in imp:
+        if N > args.paper_max_n:
             continue
-        pe = paper_explicit(N)
-        mine = imp[N]
+        with threadpool_limits(limits=1, user_api="blas"):
+            pe = paper_explicit(N)
         print(f"| {N} | paper explicit, numpy | {pe['step_hat']:.3g} | {pe['steps']} | "
-              f"{pe['wall']:.3g} | {pe['cpu']:.3g} | {err(pe['F'], ref_t):.2e} | |")
-        print(f"| {N} | mdr implicit (auto) | {mine['step_hat']:.3g} | {mine['steps']} | "
-              f"{mine['solve_seconds']:.3g} | {mine['cpu']:.3g} | {err(mine['F'], ref_t):.2e} | "
-              f"{mine['cpu'] / pe['cpu']:.3f} |")
+              f"{pe['wall']:.3g} | {pe['cpu']:.3g} | {err(pe, ref_t):.2e} | |")
+        for sch in ("implicit", "bdf2"):
+            mine = ladder[sch].get(N) or run_child(N, sch)
+            if "error" in mine:
+                continue
+            print(f"| {N} | mdr {sch} (auto) | {mine['step_hat']:.3g} | {mine['steps']} | "
+                  f"{mine['solve_seconds']:.3g} | {mine['cpu']:.3g} | {err(mine, ref_t):.2e} | "
+                  f"{mine['cpu'] / pe['cpu']:.3f} |")
     print()
 
-    print("## 3. Time against space error of F/F0 at N = 800\n")
-    print("| Δŝ | steps | solve s (wall) | CPU s | time error (vs Richardson) |")
-    print("|---|---|---|---|---|")
+    print("## 3. Time error against step at N = 800\n")
+    runs = {(sch, st): run_child(800, sch, st) for sch in ("implicit", "bdf2") for st in steps}
+    print("| Δŝ | implicit steps | implicit solve s | implicit time error | "
+          "bdf2 steps | bdf2 solve s | bdf2 time error |")
+    print("|---|---|---|---|---|---|---|")
     for st in steps:
-        r = runs[st]
-        print(f"| {st} | {r['steps']} | {r['solve_seconds']:.3g} | {r['cpu']:.3g} | "
-              f"{err(r['F'], ref_t):.2e} |")
-    if Ns[-1] > 800:
-        print(f"\nspace error at N = 800 (Δŝ = 0.1 on both): "
-              f"{err(runs[0.1]['F'], finest):.2e} against N = {Ns[-1]}")
-    print("\n## 4. ŝ at which F/F0 falls to a fraction (N = 800, Richardson in Δŝ)\n")
-    s_fine = np.linspace(0, 11.5, 23001)
-    F_a = np.interp(s_fine, runs[steps[-1]]["s_hat"], runs[steps[-1]]["force"])
-    F_b = np.interp(s_fine, runs[steps[-2]]["s_hat"], runs[steps[-2]]["force"])
-    F_r = 2 * F_a - F_b
+        cells = []
+        for sch in ("implicit", "bdf2"):
+            r = runs[(sch, st)]
+            cells += [str(r["steps"]), f"{r['solve_seconds']:.3g}", f"{err(r, ref_t):.2e}"]
+        print(f"| {st} | " + " | ".join(cells) + " |")
+    for sch in ("implicit", "bdf2"):
+        e = [err(runs[(sch, st)], ref_t) for st in steps]
+        order = np.polyfit(np.log(steps), np.log(e), 1)[0]
+        print(f"\n{sch}: observed order {order:.2f}; error/Δŝ^p at Δŝ = 0.1: "
+              f"{e[2] / 0.1 ** round(order):.3g}")
+    print(f"\nreference: BDF2 at Δŝ = {REF_STEPS}, Richardson (its correction: "
+          f"{err(ref_runs[1], ref_t):.1e})")
+    if Ns[-1] > 800 and 800 in Ns:
+        for sch in ("implicit", "bdf2"):
+            r, finest = ladder[sch][800], ladder[sch][Ns[-1]]
+            if "error" not in r and "error" not in finest:
+                print(f"space error at N = 800 ({sch}, auto Δŝ = {r['step_hat']}): "
+                      f"{err(r, Reference(finest)):.2e} against N = {Ns[-1]}")
+    print("\n## 4. ŝ at which F/F0 falls to a fraction (N = 800, time-accurate)\n")
+    s_fine = np.linspace(0, min(11.5, ref_t.end), 23001)
+    F_r = ref_t(s_fine)
     print("| F/F0 | ŝ |")
     print("|---|---|")
     for frac in (0.8, 0.5, 0.3, 0.15, 0.05, 0.02, 0.01):

@@ -11,8 +11,10 @@ uses the pressure at its end: on the contact nodes 0..m it solves
 
 the contact problem of the 3D compliance plus a diagonal wear compliance
 (physics.md §4). The variable-step BDF2 is the same problem with f_n replaced
-by a f_n + b f_{n-1} and h by c h (:func:`bdf2_coefficients`). T⁻¹ and P⁻¹ are triangular, so on the contact set only their
-leading blocks enter: up to DENSE_MAX nodes one LU factorisation without
+by a f_n + b f_{n-1} and h by c h (:func:`bdf2_coefficients`).
+
+T⁻¹ and P⁻¹ are triangular, so on the contact set only their leading blocks
+enter: up to DENSE_MAX nodes one LU factorisation without
 pivoting serves every contact set (its factors' leading blocks); finer grids
 apply each operator as one FFT convolution and solve by GMRES with a
 coarse-grid preconditioner (a handful of iterations whatever the grid: the
