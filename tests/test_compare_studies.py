@@ -38,7 +38,8 @@ def stand_in(finite_size_slope=0.0):
 
 def test_edge_study_runs_the_levels_it_names(tmp_path):
     case = cases.load(PAPER, ["stages.s_hat=[0.0, 0.5, 1.0]", "mdr.elements=100",
-                              "fem.contact_nodes=40", "indenter.profile=\"paraboloid\""])
+                              "fem.contact_nodes=40", "indenter.profile=\"paraboloid\"",
+                              "sliding.step_hat=\"auto\""])
     m = compare_mod.compare(case, tmp_path / "out", edge=True, solve=stand_in(), render=False)
     es = m["edge_study"]
     for name, n, spacing0 in (("mdr", 100, 1.77 / 100), ("fem", 40, 1.77 / 39)):
