@@ -205,6 +205,17 @@ def test_second_solver_joins_the_same_directory(fake_study, cluster):
     refine(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"], "fem", out,
            levels=[10, 20, 40], scheduler=cluster, quiet=True, solve=fake_solve)
     assert [s["solver"] for s in studies(out)] == ["mdr", "fem"]
+    # refinement.csv holds both studies' rows, each as in its own per-solver file
+    import csv
+    def rows(path):
+        lines = [l for l in path.read_text().splitlines() if not l.startswith("#")]
+        return list(csv.DictReader(lines))
+    both = rows(out / "refinement.csv")
+    for solver in ("mdr", "fem"):
+        own = rows(out / f"refinement-{solver}.csv")
+        mine = [{k: v for k, v in r.items() if k != "solver"} for r in both
+                if r["solver"] == solver]
+        assert mine == own and len(own) > 0
     meta = json.loads((out / "meta.json").read_text())
     assert set(meta["studies"]) == {"refine-mdr", "refine-fem"}
     for name in FIGURES:

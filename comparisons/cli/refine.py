@@ -5,7 +5,8 @@ one run directory per level in DIR, and writes ``refinement-<solver>.csv`` and
 ``.json`` (differences to the finest level, observed order, Richardson's
 estimate, coarsest converged level) and the figures ``fig4_profiles.png``,
 ``fig4_force.png``, ``convergence.png`` and ``cost.png``. MDR and FEM studies
-run into the same DIR coexist; the figures show every study found there.
+run into the same DIR coexist: ``refinement.csv`` holds every study found there
+(a ``solver`` column first), and the figures show them all.
 """
 
 from __future__ import annotations
@@ -111,6 +112,7 @@ def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolera
     write_text_atomic(out / f"refinement-{solver}.json",
                       json.dumps(_jsonable(summary), indent=2) + "\n")
     write_text_atomic(out / f"refinement-{solver}.csv", csv_text(summary))
+    write_text_atomic(out / "refinement.csv", combined_csv_text(out))
     from ..study_figures import write_figures
     write_figures(out)
     return summary
@@ -226,6 +228,30 @@ def csv_text(summary: dict) -> str:
                 + [r["stage_force"][s] for s in stages] + [d[m] for m in rf.MEASURES])
         lines.append(",".join(_fmt(v, ".10g") for v in vals))
     return "\n".join(lines) + "\n"
+
+
+def combined_csv_text(out: Path) -> str:
+    """refinement.csv: every study in ``out`` in one table, a ``solver`` column first.
+
+    Built from the per-solver CSV files (so the two never disagree); columns a
+    study lacks (e.g. stages of another case) stay empty.
+    """
+    import csv
+    import io
+    heads, rows, columns = [], [], ["solver"]
+    for path in sorted(out.glob("refinement-*.csv")):
+        solver = path.stem.removeprefix("refinement-")
+        lines = path.read_text(encoding="utf-8").splitlines()
+        heads += [line for line in lines if line.startswith("#")]
+        reader = csv.DictReader(io.StringIO("\n".join(l for l in lines
+                                                     if not l.startswith("#"))))
+        columns += [c for c in reader.fieldnames if c not in columns]
+        rows += [dict(row, solver=solver) for row in reader]
+    text = io.StringIO()
+    writer = csv.DictWriter(text, fieldnames=columns, lineterminator="\n")
+    writer.writeheader()
+    writer.writerows(rows)
+    return "\n".join(heads) + "\n" + text.getvalue()
 
 
 def table(summary: dict) -> str:
