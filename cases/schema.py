@@ -132,7 +132,9 @@ class Sliding:
     step_hat: float | str = key("auto", positive=True,
                                 doc="sliding step in units of the dimensionless sliding "
                                     "ŝ = k μ E* s / (σ0 a0), or \"auto\": the solver's "
-                                    "default (explicit: half its stability limit)")
+                                    "default (explicit: half its stability limit; implicit "
+                                    "and bdf2: MDR 0.1, FEM 0.02 and 0.01), recorded in "
+                                    "meta.json info.step_hat")
 
 
 @dataclass(frozen=True)
