@@ -10,6 +10,7 @@ import pytest
 
 import cases
 from cases import CaseError
+from conftest import write_table_case
 
 BASE = {
     "indenter": {"profile": "paraboloid", "radius": 0.01, "youngs_modulus": 210e9,
@@ -122,32 +123,10 @@ def test_bad_input_names_key_value_and_allowed(raw, pattern):
         cases.from_dict(raw)
 
 
-def _table_case(tmp_path, text):
-    csv = tmp_path / "profile.csv"
-    if text is not None:
-        csv.write_text(text)
-    case = tmp_path / "case.toml"
-    case.write_text("""
-[indenter]
-profile = "table"
-file = "profile.csv"
-youngs_modulus = 210e9
-poisson_ratio = 0.3
-[loading]
-control = "depth"
-depth = 1e-6
-[wear]
-k = 1e-4
-mu = 0.3
-hardness = 2e9
-""")
-    return case
-
-
 def test_table_profile_reads_relative_to_case(tmp_path):
     r = np.linspace(0, 4e-4, 41)
     text = "r,f\n" + "\n".join(f"{float(a)!r},{float(a * a / 0.02)!r}" for a in r)
-    case = cases.load(_table_case(tmp_path, text))
+    case = cases.load(write_table_case(tmp_path, text))
     from cases.profiles import height
     # PCHIP reproduces a parabola to interpolation accuracy (h = 1e-5, f'' = 1/R)
     rr = np.linspace(0, 4e-4, 333)
@@ -163,7 +142,7 @@ def test_table_profile_reads_relative_to_case(tmp_path):
 ])
 def test_bad_table_profile(tmp_path, text, pattern):
     with pytest.raises(CaseError, match=pattern):
-        cases.load(_table_case(tmp_path, text))
+        cases.load(write_table_case(tmp_path, text))
 
 
 def test_toml_syntax_error_reports_line(tmp_path):

@@ -13,6 +13,7 @@ from scipy import integrate
 
 import cases
 from cases import reference as ref
+from conftest import write_table_case
 
 E = 2.0e11
 R = 0.01
@@ -111,23 +112,9 @@ def test_truncated_pressure_integrates_to_force_and_is_singular_at_b():
 
 def test_table_profile_matches_closed_form_paraboloid(tmp_path):
     r = np.linspace(0, 3e-4, 301)
-    (tmp_path / "p.csv").write_text("\n".join(f"{float(x)!r},{float(x * x / (2 * R))!r}"
-                                              for x in r))
-    (tmp_path / "c.toml").write_text(f"""
-[indenter]
-profile = "table"
-file = "p.csv"
-youngs_modulus = 210e9
-poisson_ratio = 0.3
-[loading]
-control = "depth"
-depth = 1e-6
-[wear]
-k = 1e-4
-mu = 0.3
-hardness = 2e9
-""")
-    case = cases.load(tmp_path / "c.toml")
+    path = write_table_case(tmp_path, "\n".join(f"{float(x)!r},{float(x * x / (2 * R))!r}"
+                                                 for x in r))
+    case = cases.load(path)
     sc = ref.scales(case)
     h = ref.hertz(case.E_star, R, depth=1e-6)
     # PCHIP slope error O(h²) with h = 1 µm on a 100 µm contact
