@@ -32,14 +32,36 @@ DEPENDENCIES = ("numpy", "scipy", "scikit-fem", "meshio", "gmsh", "pyvista", "ma
                 "dask", "distributed")
 
 
+#: written into every directory ``atomic_directory`` creates: what may be replaced
+OUTPUT_MARKER = ".wearcheck-output"
+
+
+def _is_output(path: Path) -> bool:
+    # meta.json / metrics.json: run, study and comparison directories, also those
+    # written before the marker existed
+    return any((path / name).is_file() for name in (OUTPUT_MARKER, "meta.json", "metrics.json"))
+
+
+def _replaceable(path: Path) -> bool:
+    """An existing ``path`` may be replaced only if it is a wearcheck output, a part
+    of one (e.g. RUN_DIR/vtk), or empty."""
+    if not path.is_dir():
+        return False
+    return _is_output(path) or _is_output(path.parent) or not any(path.iterdir())
+
+
 @contextlib.contextmanager
 def atomic_directory(path: str | Path):
     """Yield a fresh temporary directory that replaces ``path`` on success.
 
     On an exception (or interrupt) the temporary directory is removed and
-    ``path`` is left as it was.
+    ``path`` is left as it was. An existing ``path`` that is not a wearcheck
+    output (a file, or a directory with other content) is refused, never deleted.
     """
     path = Path(path).absolute()
+    if path.exists() and not _replaceable(path):
+        raise cases.CaseError(f"output '{path}' exists and is not a wearcheck output; "
+                              "choose another output path or remove it yourself")
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
     os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; outputs are shared like any dir
@@ -48,6 +70,9 @@ def atomic_directory(path: str | Path):
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
+    if not _is_output(path.parent):  # parts of an output need no marker of their own
+        (tmp / OUTPUT_MARKER).write_text("written by wearcheck; this directory may be "
+                                         "replaced by the next run with the same output path\n")
     old = None
     if path.exists():
         old = Path(tempfile.mkdtemp(prefix=f".{path.name}.old-", dir=path.parent))

@@ -37,8 +37,8 @@ def mdr_run(tmp_path_factory):
 
 def test_run_writes_exactly_the_documented_files(mdr_run):
     out, _ = mdr_run
-    assert sorted(p.name for p in out.iterdir()) == ["case.toml", "history.csv", "meta.json",
-                                                     "stages.npz"]
+    assert sorted(p.name for p in out.iterdir()) == [runio.OUTPUT_MARKER, "case.toml",
+                                                     "history.csv", "meta.json", "stages.npz"]
     header = (out / "history.csv").read_text().splitlines()[0].split(",")
     assert header[:6] == list(cases.HISTORY_COLUMNS)
     with np.load(out / "stages.npz") as z:
@@ -147,3 +147,18 @@ def test_progress_bar_only_on_a_terminal():
     bar(1.0, "done")
     bar.close()
     assert "100.0%" in tty.getvalue() and "mdr" in tty.getvalue()
+
+
+def test_output_path_that_is_not_a_wearcheck_output_is_refused(tmp_path):
+    precious = tmp_path / "thesis"
+    precious.mkdir()
+    (precious / "thesis.tex").write_text("important")
+    code = cli_main(["run", str(cases.shipped("hertz")), "--out", str(precious), "--quiet",
+                     "--set", "mdr.elements=50"])
+    assert code == 2
+    assert (precious / "thesis.tex").read_text() == "important"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["thesis"]
+    # a file is refused the same way
+    with pytest.raises(cases.CaseError, match="not a wearcheck output"):
+        with runio.atomic_directory(precious / "thesis.tex"):
+            pass
