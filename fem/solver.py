@@ -37,6 +37,10 @@ BDF2_AUTO_STEP_HAT = 0.01
 MIN_NODES_IN_CONTACT = 5
 
 
+#: largest Poisson ratio before volumetric locking shows (see check_case)
+MAX_POISSON_RATIO = 0.495
+
+
 def check_case(case) -> None:
     """Reject, with a CaseError, what this FEM model cannot represent."""
     ind, cf = case.indenter, case.counterface
@@ -50,6 +54,12 @@ def check_case(case) -> None:
     if ind.rigid:
         raise CaseError("indenter.rigid = true: the FEM body is the elastic sphere; a rigid "
                         "indenter has nothing to deform (use the MDR solver)")
+    if ind.poisson_ratio > MAX_POISSON_RATIO:
+        # displacement elements lock volumetrically as ν → 0.5 (measured on hertz.toml:
+        # F/F0 = 1.0078 at ν = 0.45, 1.0081 at 0.495, 1.037 at 0.49999; 0.5 divides by 0)
+        raise CaseError(f"key 'indenter.poisson_ratio' = {ind.poisson_ratio!r}: the FEM "
+                        f"(displacement elements) accepts ν <= {MAX_POISSON_RATIO}; nearly "
+                        "incompressible material locks (use the MDR solver)")
 
 
 def mesh_parameters(case) -> meshes.SphereMeshParameters:
