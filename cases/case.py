@@ -142,7 +142,27 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     _check_materials(built)
     _check_programme(built)
     case = Case(**built, source=str(source), table=table)
+    _check_scales(case)
     return replace(case, warnings=_warnings(case))
+
+
+def _check_scales(case: Case) -> None:
+    """The unworn contact must be computable: extreme (valid) numbers can underflow."""
+    from . import reference
+    try:
+        sc = reference.scales(case)
+        ok = all(math.isfinite(sc[k]) and sc[k] > 0 for k in ("a0", "d0", "F0", "p0",
+                                                                "s_hat_per_m"))
+    except (ArithmeticError, ValueError):
+        ok = False
+    if not ok:
+        control = case.loading.control
+        raise CaseError(f"key 'loading.{control}' = {getattr(case.loading, control)!r}: the "
+                        "unworn contact of this profile under this load is not computable in "
+                        "floating point (its radius, force or pressure comes out 0 or "
+                        "infinite); check the load against the profile's size"
+                        + (f" (indenter.radius = {case.indenter.radius!r})"
+                           if case.indenter.radius is not None else ""))
 
 
 def _check_indenter(built, base: Path):

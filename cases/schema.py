@@ -228,7 +228,11 @@ def _fmt(value) -> str:
 
 
 def _check_number(name, value, meta):
-    if not math.isfinite(value):
+    try:
+        finite = math.isfinite(value)
+    except OverflowError:  # an integer beyond the range of a float
+        finite = False
+    if not finite:
         raise CaseError(f"key '{name}' = {value!r}: must be a finite number")
     unit = f" {meta['unit']}" if meta["unit"] and meta["unit"] != "1" else ""
     if meta["positive"] and not value > 0:
@@ -259,7 +263,7 @@ def convert(name: str, f: dataclasses.Field, value: Any):
         for v in value:
             if isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise CaseError(f"key '{name}' = {_fmt(value)}: every entry must be a number")
-            out.append(_check_number(name, float(v), meta))
+            out.append(_check_number(name, float(_check_number(name, v, meta)), meta))
         return tuple(out)
     if isinstance(value, bool):
         if bool in allowed:
@@ -267,7 +271,7 @@ def convert(name: str, f: dataclasses.Field, value: Any):
     elif isinstance(value, int) and int in allowed:
         return int(_check_number(name, value, meta))
     elif isinstance(value, (int, float)) and float in allowed:
-        return _check_number(name, float(value), meta)
+        return _check_number(name, float(_check_number(name, value, meta)), meta)
     elif isinstance(value, str) and str in allowed:
         choices = meta["choices"]
         if float in allowed and value != "auto":  # a number or "auto"

@@ -6,6 +6,8 @@ import shutil
 import sys
 from pathlib import Path
 
+from cases import CaseError
+
 from ._common import add_case_arguments, load_case
 
 
@@ -37,10 +39,15 @@ def main(args) -> int:
         nodes += n_edges
     if args.out is not None:
         out = Path(args.out)
+        if out.is_dir():
+            raise CaseError(f"--out '{out}' is a directory; give the path of the .msh file")
         out.parent.mkdir(parents=True, exist_ok=True)
         tmp = out.with_name(f".{out.name}.partial")
-        shutil.copyfile(mesh.path, tmp)
-        tmp.replace(out)
+        try:
+            shutil.copyfile(mesh.path, tmp)
+            tmp.replace(out)
+        finally:
+            tmp.unlink(missing_ok=True)
     a0 = reference.scales(case)["a0"]
     print(f"mesh: {len(mesh.points)} vertices, {len(mesh.triangles)} triangles; "
           f"order {order}: {nodes} nodes, {2 * nodes} DOFs; {contact_nodes} contact nodes on "

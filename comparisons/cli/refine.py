@@ -58,15 +58,21 @@ def add_cluster_arguments(p) -> None:
 
 
 def _int_list(text):
-    return [int(v) for v in text.split(",") if v.strip()]
+    values = [int(v) for v in text.split(",") if v.strip()]
+    if not values or min(values) <= 0:
+        raise ValueError(text)  # argparse: "invalid comma-separated positive integer value"
+    return values
 
 
 def _float_list(text):
-    return [float(v) for v in text.split(",") if v.strip()]
+    values = [float(v) for v in text.split(",") if v.strip()]
+    if not values or not all(v > 0 and math.isfinite(v) for v in values):
+        raise ValueError(text)
+    return values
 
 
-_int_list.__name__ = "comma-separated integer"  # argparse names it in its error
-_float_list.__name__ = "comma-separated number"
+_int_list.__name__ = "comma-separated positive integer"  # argparse names it in its error
+_float_list.__name__ = "comma-separated positive number"
 
 
 def main(args) -> int:
