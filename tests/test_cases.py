@@ -100,7 +100,7 @@ def test_resolved_case_round_trips(tmp_path):
     (with_("wear", k=10**400), r"wear\.k.*finite"),
     (with_("mdr", elements=10**400), r"mdr\.elements.*finite"),
     (with_("loading", depth=1e-300), r"loading\.depth.*not computable"),
-    (with_("indenter", radius=1e-300), r"not computable.*indenter\.radius"),
+    (with_("indenter", profile="sphere", radius=1e-300), r"not computable.*indenter\.radius"),
     (with_("wear", hardness=float("inf")), r"wear\.hardness.*inf.*finite"),
     (with_("indenter", youngs_modulus=0.0), r"indenter\.youngs_modulus.*0\.0.*> 0"),
     (with_("indenter", radius=-0.01), r"indenter\.radius.*-0\.01.*> 0"),
