@@ -298,6 +298,9 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
                                                 t.solver, extra_meta=meta)
                 except OSError as exc:
                     outcome.ok, outcome.message = False, f"writing the run failed: {exc}"
+            if not outcome.ok:
+                # a complete run left from an earlier study would pass for this one's
+                discard_run(out / t.name)
             outcomes[t.name] = outcome
             reporter.finished(outcome)
             fill()
@@ -306,6 +309,13 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
         reporter.close()
         conn.close()
     return [outcomes[t.name] for t in tasks]
+
+
+def discard_run(path: Path) -> None:
+    """Remove an earlier run directory at ``path`` (only ever a wearcheck run)."""
+    import shutil
+    if (path / "meta.json").is_file():
+        shutil.rmtree(path)
 
 
 # --------------------------------------------------------------------------

@@ -289,3 +289,17 @@ def test_mdr_step_refinement_shows_backward_euler_first_order(cluster, tmp_path)
     for m in ("profile", "force"):
         assert summary["observed_order"][m]["order"] == pytest.approx(1.0, abs=0.1)
     assert summary["richardson"]["by_stage"][1.0]["order"] == pytest.approx(1.0, abs=0.1)
+
+
+def test_a_failed_level_removes_an_earlier_run_of_that_level(cluster, tmp_path):
+    import shutil
+    from comparisons.cli.refine import refine
+    out = tmp_path / "study"
+    refine(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"], "mdr", out,
+           levels=[8, 16], scheduler=cluster, quiet=True, solve=fake_solve)
+    # a complete run of level 24 from an earlier study (here: a copy of level 16)
+    shutil.copytree(out / "mdr-elements-16", out / "mdr-elements-24")
+    refine(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"], "mdr", out,
+           levels=[8, 24], scheduler=cluster, quiet=True, solve=fake_solve)  # 24 fails
+    assert not (out / "mdr-elements-24").exists()
+    assert (out / "mdr-elements-8" / "meta.json").is_file()
