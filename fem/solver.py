@@ -37,6 +37,9 @@ BDF2_AUTO_STEP_HAT = 0.01
 MIN_NODES_IN_CONTACT = 5
 
 
+#: runaway guards: longest run in ŝ and most steps
+MAX_S_HAT = 1.0e4
+MAX_STEPS = 2_000_000
 #: largest Poisson ratio before volumetric locking shows (see check_case)
 MAX_POISSON_RATIO = 0.495
 
@@ -153,6 +156,14 @@ def _solve(case, progress=None) -> RunResult:
                             f"{model.stats()['contact_spacing']:.3g} m); use a step <= "
                             f"{limit_hat:.4g} or sliding.scheme = \"implicit\"")
     step = step_hat / per_m
+    if sl.until == "distance":
+        # refuse a run that cannot end in reasonable time before starting it
+        if sl.distance * per_m > MAX_S_HAT:
+            raise CaseError(f"key 'sliding.distance' = {sl.distance!r}: ŝ = "
+                            f"{sl.distance * per_m:.4g} exceeds the FEM's cap of {MAX_S_HAT:g}")
+        if sl.distance / step > MAX_STEPS:
+            raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: the run would take "
+                            f"{sl.distance / step:.3g} steps (cap {MAX_STEPS}); raise the step")
     control = case.loading.control
     value = getattr(case.loading, control)
     stage_s = [sh / per_m for sh in case.stages.s_hat]
@@ -168,7 +179,8 @@ def _solve(case, progress=None) -> RunResult:
     out = wear.run(C, z, r, area, rate, control=control, value=value, step=step,
                    scheme=sl.scheme, stage_s=stage_s, until=sl.until, distance=distance,
                    force_fraction=sl.force_fraction, gap_scale=d0, force_scale=F0,
-                   pressure_scale=p0, center=center, progress=loop_progress)
+                   pressure_scale=p0, center=center, progress=loop_progress,
+                   max_steps=MAX_STEPS)
     t_loop = time.perf_counter() - t0
 
     # stages: full arc values (with the axis node for P2)
@@ -198,6 +210,7 @@ def _solve(case, progress=None) -> RunResult:
     history = dict(s=np.array(out.s), force=np.array(out.force), depth=np.array(out.depth),
                    contact_radius=np.array(out.contact_radius),
                    wear_center=np.array(out.wear_center), wear_volume=np.array(out.wear_volume))
+    history["s_hat"] = history["s"] * per_m
     info = dict(
         solver="fem", scheme=sl.scheme, step_hat=step_hat, step=step,
         explicit_limit_step_hat=float(limit_hat), steps=out.steps,

@@ -118,6 +118,7 @@ def test_fields_for_export():
     (["indenter.rigid=true", "counterface.rigid=false", "counterface.youngs_modulus=2e11",
       "counterface.poisson_ratio=0.3"], r"counterface\.rigid|indenter\.rigid"),
     (["indenter.poisson_ratio=0.5"], r"indenter\.poisson_ratio.*= 0\.5.*<= 0\.495"),
+    (["sliding.distance=1e300"], r"sliding\.distance.*1e\+300.*cap"),
 ])
 def test_bad_fem_input_is_rejected(overrides, match):
     case_path = cases.shipped("hertz")
