@@ -109,10 +109,13 @@ def parse_override(text: str) -> tuple[str, str, Any]:
 def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Case:
     """Read a case file, apply ``section.key=value`` overrides, validate."""
     path = Path(path)
+    if path.is_dir():
+        raise CaseError(f"case file '{path}' is a directory, not a TOML file")
     if not path.is_file():
         raise CaseError(f"case file '{path}' does not exist")
     try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+        # utf-8-sig: editors on some systems start the file with a byte-order mark
+        raw = tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"case file '{path}': TOML syntax error: {exc}") from None
     except UnicodeDecodeError as exc:

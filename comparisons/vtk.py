@@ -39,7 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cases import WearcheckError
+from cases import CaseError, WearcheckError
 from cases.profiles import height
 
 from .runio import Run, atomic_directory
@@ -393,7 +393,7 @@ def export_run(run_dir, revolve: int = 0) -> Path:
         number of segments of the worn surface (default ``SURFACE_SEGMENTS``).
     """
     if revolve < 0 or 0 < revolve < 3:
-        raise WearcheckError(f"--revolve {revolve}: need 0 (no solid) or at least 3 segments")
+        raise CaseError(f"--revolve {revolve}: need 0 (no solid) or at least 3 segments")
     run = Run(run_dir)
     target = run.path / "vtk"
     with atomic_directory(target) as tmp:

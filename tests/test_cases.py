@@ -179,3 +179,11 @@ def test_readme_documents_every_key():
     for section in SECTIONS:
         for name, _ in section_fields(section):
             assert f"`{section}.{name}`" in readme, f"{section}.{name} missing from README"
+
+
+def test_case_file_with_byte_order_mark_and_a_directory(tmp_path):
+    path = tmp_path / "bom.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + cases.shipped("hertz").read_bytes())
+    assert cases.load(path).loading.depth == 1e-6
+    with pytest.raises(CaseError, match="is a directory"):
+        cases.load(tmp_path)

@@ -162,3 +162,9 @@ def test_output_path_that_is_not_a_wearcheck_output_is_refused(tmp_path):
     with pytest.raises(cases.CaseError, match="not a wearcheck output"):
         with runio.atomic_directory(precious / "thesis.tex"):
             pass
+
+
+def test_revolve_below_three_segments_is_bad_input_before_solving(tmp_path):
+    code = cli_main(["run", str(cases.shipped("hertz")), "--revolve", "2", "--quiet",
+                     "--out", str(tmp_path / "x")])
+    assert code == 2 and not (tmp_path / "x").exists()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from cases import WearcheckError
+from cases import CaseError
 
 from ..progress import ProgressBar
 from ..runio import atomic_directory, write_run_files
@@ -29,7 +29,7 @@ def add_parser(sub):
 
 def main(args) -> int:
     if args.revolve < 0 or 0 < args.revolve < 3:
-        raise WearcheckError(f"--revolve {args.revolve}: need 0 (no solid) or at least 3 segments")
+        raise CaseError(f"--revolve {args.revolve}: need 0 (no solid) or at least 3 segments")
     args.vtk = args.vtk or args.revolve > 0
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-{args.solver}"
