@@ -22,7 +22,6 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 PAPER = ROOT / "cases" / "paper.toml"
 
 
@@ -30,14 +29,14 @@ def one_size(n: int) -> dict:
     """Timings of one contact-node count (run in a child process)."""
     import numpy as np
 
-    import cases
-    import fem
-    import meshes
-    from cases import reference
+    from wearcheck import cases
+    from wearcheck import fem
+    from wearcheck import meshes
+    from wearcheck.cases import reference
     from threadpoolctl import threadpool_limits
-    from fem.contact import PrefixCholesky, solve_lcp
-    from fem.model import build
-    from fem.solver import mesh_parameters
+    from wearcheck.fem.contact import PrefixCholesky, solve_lcp
+    from wearcheck.fem.model import build
+    from wearcheck.fem.solver import mesh_parameters
 
     case = cases.load(PAPER, [f"fem.contact_nodes={n}"])
     out = {"n": n}
@@ -99,11 +98,11 @@ def factorisation_options(n: int) -> list[dict]:
     """Factorise + compliance with each scipy option (run in a child process)."""
     import numpy as np
 
-    import cases
-    import meshes
+    from wearcheck import cases
+    from wearcheck import meshes
     from threadpoolctl import threadpool_limits
-    from fem.model import FACTORISATIONS, build
-    from fem.solver import mesh_parameters
+    from wearcheck.fem.model import FACTORISATIONS, build
+    from wearcheck.fem.solver import mesh_parameters
 
     case = cases.load(PAPER, [f"fem.contact_nodes={n}"])
     sm = meshes.sphere_mesh(mesh_parameters(case))
@@ -154,9 +153,9 @@ def step_accuracy(n: int = 250):
     """
     import numpy as np
 
-    import cases
-    import fem
-    from cases import reference
+    from wearcheck import cases
+    from wearcheck import fem
+    from wearcheck.cases import reference
 
     sc = reference.scales(cases.load(PAPER))
     dist = S_HAT_END / sc["s_hat_per_m"]
@@ -192,9 +191,9 @@ def recovery_wiggle():
     """Odd-even component of the nodal pressure near the worn contact edge."""
     import numpy as np
 
-    import cases
-    import fem
-    from cases import reference
+    from wearcheck import cases
+    from wearcheck import fem
+    from wearcheck.cases import reference
 
     out = []
     for rec in ("lumped", "consistent"):
@@ -219,7 +218,7 @@ def cli_run():
         env = dict(os.environ, WEARCHECK_CACHE=str(Path(tmp) / "cache"))
         for label in ("cold mesh cache", "warm mesh cache"):
             t = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "comparisons.cli", "run", str(PAPER),
+            subprocess.run([sys.executable, "-m", "wearcheck", "run", str(PAPER),
                             "--solver", "fem", "--out", str(Path(tmp) / "run"), "--quiet"],
                            cwd=ROOT, env=env, check=True)
             rows.append((label, time.perf_counter() - t))

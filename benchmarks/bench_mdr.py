@@ -39,10 +39,9 @@ import numpy as np  # noqa: E402
 from threadpoolctl import threadpool_info, threadpool_limits  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
 
-import cases  # noqa: E402
-from cases import reference  # noqa: E402
+from wearcheck import cases  # noqa: E402
+from wearcheck.cases import reference  # noqa: E402
 
 PAPER = ROOT / "cases" / "paper.toml"
 #: time-accurate reference at N = 800: BDF2 at these steps, Richardson-extrapolated
@@ -53,7 +52,7 @@ def one(N: int, scheme: str, step: str, extra=()) -> dict:
     """One MDR run in this process; returns timings, memory and the history."""
     import resource
 
-    import mdr
+    from wearcheck import mdr
     overrides = [f"mdr.elements={N}", f'sliding.scheme="{scheme}"', f"sliding.step_hat={step}",
                  "stages.s_hat=[0.0]", *extra]
     case = cases.load(PAPER, overrides)
@@ -90,7 +89,7 @@ def paper_explicit(N: int) -> dict:
     """
     case = cases.load(PAPER, [f"mdr.elements={N}"])
     sc = reference.scales(case)
-    from cases import profiles
+    from wearcheck.cases import profiles
     L = case.mdr.domain_factor * math.sqrt(2.0) * sc["a0"]
     x = np.linspace(0.0, L, N + 1)
     E, K, d = case.E_star, case.wear_rate, case.loading.depth

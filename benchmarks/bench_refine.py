@@ -13,8 +13,8 @@ import argparse
 import tempfile
 import time
 
-from comparisons.distributed import Task, run_cases
-from comparisons.refine import levels
+from wearcheck.comparisons.distributed import Task, run_cases
+from wearcheck.comparisons.refine import levels
 
 
 def study(solver, lvls, scheduler, out):

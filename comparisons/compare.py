@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-import cases
-from cases import reference
+from wearcheck import cases
+from wearcheck.cases import reference
 
 from . import edge_peak, metrics, report, runio
 from .solvers import solve as solve_case

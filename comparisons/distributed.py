@@ -33,7 +33,7 @@ import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import cases
+from wearcheck import cases
 from .progress import ProgressBar
 from .runio import _jsonable, write_run, write_text_atomic
 
@@ -133,7 +133,7 @@ def execute(raw: dict, source: str, overrides: tuple[str, ...], solver: str, nam
     if solve is None:
         from .solvers import solve
         try:  # a worker's first import of the solver is not part of its cost
-            importlib.import_module(solver)
+            importlib.import_module(f"wearcheck.{solver}")
         except Exception:
             pass  # solve() meets the same failure below and reports it
     out = dict(ok=False, message="", case=None, result=None, traceback="")

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from cases import CaseError
+from wearcheck.cases import CaseError
 
 #: the case key each solver's resolution is set by
 RESOLUTION_KEY = {"mdr": "mdr.elements", "fem": "fem.contact_nodes"}

@@ -24,9 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-import cases
-from cases import reference
-from cases.result import HISTORY_COLUMNS, RunResult
+from wearcheck import cases
+from wearcheck.cases import reference
+from wearcheck.cases.result import HISTORY_COLUMNS, RunResult
 
 DEPENDENCIES = ("numpy", "scipy", "scikit-fem", "meshio", "gmsh", "pyvista", "matplotlib",
                 "dask", "distributed")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from cases import Case, CaseError, RunResult
+from wearcheck.cases import Case, CaseError, RunResult
 
 SOLVERS = ("mdr", "fem")
 
@@ -10,9 +10,9 @@ SOLVERS = ("mdr", "fem")
 def solve(case: Case, solver: str, progress=None) -> RunResult:
     """Run ``solver`` ("mdr" or "fem") on ``case``."""
     if solver == "mdr":
-        import mdr
+        from wearcheck import mdr
         return mdr.solve(case, progress=progress)
     if solver == "fem":
-        import fem
+        from wearcheck import fem
         return fem.solve(case, progress=progress)
     raise CaseError(f"solver '{solver}': must be one of " + ", ".join(SOLVERS))

@@ -39,8 +39,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cases import CaseError, WearcheckError
-from cases.profiles import height
+from wearcheck.cases import CaseError, WearcheckError
+from wearcheck.cases.profiles import height
 
 from .runio import Run, atomic_directory
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import linalg
 
-from cases import SolverError
+from wearcheck.cases import SolverError
 
 
 class PrefixCholesky:

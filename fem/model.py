@@ -19,7 +19,7 @@ from skfem import (Basis, ElementTriP1, ElementTriP2, ElementVector, FacetBasis,
                    MeshTri, asm)
 from skfem.models.poisson import mass
 
-from cases import SolverError
+from wearcheck.cases import SolverError
 
 from .axisym import boundary_mass, boundary_weight, stiffness_form, stress_at_quadrature
 

@@ -8,9 +8,9 @@ import time
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-import meshes
-from cases import CaseError, RunResult, reference
-from cases.profiles import height
+from wearcheck import meshes
+from wearcheck.cases import CaseError, RunResult, reference
+from wearcheck.cases.profiles import height
 
 from . import wear
 from .model import build

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg
 
-from cases import SolverError
+from wearcheck.cases import SolverError
 
 from .contact import PrefixCholesky, solve_lcp
 

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from cases import SolverError
+from wearcheck.cases import SolverError
 
 from . import transforms
 

@@ -18,7 +18,7 @@ from threadpoolctl import threadpool_limits
 from scipy.linalg import lu_factor, solve_triangular
 from scipy.linalg.blas import dtpsv
 
-from cases import SolverError
+from wearcheck.cases import SolverError
 
 
 _blas_lock = threading.Lock()

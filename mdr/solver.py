@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from cases import CaseError, RunResult, SolverError, profiles, reference
+from wearcheck.cases import CaseError, RunResult, SolverError, profiles, reference
 
 from . import linalg, transforms, wear
 

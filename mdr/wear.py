@@ -30,7 +30,7 @@ import numpy as np
 from scipy.linalg import lu_factor, lu_solve
 from scipy.sparse.linalg import LinearOperator, eigs
 
-from cases import SolverError
+from wearcheck.cases import SolverError
 
 from . import contact, linalg, transforms
 

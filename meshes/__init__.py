@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cases import CaseError, SolverError
+from wearcheck.cases import CaseError, SolverError
 
 #: bump when the geometry or meshing recipe changes (invalidates the cache)
 RECIPE = 1

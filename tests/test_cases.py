@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import cases
-from cases import CaseError
+from wearcheck import cases
+from wearcheck.cases import CaseError
 from conftest import write_table_case
 
 BASE = {
@@ -35,7 +35,7 @@ def test_shipped_cases_load():
 
 def test_paper_case_meets_issue_requirements():
     case = cases.load(cases.shipped("paper"))
-    from cases.reference import scales
+    from wearcheck.cases.reference import scales
     sc = scales(case)
     assert case.loading.control == "depth"
     assert case.sliding.until == "force_fraction" and case.sliding.force_fraction == 0.01
@@ -131,7 +131,7 @@ def test_table_profile_reads_relative_to_case(tmp_path):
     r = np.linspace(0, 4e-4, 41)
     text = "r,f\n" + "\n".join(f"{float(a)!r},{float(a * a / 0.02)!r}" for a in r)
     case = cases.load(write_table_case(tmp_path, text))
-    from cases.profiles import height
+    from wearcheck.cases.profiles import height
     # PCHIP reproduces a parabola to interpolation accuracy (h = 1e-5, f'' = 1/R)
     rr = np.linspace(0, 4e-4, 333)
     assert np.max(np.abs(height(case.indenter, rr, case.table) - rr**2 / 0.02)) < 1e-3 * 1e-6
@@ -164,7 +164,7 @@ def test_missing_case_file():
 def test_cli_bad_input_is_one_clear_line_without_traceback(tmp_path):
     path = tmp_path / "case.toml"
     path.write_text(cases.shipped("hertz").read_text().replace("depth = 1e-6", "depth = -1e-6"))
-    out = subprocess.run([sys.executable, "-m", "comparisons.cli", "run", str(path),
+    out = subprocess.run([sys.executable, "-m", "wearcheck", "run", str(path),
                           "--out", str(tmp_path / "run")], capture_output=True, text=True,
                          cwd=Path(__file__).parents[1])
     assert out.returncode == 2
@@ -175,7 +175,7 @@ def test_cli_bad_input_is_one_clear_line_without_traceback(tmp_path):
 
 def test_readme_documents_every_key():
     readme = (Path(__file__).parents[1] / "README.md").read_text()
-    from cases.schema import SECTIONS, section_fields
+    from wearcheck.cases.schema import SECTIONS, section_fields
     for section in SECTIONS:
         for name, _ in section_fields(section):
             assert f"`{section}.{name}`" in readme, f"{section}.{name} missing from README"

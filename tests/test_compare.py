@@ -9,11 +9,11 @@ import re
 import numpy as np
 import pytest
 
-import cases
-from cases import RunResult, profiles, reference
-from comparisons import compare as compare_mod
-from comparisons import runio
-from comparisons.cli import main as cli_main
+from wearcheck import cases
+from wearcheck.cases import RunResult, profiles, reference
+from wearcheck.comparisons import compare as compare_mod
+from wearcheck.comparisons import runio
+from wearcheck.comparisons.cli import main as cli_main
 
 HERTZ = str(cases.shipped("hertz"))
 TRUNCATED = str(cases.shipped("truncated"))

@@ -4,9 +4,9 @@ around stand-in solvers whose answers are known by construction."""
 import numpy as np
 import pytest
 
-import cases
-from cases import RunResult, profiles, reference
-from comparisons import compare as compare_mod
+from wearcheck import cases
+from wearcheck.cases import RunResult, profiles, reference
+from wearcheck.comparisons import compare as compare_mod
 
 PAPER = cases.shipped("paper")
 

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from cases import reference
-from comparisons import edge_peak
+from wearcheck.cases import reference
+from wearcheck.comparisons import edge_peak
 
 E_STAR = 2.308e11
 

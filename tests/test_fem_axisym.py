@@ -7,7 +7,7 @@ import pytest
 from skfem import (Basis, ElementTriP1, ElementTriP2, ElementVector, FacetBasis, MeshTri,
                    Functional, asm, condense, solve)
 
-from fem.axisym import stiffness_form, traction_form
+from wearcheck.fem.axisym import stiffness_form, traction_form
 
 E, NU = 210e9, 0.3
 

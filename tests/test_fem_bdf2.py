@@ -12,10 +12,10 @@ import math
 import numpy as np
 import pytest
 
-import cases
-import fem
-from cases import reference
-from fem import wear
+from wearcheck import cases
+from wearcheck import fem
+from wearcheck.cases import reference
+from wearcheck.fem import wear
 
 S_END = 1.0
 STEPS = np.array([0.08, 0.04, 0.02, 0.01])

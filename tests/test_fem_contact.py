@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from scipy import linalg, optimize
 
-from cases import SolverError
-from fem.contact import PrefixCholesky, complementarity_residual, solve_lcp
+from wearcheck.cases import SolverError
+from wearcheck.fem.contact import PrefixCholesky, complementarity_residual, solve_lcp
 
 
 def _problem(n=60, seed=0):

@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-import cases
-import fem
-from cases import reference
+from wearcheck import cases
+from wearcheck import fem
+from wearcheck.cases import reference
 
 
 @pytest.fixture(autouse=True)

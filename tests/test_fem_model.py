@@ -5,11 +5,11 @@ import math
 import numpy as np
 import pytest
 
-import cases
-import fem
-import meshes
-from cases import CaseError, reference
-from fem.model import build
+from wearcheck import cases
+from wearcheck import fem
+from wearcheck import meshes
+from wearcheck.cases import CaseError, reference
+from wearcheck.fem.model import build
 
 R, E, NU = 0.01, 210e9, 0.3
 

@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
-import cases
-import fem
-from cases import CaseError, SolverError, reference
-from fem import wear
+from wearcheck import cases
+from wearcheck import fem
+from wearcheck.cases import CaseError, SolverError, reference
+from wearcheck.fem import wear
 
 
 @pytest.fixture(autouse=True)
@@ -178,8 +178,8 @@ def test_contact_outgrowing_the_arc_is_an_error():
 
 
 def test_run_command_writes_fem_run(tmp_path):
-    from comparisons.cli import main as cli
-    from comparisons.runio import Run
+    from wearcheck.comparisons.cli import main as cli
+    from wearcheck.comparisons.runio import Run
 
     out = tmp_path / "run"
     assert cli(["run", str(cases.shipped("hertz")), "--solver", "fem", "--quiet",

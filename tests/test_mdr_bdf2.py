@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import threadpoolctl
 
-import mdr
-from mdr import solver, wear
+from wearcheck import mdr
+from wearcheck.mdr import solver, wear
 from test_mdr_wear import make
 
 # points away from the start: the run begins at a Hertz contact whose

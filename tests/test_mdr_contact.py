@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-import cases
-import mdr
-from cases import reference
+from wearcheck import cases
+from wearcheck import mdr
+from wearcheck.cases import reference
 
 R = 0.01
 STEEL = dict(youngs_modulus=210e9, poisson_ratio=0.3)

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from mdr import linalg, transforms
+from wearcheck.mdr import linalg, transforms
 
 
 def test_nested_lu_solves_every_leading_block():

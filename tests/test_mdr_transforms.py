@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from cases import reference
-from mdr import transforms
+from wearcheck.cases import reference
+from wearcheck.mdr import transforms
 
 R = 0.01
 L = 2e-4

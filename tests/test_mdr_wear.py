@@ -5,10 +5,10 @@ import math
 import numpy as np
 import pytest
 
-import cases
-import mdr
-from cases import reference
-from mdr import solver, wear
+from wearcheck import cases
+from wearcheck import mdr
+from wearcheck.cases import reference
+from wearcheck.mdr import solver, wear
 
 R = 0.01
 D = 1e-6

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-import meshes
-from cases import CaseError, SolverError
-from comparisons.cli import main as cli
+from wearcheck import meshes
+from wearcheck.cases import CaseError, SolverError
+from wearcheck.comparisons.cli import main as cli
 
 R = 0.01
 
@@ -94,7 +94,7 @@ def test_contact_edges_for_order():
 
 
 def test_mesh_command(tmp_path, capsys):
-    import cases
+    from wearcheck import cases
 
     out = tmp_path / "m" / "paper.msh"
     rc = cli(["mesh", str(cases.shipped("paper")), "--set", "fem.contact_nodes=41",

@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from cases import RunResult, reference
-from comparisons import metrics
+from wearcheck.cases import RunResult, reference
+from wearcheck.comparisons import metrics
 
 TOL = dict(profile_tolerance=0.01, force_tolerance=0.01, pressure_tolerance=0.02,
            contact_radius_tolerance=0.02, edge_band=0.1)

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-import cases
-from cases import reference as ref
+from wearcheck import cases
+from wearcheck.cases import reference as ref
 from conftest import write_table_case
 
 E = 2.0e11

@@ -10,12 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from comparisons.runio import OUTPUT_MARKER
+from wearcheck.comparisons.runio import OUTPUT_MARKER
 
-import cases
-from cases import WearcheckError
-from comparisons import render
-from comparisons.runio import Run, write_run
+from wearcheck import cases
+from wearcheck.cases import WearcheckError
+from wearcheck.comparisons import render
+from wearcheck.comparisons.runio import Run, write_run
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_vtk_export import cylinder_run  # noqa: E402
@@ -106,8 +106,7 @@ def test_render_command_needs_no_display(tmp_path):
     run, _ = cylinder_run(tmp_path / "run", s_hat=(0.0, 1.0))
     env = {k: v for k, v in os.environ.items()
            if k not in ("DISPLAY", "WAYLAND_DISPLAY", "VTK_DEFAULT_OPENGL_WINDOW")}
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
-    done = subprocess.run([sys.executable, "-m", "comparisons.cli", "render", str(run.path)],
+    done = subprocess.run([sys.executable, "-m", "wearcheck", "render", str(run.path)],
                           cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert "X server" not in done.stderr

@@ -8,11 +8,11 @@ import os
 import numpy as np
 import pytest
 
-import cases
-from cases import reference
-from comparisons import runio
-from comparisons.cli import main as cli_main
-from comparisons.progress import ProgressBar
+from wearcheck import cases
+from wearcheck.cases import reference
+from wearcheck.comparisons import runio
+from wearcheck.comparisons.cli import main as cli_main
+from wearcheck.comparisons.progress import ProgressBar
 
 SMALL = ["--set", "mdr.elements=100", "--set", "sliding.until=distance",
          "--set", "sliding.scheme=implicit",
@@ -112,7 +112,7 @@ def test_interrupted_write_leaves_nothing(tmp_path, monkeypatch):
         (args[0] / "history.csv").write_text("s,force\n")
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("comparisons.cli.run.write_run_files", interrupted)
+    monkeypatch.setattr("wearcheck.comparisons.cli.run.write_run_files", interrupted)
     code = cli_main(["run", str(cases.shipped("hertz")), "--out", str(tmp_path / "x"),
                      "--quiet", "--set", "mdr.elements=50"])
     assert code == 130

@@ -10,10 +10,10 @@ import cloudpickle
 import numpy as np
 import pytest
 
-import cases
-from cases import reference
-from comparisons.cli.sweep import parse_vary, split_values, sweep
-from comparisons.runio import Run
+from wearcheck import cases
+from wearcheck.cases import reference
+from wearcheck.comparisons.cli.sweep import parse_vary, split_values, sweep
+from wearcheck.comparisons.runio import Run
 
 # the stand-in solvers below travel to the Dask workers by value, so the
 # workers need not import this test module
@@ -78,7 +78,7 @@ def test_sweep_writes_one_run_per_value(cluster, tmp_path):
 
 
 def test_mdr_sweep_over_the_wear_coefficient_is_self_similar(cluster, tmp_path):
-    from comparisons.cli import main
+    from wearcheck.comparisons.cli import main
     out = tmp_path / "k"
     code = main(["sweep", str(cases.shipped("paper")), "--vary", "wear.k=1e-5,1e-4,1e-3",
                  "--solver", "mdr", "--out", str(out), "--set", "mdr.elements=50",

@@ -18,12 +18,12 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from comparisons.runio import OUTPUT_MARKER
+from wearcheck.comparisons.runio import OUTPUT_MARKER
 
-import cases
-from cases import RunResult, WearcheckError
-from comparisons import vtk
-from comparisons.runio import Run, write_run
+from wearcheck import cases
+from wearcheck.cases import RunResult, WearcheckError
+from wearcheck.comparisons import vtk
+from wearcheck.comparisons.runio import Run, write_run
 
 SEGMENTS = 12
 
@@ -122,7 +122,7 @@ def cylinder_run(path, order=2, nr=5, nz=8, s_hat=(0.0, 1.0, 4.0), with_fields=T
 
 
 def _a0(case):
-    from cases import reference
+    from wearcheck.cases import reference
     return reference.scales(case)["a0"]
 
 
@@ -504,7 +504,7 @@ def test_export_replaces_atomically_and_a_failure_keeps_the_old_files(tmp_path):
 
 
 def test_export_command(tmp_path, capsys):
-    from comparisons.cli import main
+    from wearcheck.comparisons.cli import main
     run, _ = cylinder_run(tmp_path / "run", s_hat=(0.0, 2.0))
     assert main(["export", str(run.path), "--revolve", "5"]) == 0
     check_series(run.path / "vtk", run, SERIES_FIELDS)
@@ -517,7 +517,7 @@ def test_export_command(tmp_path, capsys):
 
 
 def test_run_that_stored_no_stage_exports_nothing(tmp_path):
-    from comparisons.render import render_run
+    from wearcheck.comparisons.render import render_run
     run, _ = cylinder_run(tmp_path / "run", s_hat=(0.0,))
     F = run.fields
     empty = RunResult(history=run.history, stage_s=np.zeros(0), r=run.stages["r"],

@@ -11,7 +11,7 @@ import importlib
 import pkgutil
 import sys
 
-from cases import WearcheckError
+from wearcheck.cases import WearcheckError
 
 
 def _subcommands():

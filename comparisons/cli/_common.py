@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import cases
+from wearcheck import cases
 
 
 def add_case_arguments(parser) -> None:

@@ -6,7 +6,7 @@ import shutil
 import sys
 from pathlib import Path
 
-from cases import CaseError
+from wearcheck.cases import CaseError
 
 from ._common import add_case_arguments, load_case
 
@@ -21,10 +21,10 @@ def add_parser(sub):
 
 
 def main(args) -> int:
-    import meshes
-    from cases import reference
+    from wearcheck import meshes
+    from wearcheck.cases import reference
 
-    from fem.solver import mesh_parameters
+    from wearcheck.fem.solver import mesh_parameters
 
     case = load_case(args)
     params = mesh_parameters(case)

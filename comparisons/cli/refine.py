@@ -16,7 +16,7 @@ import math
 import sys
 from pathlib import Path
 
-import cases
+from wearcheck import cases
 from .. import refine as rf
 from ..distributed import Task, fmt as _fmt, record_study, run_cases
 from ..runio import _jsonable, provenance, write_text_atomic
@@ -126,7 +126,7 @@ def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolera
 
 def summarize(case, solver, lvls, outcomes, varied, tolerance, stage) -> dict:
     """Differences to the finest level, orders, Richardson, converged level."""
-    from cases.reference import scales as case_scales
+    from wearcheck.cases.reference import scales as case_scales
     sols = [rf.scaled(o.result, case_scales(o.case)) if o.ok else None for o in outcomes]
     ok = [i for i, s in enumerate(sols) if s is not None]
     stages = list(case.stages.s_hat)

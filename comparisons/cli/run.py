@@ -5,7 +5,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from cases import CaseError
+from wearcheck.cases import CaseError
 
 from ..progress import ProgressBar
 from ..runio import atomic_directory, write_run_files

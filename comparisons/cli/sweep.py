@@ -14,10 +14,10 @@ import re
 import sys
 from pathlib import Path
 
-import cases
-from cases.case import parse_override
-from cases.reference import scales as case_scales
-from cases.schema import section_fields
+from wearcheck import cases
+from wearcheck.cases.case import parse_override
+from wearcheck.cases.reference import scales as case_scales
+from wearcheck.cases.schema import section_fields
 from ..distributed import Task, fmt, record_study, run_cases
 from ..runio import provenance, write_text_atomic
 from ..solvers import SOLVERS
