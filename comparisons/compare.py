@@ -695,6 +695,8 @@ def compare(case, out, *, argv=None, edge=False, sphere=False, sphere_ratios=SPH
     Returns the metrics (as in metrics.json); ``passed`` is the verdict.
     """
     t0 = time.perf_counter()
+    from .outputs import check_output
+    check_output(out, "comparison")  # before the solves
     solve = solve or solve_case
     results = run_both(case, solve=solve, quiet=quiet)
     m = analyse(case, results)
@@ -705,7 +707,7 @@ def compare(case, out, *, argv=None, edge=False, sphere=False, sphere_ratios=SPH
     sweep = sphere_sweep(case, sphere_ratios, solve=solve, quiet=quiet) if sphere else None
     prov = runio.provenance(argv)
     out = Path(out)
-    with runio.atomic_directory(out) as tmp:
+    with runio.atomic_directory(out, "comparison") as tmp:
         for name, res in results.items():
             (tmp / name).mkdir()
             runio.write_run_files(tmp / name, case, res, name, argv)

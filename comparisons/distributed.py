@@ -250,8 +250,8 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
 
     source = str(Path(source).absolute())
     raw = tomllib.loads(Path(source).read_text(encoding="utf-8"))
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    from .outputs import study_directory
+    out = study_directory(out)
     names = [t.name for t in tasks]
     if len(set(names)) != len(names):
         raise cases.CaseError("two runs would share a directory: " + ", ".join(names))
@@ -313,9 +313,8 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
 
 def discard_run(path: Path) -> None:
     """Remove an earlier run directory at ``path`` (only ever a wearcheck run)."""
-    import shutil
-    if (path / "meta.json").is_file():
-        shutil.rmtree(path)
+    from .outputs import remove_output
+    remove_output(path, "run")
 
 
 # --------------------------------------------------------------------------

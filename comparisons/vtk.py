@@ -396,6 +396,6 @@ def export_run(run_dir, revolve: int = 0) -> Path:
         raise CaseError(f"--revolve {revolve}: need 0 (no solid) or at least 3 segments")
     run = Run(run_dir)
     target = run.path / "vtk"
-    with atomic_directory(target) as tmp:
+    with atomic_directory(target, "vtk") as tmp:
         write_vtk_files(tmp, run, revolve)
     return target

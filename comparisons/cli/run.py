@@ -7,6 +7,7 @@ from pathlib import Path
 
 from wearcheck.cases import CaseError
 
+from ..outputs import check_output
 from ..progress import ProgressBar
 from ..runio import atomic_directory, write_run_files
 from ..solvers import SOLVERS, solve
@@ -33,12 +34,13 @@ def main(args) -> int:
     args.vtk = args.vtk or args.revolve > 0
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-{args.solver}"
+    check_output(out, "run")  # before the solve: a path we may not write fails at once
     bar = ProgressBar(f"{args.solver}", quiet=args.quiet)
     try:
         result = solve(case, args.solver, progress=bar)
     finally:
         bar.close()
-    with atomic_directory(out) as tmp:
+    with atomic_directory(out, "run") as tmp:
         write_run_files(tmp, case, result, args.solver)
         if args.vtk:
             from ..vtk import export_run
