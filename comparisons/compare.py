@@ -697,6 +697,9 @@ def compare(case, out, *, argv=None, edge=False, sphere=False, sphere_ratios=SPH
     t0 = time.perf_counter()
     from .outputs import check_output
     check_output(out, "comparison")  # before the solves
+    from .resources import check_memory
+    for name in ("mdr", "fem"):
+        check_memory(case, name)
     solve = solve or solve_case
     results = run_both(case, solve=solve, quiet=quiet)
     m = analyse(case, results)

@@ -26,7 +26,6 @@ import os
 import sys
 import threading
 import time
-import tomllib
 import traceback
 import uuid
 import warnings
@@ -34,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from wearcheck import cases
+from wearcheck.cases.case import read_raw
 from .progress import ProgressBar
 from .runio import _jsonable, write_run, write_text_atomic
 
@@ -41,6 +41,24 @@ from .runio import _jsonable, write_run, write_text_atomic
 RSS_INTERVAL = 0.01
 #: least seconds between two progress events of one task
 PROGRESS_INTERVAL = 0.5
+#: seconds to wait for a first worker (an external scheduler may have none)
+WORKER_TIMEOUT = 30.0
+#: most worker processes per core of the embedded cluster (each is a Python process)
+WORKERS_PER_CORE = 4
+
+
+def check_workers(scheduler: str | None, workers) -> None:
+    """--workers must be a positive count (at most WORKERS_PER_CORE per core), and
+    only for the embedded cluster."""
+    if scheduler and workers:
+        raise cases.CaseError("--workers sizes the embedded cluster; an existing one "
+                              "(--scheduler) has the workers it has")
+    if workers is None:
+        return
+    most = WORKERS_PER_CORE * (os.cpu_count() or 1)
+    if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= most:
+        raise cases.CaseError(f"--workers {workers}: must be a whole number from 1 to {most} "
+                              f"({WORKERS_PER_CORE} per core on this machine)")
 
 
 @dataclass(frozen=True)
@@ -146,6 +164,8 @@ def execute(raw: dict, source: str, overrides: tuple[str, ...], solver: str, nam
     with _PeakRSS() as rss:
         try:
             case = cases.from_dict(raw, source=source, overrides=list(overrides))
+            from .resources import check_memory
+            check_memory(case, solver)  # this worker's memory, before allocating
             result = solve(case, solver, _progress_sender(topic, name))
             out.update(ok=True, case=case, result=result)
         except cases.WearcheckError as exc:
@@ -169,15 +189,22 @@ class _Client:
         import dask
         from distributed import Client, LocalCluster
         self.cluster = None
-        if scheduler and workers:
-            raise cases.CaseError("--workers sizes the embedded cluster; an existing one "
-                                  "(--scheduler) has the workers it has")
+        check_workers(scheduler, workers)
         if scheduler:
             try:
                 self.client = Client(scheduler, timeout="10s")
             except (OSError, TimeoutError, ValueError) as exc:
                 raise cases.WearcheckError(f"cannot reach the Dask scheduler at '{scheduler}': "
                                            f"{exc}") from None
+            try:
+                # tasks sent to a scheduler without workers would wait for ever
+                self.client.wait_for_workers(1, timeout=WORKER_TIMEOUT)
+            except (TimeoutError, OSError) as exc:
+                self.client.close()
+                raise cases.WearcheckError(
+                    f"the Dask scheduler at '{scheduler}' has no worker: none joined within "
+                    f"{WORKER_TIMEOUT:g} s; start workers (dask worker {scheduler}) or drop "
+                    "--scheduler") from None
             return
         n = workers or max(1, min(os.cpu_count() or 1, n_tasks))
         # a task that kills its worker (out of memory, crash) is reported at once,
@@ -249,7 +276,8 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
     from distributed import KilledWorker, as_completed
 
     source = str(Path(source).absolute())
-    raw = tomllib.loads(Path(source).read_text(encoding="utf-8"))
+    raw = read_raw(Path(source))  # as cases.load reads it (a BOM, errors)
+    check_workers(scheduler, workers)
     from .outputs import study_directory
     out = study_directory(out)
     names = [t.name for t in tasks]

@@ -9,7 +9,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from wearcheck import meshes
-from wearcheck.cases import CaseError, RunResult, reference
+from wearcheck.cases import CaseError, SolverError, RunResult, reference
 from wearcheck.cases.profiles import height
 
 from . import wear
@@ -143,8 +143,16 @@ def _solve(case, progress=None) -> RunResult:
     else:
         center[0] = 1.0
 
-    limit = wear.explicit_limit(C, area, rate)
-    limit_hat = limit * per_m
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        limit = wear.explicit_limit(C, area, rate) if np.all(np.isfinite(C)) else math.nan
+        limit_hat = limit * per_m
+    if not (math.isfinite(limit_hat) and limit_hat > 0 and np.all(np.isfinite(C))):
+        # extreme moduli (e.g. E1 = 1e-300 Pa): the compliance or the wear rate
+        # leaves floating point, and every later step would be meaningless
+        raise SolverError(f"the contact compliance of this case is not representable in "
+                          f"floating point (indenter.youngs_modulus = "
+                          f"{case.indenter.youngs_modulus!r} Pa, stability limit "
+                          f"{float(limit_hat)!r} in ŝ); the FEM cannot run it")
     if sl.step_hat == "auto":
         step_hat = {"explicit": 0.5 * limit_hat, "implicit": IMPLICIT_AUTO_STEP_HAT,
                     "bdf2": BDF2_AUTO_STEP_HAT}[sl.scheme]

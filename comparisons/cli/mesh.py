@@ -27,6 +27,8 @@ def main(args) -> int:
     case = load_case(args)
     if args.out is not None:
         check_output_file(args.out, "mesh")  # before meshing
+    from ..resources import check_memory
+    check_memory(case, "fem")  # the mesh is the FEM's: refuse one it could never solve
     params = mesh_parameters(case)
     mesh = meshes.sphere_mesh(params)
     order = case.fem.element_order

@@ -83,10 +83,14 @@ def main(args) -> int:
                          steps=args.steps, tolerance=args.tolerance, stage=args.stage,
                          scheduler=args.scheduler, workers=args.workers, quiet=args.quiet,
                          case=case)
-    except KeyboardInterrupt:
-        print(f"wearcheck refine: interrupted; the levels finished are in {out}, "
-              "no summary was written", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        from . import Terminated
+        written = getattr(exc, "summary_written", False)
+        print(f"wearcheck refine: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}"
+              f"; the levels finished are in {out}, "
+              + ("the summary was written, the figures may be missing" if written
+                 else "no summary was written"), file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
     print(table(summary))
     return 0 if all(lv["status"] == "ok" for lv in summary["levels"]) else 1
 
@@ -114,13 +118,19 @@ def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolera
                          extra_meta=dict(study=f"refine-{solver}"))[::-1]
     summary = summarize(case, solver, lvls, outcomes, varied, tolerance, stage)
     summary.update(case=str(case_path), overrides=list(overrides), provenance=prov)
-    record_study(out, f"refine-{solver}", case, overrides, prov)
-    write_text_atomic(out / f"refinement-{solver}.json",
-                      json.dumps(_jsonable(summary), indent=2) + "\n")
-    write_text_atomic(out / f"refinement-{solver}.csv", csv_text(summary))
-    write_text_atomic(out / "refinement.csv", combined_csv_text(out))
-    from ..study_figures import write_figures
-    write_figures(out)
+    written = False
+    try:
+        record_study(out, f"refine-{solver}", case, overrides, prov)
+        write_text_atomic(out / f"refinement-{solver}.json",
+                          json.dumps(_jsonable(summary), indent=2) + "\n")
+        written = True
+        write_text_atomic(out / f"refinement-{solver}.csv", csv_text(summary))
+        write_text_atomic(out / "refinement.csv", combined_csv_text(out))
+        from ..study_figures import write_figures
+        write_figures(out)
+    except KeyboardInterrupt as exc:
+        exc.summary_written = written  # for the message: what is on disk
+        raise
     return summary
 
 

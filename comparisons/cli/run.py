@@ -8,6 +8,7 @@ from pathlib import Path
 from wearcheck.cases import CaseError
 
 from ..outputs import check_output
+from ..resources import _estimator, check_export, check_memory
 from ..progress import ProgressBar
 from ..runio import atomic_directory, write_run_files
 from ..solvers import SOLVERS, solve
@@ -35,6 +36,12 @@ def main(args) -> int:
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-{args.solver}"
     check_output(out, "run")  # before the solve: a path we may not write fails at once
+    check_memory(case, args.solver)
+    if args.revolve:
+        est = _estimator(args.solver)
+        if est is not None:
+            check_export(getattr(est, "section_points", lambda c: 0)(case),
+                         est.profile_points(case), args.revolve, len(case.stages.s_hat), out)
     bar = ProgressBar(f"{args.solver}", quiet=args.quiet)
     try:
         result = solve(case, args.solver, progress=bar)
