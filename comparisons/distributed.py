@@ -41,10 +41,19 @@ from .runio import _jsonable, write_run, write_text_atomic
 RSS_INTERVAL = 0.01
 #: least seconds between two progress events of one task
 PROGRESS_INTERVAL = 0.5
-#: seconds to wait for a first worker (an external scheduler may have none)
+#: seconds to wait for a first worker (an external scheduler may have none);
+#: the environment variable WEARCHECK_WORKER_TIMEOUT overrides it
 WORKER_TIMEOUT = 30.0
 #: most worker processes per core of the embedded cluster (each is a Python process)
 WORKERS_PER_CORE = 4
+
+
+def _worker_timeout() -> float:
+    try:
+        value = float(os.environ.get("WEARCHECK_WORKER_TIMEOUT", WORKER_TIMEOUT))
+    except ValueError:
+        value = WORKER_TIMEOUT
+    return value if value > 0 else WORKER_TIMEOUT
 
 
 def check_workers(scheduler: str | None, workers) -> None:
@@ -198,12 +207,12 @@ class _Client:
                                            f"{exc}") from None
             try:
                 # tasks sent to a scheduler without workers would wait for ever
-                self.client.wait_for_workers(1, timeout=WORKER_TIMEOUT)
+                self.client.wait_for_workers(1, timeout=_worker_timeout())
             except (TimeoutError, OSError) as exc:
                 self.client.close()
                 raise cases.WearcheckError(
                     f"the Dask scheduler at '{scheduler}' has no worker: none joined within "
-                    f"{WORKER_TIMEOUT:g} s; start workers (dask worker {scheduler}) or drop "
+                    f"{_worker_timeout():g} s; start workers (dask worker {scheduler}) or drop "
                     "--scheduler") from None
             return
         n = workers or max(1, min(os.cpu_count() or 1, n_tasks))

@@ -125,8 +125,13 @@ def check_output(path, kind: str) -> Path:
             or raw in (".", ".."):
         raise OutputError(f"output '{raw}': name a directory or file of its own, not "
                           "'.' or '..'")
+    given = Path(raw).absolute()
+    for part in [*reversed(given.parents), given]:
+        if part.is_symlink() and not part.exists():
+            raise OutputError(f"output '{raw}': '{part}' is a broken symbolic link; "
+                              "wearcheck does not write through it")
     # the parent as the kernel resolves it ('..' after a link goes where the link leads)
-    path = Path(os.path.realpath(Path(raw).absolute().parent)) / Path(raw).name
+    path = Path(os.path.realpath(given.parent)) / given.name
     why = refusal(path, kind)
     if why:
         raise OutputError(why)
