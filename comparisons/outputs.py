@@ -87,6 +87,27 @@ def _is_legacy_part(path: Path, kind: str) -> bool:
 
 def refusal(path: Path, kind: str) -> str | None:
     """Why the existing ``path`` may not be replaced by a ``kind`` output; None if it may."""
+    # concurrent writers swap the directory at ``path`` under us: a verdict
+    # counts only if the same directory (inode) was there before and after
+    why = None
+    for _ in range(100):
+        try:
+            before = os.lstat(path).st_ino
+        except FileNotFoundError:
+            return None
+        try:
+            why = _refusal(path, kind)
+        except FileNotFoundError:
+            continue
+        try:
+            if os.lstat(path).st_ino == before:
+                return why
+        except FileNotFoundError:
+            return None
+    return why
+
+
+def _refusal(path: Path, kind: str) -> str | None:
     if path.is_symlink():
         return (f"output '{path}' is a symbolic link; give the real path (wearcheck does not "
                 "write through or replace links)")
