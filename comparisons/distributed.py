@@ -19,6 +19,7 @@ tabulated profile, the table file at the same path.
 
 from __future__ import annotations
 
+import asyncio
 import importlib
 import json
 import math
@@ -234,6 +235,50 @@ class _Client:
             self.cluster.close()
 
 
+class _Watchdog:
+    """Cancels the study's tasks when the cluster has had no worker for a while.
+
+    An external scheduler whose workers all died would otherwise keep the
+    tasks waiting for ever; the embedded cluster restarts its workers, so
+    there this never fires.
+    """
+
+    def __init__(self, client, futures: dict, interval: float = 1.0):
+        self.client, self.futures, self.interval = client, futures, interval
+        self.reason = ""
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self):
+        since = None
+        while not self._stop.wait(self.interval):
+            try:
+                workers = len(self.client.nthreads())
+            except Exception:  # the scheduler itself is gone: the futures fail on their own
+                continue
+            if workers:
+                since = None
+                continue
+            since = since or time.monotonic()
+            if time.monotonic() - since >= _worker_timeout():
+                self.reason = (f"no worker left on the Dask scheduler for "
+                               f"{_worker_timeout():g} s; the task was cancelled")
+                for _ in range(3):
+                    try:
+                        futures = list(self.futures)
+                        break
+                    except RuntimeError:  # the dict grew meanwhile
+                        continue
+                for fut in futures:
+                    fut.cancel()
+                return
+
+    def stop(self):
+        self._stop.set()
+        self._thread.join(timeout=5)
+
+
 class _Reporter:
     """Per-level progress on stderr: a bar while running, a line per finished task."""
 
@@ -296,6 +341,7 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
     topic = f"wearcheck-progress-{uuid.uuid4().hex}"
     outcomes: dict[str, Outcome] = {}
     conn = _Client(scheduler, workers, len(tasks))
+    state = {"watchdog": None}
     try:
         client = conn.client
         client.subscribe_topic(topic, reporter.event)
@@ -304,6 +350,8 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
         def fill():
             # no more tasks out than worker threads: a task queued on a worker
             # that dies would be lost with it
+            if state["watchdog"] is not None and state["watchdog"].reason:
+                return  # no worker left: the pending tasks fail below
             slots = max(1, sum(client.nthreads().values()))
             while pending and running.count() < slots:
                 t = pending.pop(0)
@@ -313,7 +361,29 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
                 futures[fut] = t
                 running.add(fut)
         fill()
-        for fut in running:
+        watchdog = state["watchdog"] = _Watchdog(client, futures)
+
+        def completed():
+            # polled, not a blocking as_completed: a study whose workers all
+            # left must end once the watchdog gives up on it
+            handled = set()
+            while True:
+                batch = running.next_batch(block=False)
+                if batch:
+                    handled.update(batch)
+                    yield from batch
+                elif watchdog.reason:
+                    stuck = [f for f in list(futures) if f not in handled]
+                    running.clear()
+                    handled.update(stuck)
+                    yield from stuck
+                    return
+                elif running.is_empty():
+                    return
+                else:
+                    time.sleep(0.05)
+
+        for fut in completed():
             t = futures[fut]
             try:
                 rec = fut.result()
@@ -321,8 +391,9 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
             except KilledWorker:
                 outcome = Outcome(task=t, ok=False, message="its worker died while running it "
                                   "(a crash, or memory beyond the worker's limit)")
-            except Exception as exc:  # e.g. the scheduler was lost
-                outcome = Outcome(task=t, ok=False, message=f"{type(exc).__name__}: {exc}")
+            except (Exception, asyncio.CancelledError) as exc:  # the scheduler or workers lost
+                outcome = Outcome(task=t, ok=False, message=watchdog.reason or
+                                  f"{type(exc).__name__}: {exc}")
             fut.release()
             if outcome.ok:
                 meta = dict(task=t.name, overrides=list(t.overrides),
@@ -341,8 +412,14 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
             outcomes[t.name] = outcome
             reporter.finished(outcome)
             fill()
+        for t in pending:  # never started: no worker was left to run them
+            outcomes[t.name] = Outcome(task=t, ok=False, message=watchdog.reason)
+            discard_run(out / t.name)
+            reporter.finished(outcomes[t.name])
         client.unsubscribe_topic(topic)
     finally:
+        if state.get("watchdog") is not None:
+            state["watchdog"].stop()
         reporter.close()
         conn.close()
     return [outcomes[t.name] for t in tasks]

@@ -169,6 +169,29 @@ def test_a_scheduler_without_workers_times_out_with_one_line(tmp_path):
     assert "no worker" in _one_error_line(proc.stderr)
 
 
+def _slow_solve(case, solver, progress=None):
+    time.sleep(30.0)
+    raise cases.SolverError("not reached in the test")
+
+
+def test_a_study_whose_workers_all_leave_ends_instead_of_hanging(tmp_path, monkeypatch):
+    """All workers of an external scheduler go away mid-study: the tasks are
+    cancelled after the worker timeout and reported as failed levels."""
+    import threading
+    from distributed import LocalCluster
+    from wearcheck.comparisons.cli.refine import refine
+    monkeypatch.setenv("WEARCHECK_WORKER_TIMEOUT", "2")
+    with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None) as cluster:
+        threading.Timer(2.0, lambda: cluster.scale(0)).start()
+        t0 = time.perf_counter()
+        summary = refine(HERTZ, [], "mdr", tmp_path / "s", levels=[20, 40], quiet=True,
+                         scheduler=cluster.scheduler_address, solve=_slow_solve)
+        assert time.perf_counter() - t0 < 25  # well before the 30 s task would end
+    assert [lv["status"].startswith("error: no worker left") for lv in summary["levels"]] \
+        == [True, True]
+
+
 # -- 3. bounded resources ----------------------------------------------------
 
 @pytest.mark.parametrize("argv, key", [

@@ -36,7 +36,10 @@ def _on_sigterm(signum, frame):
 
 
 def _one_line(text: str) -> str:
-    return " ".join(str(text).split())
+    """A message as one printable line: whitespace runs collapsed, control
+    characters (e.g. from a fuzzed key name) shown as escapes, not sent to the terminal."""
+    text = " ".join(str(text).split())
+    return "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in text)
 
 
 def _subcommands():
