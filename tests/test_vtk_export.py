@@ -18,12 +18,12 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from wearcheck.comparisons.runio import OUTPUT_MARKER
+from wearcheck.comparisons.rundir import OUTPUT_MARKER
 
 from wearcheck import cases
 from wearcheck.cases import RunResult, WearcheckError
-from wearcheck.comparisons import vtk
-from wearcheck.comparisons.runio import Run, write_run
+from wearcheck.comparisons.present import vtk
+from wearcheck.comparisons.rundir import Run, write_run
 
 SEGMENTS = 12
 
@@ -517,7 +517,7 @@ def test_export_command(tmp_path, capsys):
 
 
 def test_run_that_stored_no_stage_exports_nothing(tmp_path):
-    from wearcheck.comparisons.render import render_run
+    from wearcheck.comparisons.present.render import render_run
     run, _ = cylinder_run(tmp_path / "run", s_hat=(0.0,))
     F = run.fields
     empty = RunResult(history=run.history, stage_s=np.zeros(0), r=run.stages["r"],

@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from wearcheck.comparisons.runio import OUTPUT_MARKER
+from wearcheck.comparisons.rundir import OUTPUT_MARKER
 
 from wearcheck import cases
-from wearcheck.comparisons import vtk
-from wearcheck.comparisons.runio import Run, write_run
+from wearcheck.comparisons.present import vtk
+from wearcheck.comparisons.rundir import Run, write_run
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_vtk_export import (SERIES_FIELDS, assert_convex_cells,  # noqa: E402

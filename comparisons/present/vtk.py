@@ -42,7 +42,7 @@ import numpy as np
 from wearcheck.cases import CaseError, WearcheckError
 from wearcheck.cases.profiles import height
 
-from .runio import Run, atomic_directory
+from wearcheck.comparisons.rundir import Run, atomic_directory
 
 FIELD_KEYS = ("points", "cells", "displacement", "stress", "contact_nodes",
               "contact_pressure", "wear_depth")

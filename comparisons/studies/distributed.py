@@ -30,12 +30,12 @@ import tomllib
 import traceback
 import uuid
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from wearcheck import cases
-from .progress import ProgressBar
-from .runio import _jsonable, write_run, write_text_atomic
+from wearcheck.comparisons.present.progress import ProgressBar
+from wearcheck.comparisons.rundir import _jsonable, write_run, write_text_atomic
 
 #: seconds between two samples of a task's resident set size
 RSS_INTERVAL = 0.01
@@ -131,9 +131,10 @@ def execute(raw: dict, source: str, overrides: tuple[str, ...], solver: str, nam
     ``solve(case, solver, progress)`` defaults to ``comparisons.solvers.solve``.
     """
     if solve is None:
-        from .solvers import solve
+        from wearcheck.comparisons import registry
+        from wearcheck.comparisons.registry import solve
         try:  # a worker's first import of the solver is not part of its cost
-            importlib.import_module(f"wearcheck.{solver}")
+            importlib.import_module(registry.get(solver).module)
         except Exception:
             pass  # solve() meets the same failure below and reports it
     out = dict(ok=False, message="", case=None, result=None, traceback="")
