@@ -35,9 +35,10 @@ class Solver:
     resolution_label : the resolution in words, for figures ("N", "contact nodes").
     description : one line for ``wearcheck solvers`` and the help texts.
     style : matplotlib keyword arguments of its curves in comparison figures.
-    export_vtk : "module:function" that writes ParaView files of its run
-        directory, ``function(run_dir, out_dir, **options) -> list[Path]``;
-        None: the generic profile/pressure series only.
+    export_vtk : "module:function" that writes ParaView files of the solver's own
+        ``fields.npz``, ``function(directory, run, revolve=0) -> list[Path]`` (the
+        .pvd files; ``run`` a ``rundir.Run``); None: the generic profile,
+        pressure and surface series only.
     solve_function, supports_function : for solvers that are not packages
         (tests, notebooks): callables used instead of ``module``.
     """
@@ -132,4 +133,4 @@ register(Solver(
     description="axisymmetric elastic sphere (scikit-fem), condensed onto its contact nodes, "
                 "against a rigid plane",
     style=dict(ls="none", color="C3", marker="o", ms=3.5, mfc="none", mew=0.9),
-    export_vtk="wearcheck.comparisons.present.vtk:export_fem_fields"))
+    export_vtk="wearcheck.comparisons.present.vtk:write_fem_fields"))

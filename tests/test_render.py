@@ -81,7 +81,7 @@ def test_failed_render_keeps_the_previous_pictures(tmp_path):
 
 def test_render_fem_run_colours_the_hertz_field(tmp_path):
     """A real FEM run: the picture spans the colour map, brightest below the pole."""
-    fem = pytest.importorskip("fem")
+    from wearcheck import fem
     case = cases.load(cases.shipped("hertz"), ["fem.contact_nodes=30"])
     path = write_run(tmp_path / "run", case, fem.solve(case), "fem", argv=["test"])
     paths = render.render_run(path)

@@ -152,7 +152,7 @@ def render_run(run_dir) -> list[Path]:
         return []
     names = []
     with atomic_directory(target) as tmp:
-        if run.fields is not None:
+        if run.fields is not None and "cells" in run.fields:  # a section mesh (FEM)
             fields = run.fields
             K = len(run.stages["s"])
             check_fields(fields, K)
