@@ -1,36 +1,66 @@
-"""A minimal progress bar on stderr, shown only on a terminal."""
+"""Progress bars with an ETA, in terminals and in Jupyter (tqdm.auto).
+
+Silent when asked to be quiet, and when neither a terminal nor a notebook is
+watching (CI logs, pipes), so that logs carry no carriage-return noise.
+"""
 
 from __future__ import annotations
 
 import sys
-import time
+
+#: a bar counts in thousandths of the run
+_TOTAL = 1000
+
+
+def in_notebook() -> bool:
+    """True inside a Jupyter kernel (where tqdm.auto draws a widget)."""
+    shell = sys.modules.get("IPython")
+    if shell is None or "ipykernel" not in sys.modules:
+        return False
+    try:
+        return type(shell.get_ipython()).__name__ == "ZMQInteractiveShell"
+    except Exception:  # noqa: BLE001 - an odd IPython is not a notebook
+        return False
 
 
 class ProgressBar:
-    """Callable ``bar(fraction, text="")``; silent when quiet or stderr is not a TTY."""
+    """Callable ``bar(fraction, text="")`` with the elapsed time and an ETA.
 
-    def __init__(self, label: str, quiet: bool = False, stream=None, width: int = 30):
-        self.stream = stream if stream is not None else sys.stderr
-        self.enabled = not quiet and hasattr(self.stream, "isatty") and self.stream.isatty()
-        self.label, self.width = label, width
-        self._last = 0.0
-        self._start = time.perf_counter()
+    Parameters
+    ----------
+    label : what runs (shown before the bar).
+    quiet : never draw.
+    stream : where a terminal bar goes (default stderr); drawn only if it is a
+        TTY, or in a notebook.
+    """
+
+    def __init__(self, label: str, quiet: bool = False, stream=None):
+        stream = stream if stream is not None else sys.stderr
+        notebook = in_notebook() and stream is sys.stderr
+        tty = hasattr(stream, "isatty") and stream.isatty()
+        self.enabled = not quiet and (tty or notebook)
+        self._bar = None
+        if self.enabled:
+            if notebook:
+                from tqdm.auto import tqdm
+            else:
+                from tqdm import tqdm
+            self._bar = tqdm(total=_TOTAL, desc=label, file=stream, leave=True,
+                             mininterval=0.1, dynamic_ncols=True,
+                             bar_format="{desc} {percentage:5.1f}%|{bar}| "
+                                        "{elapsed}<{remaining} {postfix}")
 
     def __call__(self, fraction: float, text: str = "") -> None:
-        if not self.enabled:
+        if self._bar is None:
             return
-        now = time.perf_counter()
-        if now - self._last < 0.1 and fraction < 1.0:
-            return
-        self._last = now
-        fraction = min(max(float(fraction), 0.0), 1.0)
-        filled = int(round(self.width * fraction))
-        bar = "#" * filled + "-" * (self.width - filled)
-        self.stream.write(f"\r{self.label} [{bar}] {100 * fraction:5.1f}% "
-                          f"{now - self._start:6.1f}s {text}\033[K")
-        self.stream.flush()
+        n = int(round(_TOTAL * min(max(float(fraction), 0.0), 1.0)))
+        if text:
+            self._bar.set_postfix_str(text, refresh=False)
+        if n > self._bar.n:
+            self._bar.update(n - self._bar.n)
 
     def close(self) -> None:
-        if self.enabled:
-            self.stream.write("\n")
-            self.stream.flush()
+        if self._bar is not None:
+            self._bar.refresh()
+            self._bar.close()
+            self._bar = None
