@@ -237,20 +237,24 @@ class _Reporter:
         self.bar.close()
 
 
-def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | Path, *,
+def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Task], out: str | Path, *,
               scheduler: str | None = None, workers: int | None = None, quiet: bool = False,
               solve=None, extra_meta: dict | None = None) -> list[Outcome]:
     """Run every task on Dask; write each successful one to ``out/<task.name>``.
 
-    ``base_overrides`` apply to every task before its own. Returns the outcomes
+    ``source`` is a case file or a :class:`cases.Case`; ``base_overrides`` apply
+    to every task before its own. Returns the outcomes
     in the order of ``tasks``; each run directory is written (atomically, by
     ``runio.write_run``) as soon as its result arrives, so an interrupted study
     keeps the levels already done.
     """
     from distributed import KilledWorker, as_completed
 
-    source = str(Path(source).absolute())
-    raw = tomllib.loads(Path(source).read_text(encoding="utf-8"))
+    if isinstance(source, cases.Case):  # a case built or derived in Python
+        raw, source = cases.to_dict(source), source.source
+    else:
+        source = str(Path(source).absolute())
+        raw = tomllib.loads(Path(source).read_text(encoding="utf-8"))
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     names = [t.name for t in tasks]
