@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 from wearcheck.cases import Case, CaseError, RunResult
+from wearcheck.comparisons.layout import Item
 
 
 @dataclass(frozen=True)
@@ -39,6 +40,8 @@ class Solver:
         ``fields.npz``, ``function(directory, run, revolve=0) -> list[Path]`` (the
         .pvd files; ``run`` a ``rundir.Run``); None: the generic profile,
         pressure and surface series only.
+    history_columns : its extra ``history.csv`` columns, ``layout.Item`` each.
+    fields : its ``fields.npz`` arrays, ``layout.Item`` each.
     solve_function, supports_function : for solvers that are not packages
         (tests, notebooks): callables used instead of ``module``.
     """
@@ -53,6 +56,8 @@ class Solver:
     description: str = ""
     style: dict = field(default_factory=dict)
     export_vtk: str | None = None
+    history_columns: tuple = ()
+    fields: tuple = ()
     solve_function: Callable | None = None
     supports_function: Callable | None = None
 
@@ -124,7 +129,9 @@ register(Solver(
     resolution_label="N",
     description="Method of Dimensionality Reduction: 1D springs, exact for axisymmetric "
                 "half-space contact",
-    style=dict(ls="-", color="C0", lw=1.4, marker=None)))
+    style=dict(ls="-", lw=1.4),
+    history_columns=(Item("max_pressure", "Pa", "largest contact pressure"),
+                     Item("s_hat", "", "dimensionless sliding ŝ"))))
 
 register(Solver(
     name="fem", title="FEM", module="wearcheck.fem", section="fem",
@@ -132,5 +139,18 @@ register(Solver(
     resolution_label="contact nodes",
     description="axisymmetric elastic sphere (scikit-fem), condensed onto its contact nodes, "
                 "against a rigid plane",
-    style=dict(ls="none", color="C3", marker="o", ms=3.5, mfc="none", mew=0.9),
-    export_vtk="wearcheck.comparisons.present.vtk:write_fem_fields"))
+    style=dict(ls="none", marker="o", ms=3.5, mfc="none", mew=0.9),
+    export_vtk="wearcheck.comparisons.present.vtk:write_fem_fields",
+    history_columns=(Item("s_hat", "", "dimensionless sliding ŝ"),),
+    fields=(Item("points", "m", "r, z of the mesh nodes, undeformed (Np, 2); P2 with midside "
+                                "nodes"),
+            Item("cells", "", "triangles, counter-clockwise, meshio triangle/triangle6 order "
+                              "(Nt, 3 or 6)"),
+            Item("displacement", "m", "u_r, u_z per stage (K, Np, 2); the top face has "
+                                      "u_z = -d"),
+            Item("stress", "Pa", "σ_rr, σ_zz, σ_θθ, σ_rz per stage, L2-projected to the "
+                                 "nodes (K, Np, 4)"),
+            Item("contact_nodes", "", "indices into points of the candidate contact nodes, "
+                                      "by increasing r (Nc,)"),
+            Item("contact_pressure", "Pa", "nodal contact pressure per stage (K, Nc)"),
+            Item("wear_depth", "m", "nodal wear depth per stage (K, Nc)"))))

@@ -25,7 +25,7 @@ import numpy as np
 
 from wearcheck import cases
 from wearcheck.cases import reference
-from wearcheck.comparisons import registry, rundir
+from wearcheck.comparisons import layout, registry, rundir
 from wearcheck.comparisons.analysis import edge_peak, metrics
 
 #: how a solver is run; tests replace it with analytic stand-ins
@@ -273,6 +273,7 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
         m["provenance"] = prov
         m["case_source"] = case.source
         m["seconds_total"] = time.perf_counter() - t0
+        m["data_dictionary"] = layout.comparison_dictionary()
         rundir.write_json(tmp / "metrics.json", m)
         (tmp / "case.toml").write_text(cases.to_toml(case), encoding="utf-8")
         blocks = compare_report.build_report(case, m, figure_names, renders, notes, prov)
