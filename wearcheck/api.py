@@ -86,6 +86,7 @@ class Result:
     info : what the solver reports about its run (steps, step size, grid, ...).
     solve_seconds : time in the solver proper.
     path : the run directory, once written or when read from one.
+    meta : its meta.json (provenance, scales, data dictionary), when read from one.
     """
 
     case: Case
@@ -96,6 +97,7 @@ class Result:
     info: dict
     solve_seconds: float
     path: Path | None = None
+    meta: dict | None = None
     _run: RunResult | None = None
 
     @property
@@ -176,7 +178,8 @@ def read_run(path: str | Path) -> Result:
     run = rundir.Run(path)
     return Result(case=run.case, solver=run.solver, history=run.history, stages=run.stages,
                   fields=run.fields, info=run.meta.get("info", {}),
-                  solve_seconds=run.meta.get("solve_seconds", float("nan")), path=run.path)
+                  solve_seconds=run.meta.get("solve_seconds", float("nan")), path=run.path,
+                  meta=run.meta)
 
 
 # -- studies -----------------------------------------------------------------
