@@ -4,7 +4,8 @@ column, array and field with its unit and meaning.
 This is the one definition. ``rundir`` writes and reads by it, every
 ``meta.json`` carries the part that applies to its run (``data_dictionary``),
 ``metrics.json`` carries the comparison's, and the README's output tables are
-generated from it (:func:`markdown`). A solver documents its own extra history
+generated from it (``python -c "from wearcheck.comparisons import layout;
+layout.update_readme('README.md')"``). A solver documents its own extra history
 columns and ``fields.npz`` arrays in its registry entry.
 """
 
@@ -30,8 +31,8 @@ class Item:
 #: files of a run directory (``wearcheck run``, and each solver's folder of a comparison)
 RUN_FILES = (
     Item("case.toml", "", "the resolved case, every default filled in"),
-    Item("history.csv", "", "one row per step: the columns of HISTORY, then the solver's extras"),
-    Item("stages.npz", "", "the stored stages: the arrays of STAGES"),
+    Item("history.csv", "", "one row per step: the history columns, then the solver's extras"),
+    Item("stages.npz", "", "the stored stages: the stage arrays"),
     Item("meta.json", "", "scales, solver info, warnings, provenance and this data dictionary"),
     Item("fields.npz", "", "the solver's own arrays per stage, when it has any (its registry "
                            "entry's fields)"),
@@ -179,3 +180,32 @@ def markdown(items, first="name") -> str:
     rows = [f"| {first} | unit | meaning |", "|---|---|---|"]
     rows += [f"| `{i.name}` | {i.unit} | {i.meaning} |" for i in items]
     return "\n".join(rows)
+
+
+def readme_sections() -> dict[str, str]:
+    """The README's generated output tables, by marker name."""
+    return {
+        "run-files": markdown(RUN_FILES, "file"),
+        "history": markdown(HISTORY, "column"),
+        "stages": markdown(STAGES, "array"),
+        "meta": markdown(META, "key"),
+        "comparison-files": markdown(COMPARISON_FILES, "file"),
+        "metrics": markdown(METRICS, "key"),
+        "stage-metrics": markdown(STAGE_METRICS, "key"),
+    }
+
+
+def update_readme(path) -> bool:
+    """Rewrite the generated tables between ``<!-- layout:NAME -->`` and
+    ``<!-- /layout:NAME -->`` in the README at ``path``; True if it changed."""
+    import re
+    from pathlib import Path
+    path = Path(path)
+    text = path.read_text(encoding="utf-8")
+    new = text
+    for name, table in readme_sections().items():
+        new = re.sub(rf"(<!-- layout:{name} -->\n).*?(<!-- /layout:{name} -->)",
+                     lambda m: m.group(1) + table + "\n" + m.group(2), new, flags=re.S)
+    if new != text:
+        path.write_text(new, encoding="utf-8")
+    return new != text

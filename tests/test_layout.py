@@ -3,6 +3,7 @@ writes has a unit and a meaning in ``comparisons.layout`` (and in the file's own
 dictionary), and nothing is described that is not written."""
 
 import csv
+from pathlib import Path
 import json
 
 import numpy as np
@@ -63,3 +64,15 @@ def test_comparison_metrics_match_the_dictionary(tmp_path):
 def test_markdown_tables_list_every_item():
     text = layout.markdown(layout.HISTORY)
     assert all(f"`{i.name}`" in text for i in layout.HISTORY)
+
+
+def test_readme_tables_are_the_generated_ones(tmp_path):
+    readme = Path(__file__).resolve().parents[1] / "README.md"
+    copy = tmp_path / "README.md"
+    copy.write_text(readme.read_text(encoding="utf-8"), encoding="utf-8")
+    # regenerating changes nothing: the README shows what layout.py defines
+    assert not layout.update_readme(copy), \
+        "README tables are stale: run layout.update_readme('README.md')"
+    text = copy.read_text(encoding="utf-8")
+    for table in layout.readme_sections().values():
+        assert table in text
