@@ -154,11 +154,12 @@ def provenance(argv=None) -> dict:
     )
 
 
-def _jsonable(obj):
+def jsonable(obj):
+    """``obj`` with numpy arrays and scalars as lists and Python numbers, for json.dumps."""
     if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
+        return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
+        return [jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
         return obj.tolist()
     if isinstance(obj, np.generic):
@@ -167,7 +168,7 @@ def _jsonable(obj):
 
 
 def write_json(path: Path, data: dict) -> None:
-    Path(path).write_text(json.dumps(_jsonable(data), indent=2, allow_nan=True) + "\n",
+    Path(path).write_text(json.dumps(jsonable(data), indent=2, allow_nan=True) + "\n",
                           encoding="utf-8")
 
 

@@ -35,7 +35,7 @@ from pathlib import Path
 
 from wearcheck import cases
 from wearcheck.comparisons.present.progress import ProgressBar
-from wearcheck.comparisons.rundir import _jsonable, write_run, write_text_atomic
+from wearcheck.comparisons.rundir import jsonable, write_run, write_text_atomic
 
 #: seconds between two samples of a task's resident set size
 RSS_INTERVAL = 0.01
@@ -338,7 +338,7 @@ def record_study(out: Path, study: str, case, overrides, prov) -> None:
     meta.setdefault("studies", {})[study] = dict(
         prov, case_file=str(getattr(case, "source", "")), overrides=list(overrides),
         resolved_case=cases.to_toml(case))
-    write_text_atomic(path, json.dumps(_jsonable(meta), indent=2) + "\n")
+    write_text_atomic(path, json.dumps(jsonable(meta), indent=2) + "\n")
 
 
 def fmt(v, spec=".4g"):

@@ -19,7 +19,7 @@ from wearcheck import cases
 from wearcheck.comparisons import registry
 from wearcheck.comparisons.analysis import convergence as rf
 from wearcheck.comparisons.studies.distributed import Task, fmt as _fmt, record_study, run_cases
-from wearcheck.comparisons.rundir import _jsonable, provenance, write_text_atomic
+from wearcheck.comparisons.rundir import jsonable, provenance, write_text_atomic
 
 
 def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolerance=0.01,
@@ -47,7 +47,7 @@ def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolera
     summary.update(case=str(case_path), overrides=list(overrides), provenance=prov)
     record_study(out, f"refine-{solver}", case, overrides, prov)
     write_text_atomic(out / f"refinement-{solver}.json",
-                      json.dumps(_jsonable(summary), indent=2) + "\n")
+                      json.dumps(jsonable(summary), indent=2) + "\n")
     write_text_atomic(out / f"refinement-{solver}.csv", csv_text(summary))
     write_text_atomic(out / "refinement.csv", combined_csv_text(out))
     from wearcheck.comparisons.present.study_figures import write_figures
