@@ -92,9 +92,6 @@ class Case:
             if not isinstance(name, str) or name.count(".") != 1 or not all(name.split(".")):
                 raise CaseError(f"key '{name}': must be section.key, e.g. wear.mu")
             section, key = name.split(".")
-            if section not in SECTIONS:
-                raise CaseError(f"key '{name}': unknown section '{section}'; allowed: "
-                                + ", ".join(SECTIONS))
             raw.setdefault(section, {})[key] = list(value) if isinstance(value, tuple) else value
         return from_dict(raw, source=self.source, overrides=texts)
 
