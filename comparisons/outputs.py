@@ -93,16 +93,16 @@ def refusal(path: Path, kind: str) -> str | None:
     for _ in range(100):
         try:
             before = os.lstat(path).st_ino
-        except FileNotFoundError:
+        except (FileNotFoundError, NotADirectoryError):
             return None
         try:
             why = _refusal(path, kind)
-        except FileNotFoundError:
+        except (FileNotFoundError, NotADirectoryError):
             continue
         try:
             if os.lstat(path).st_ino == before:
                 return why
-        except FileNotFoundError:
+        except (FileNotFoundError, NotADirectoryError):
             return None
     return why
 

@@ -59,8 +59,15 @@ def _largest(fits, lo: int, hi: int) -> int | None:
 
 
 def _estimator(solver: str):
+    """The solver package's ``resources`` module (next to its ``solve``), or None."""
+    module = f"wearcheck.{solver}"
     try:
-        return importlib.import_module(f"wearcheck.{solver}.resources")
+        from wearcheck.comparisons import registry
+        module = registry.get(solver).module or module
+    except Exception:  # an unknown name: the solve reports it
+        pass
+    try:
+        return importlib.import_module(f"{module}.resources")
     except ImportError:
         return None  # a solver without an estimate is not checked
 

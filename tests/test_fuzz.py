@@ -41,8 +41,8 @@ class _OverBudget(KeyboardInterrupt):
 
 @pytest.fixture
 def budgeted(monkeypatch):
-    from wearcheck.comparisons import solvers
-    real = solvers.solve
+    from wearcheck.comparisons import registry
+    real = registry.solve
     hit = []
 
     def solve(case, solver, progress=None):
@@ -53,7 +53,7 @@ def budgeted(monkeypatch):
                 hit.append(True)
                 raise _OverBudget()
         return real(case, solver, progress=check)
-    monkeypatch.setattr("wearcheck.comparisons.cli.run.solve", solve)
+    monkeypatch.setattr("wearcheck.comparisons.registry.solve", solve)
     return hit
 
 

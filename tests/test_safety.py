@@ -62,7 +62,7 @@ def no_solve(monkeypatch):
     """Fail the test if the CLI starts a solve: refusals must come before the work."""
     def boom(*args, **kwargs):
         raise AssertionError("the solve started before the refusal")
-    monkeypatch.setattr("wearcheck.comparisons.cli.run.solve", boom)
+    monkeypatch.setattr("wearcheck.comparisons.registry.solve", boom)
 
 
 # -- 1. data loss ----------------------------------------------------------
@@ -179,7 +179,7 @@ def test_a_study_whose_workers_all_leave_ends_instead_of_hanging(tmp_path, monke
     cancelled after the worker timeout and reported as failed levels."""
     import threading
     from distributed import LocalCluster
-    from wearcheck.comparisons.cli.refine import refine
+    from wearcheck.comparisons.studies.refine import refine
     monkeypatch.setenv("WEARCHECK_WORKER_TIMEOUT", "2")
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=None) as cluster:
@@ -312,7 +312,7 @@ def _marker(kind, complete, pid, host=None):
 
 
 def test_stale_partials_of_dead_writers_are_cleaned_and_no_others(tmp_path):
-    from wearcheck.comparisons.runio import OUTPUT_MARKER
+    from wearcheck.comparisons.rundir import OUTPUT_MARKER
     stale, live, foreign, unmarked = (tmp_path / f".x.partial-{n}" for n in "abcd")
     for d, marker in ((stale, _marker("run", False, _dead_pid())),
                       (live, _marker("run", False, os.getppid())),
@@ -329,7 +329,7 @@ def test_stale_partials_of_dead_writers_are_cleaned_and_no_others(tmp_path):
 
 @pytest.mark.parametrize("command", ["export", "render"])
 def test_export_and_render_refuse_a_partial_directory(tmp_path, capsys, command):
-    from wearcheck.comparisons.runio import OUTPUT_MARKER
+    from wearcheck.comparisons.rundir import OUTPUT_MARKER
     run = tmp_path / "x"
     assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
     partial = tmp_path / ".x.partial-abc"
@@ -341,7 +341,7 @@ def test_export_and_render_refuse_a_partial_directory(tmp_path, capsys, command)
 
 
 def _writer(path, worker, count, queue):
-    from wearcheck.comparisons import runio
+    from wearcheck.comparisons import rundir as runio
     try:
         for i in range(count):
             with runio.atomic_directory(path) as tmp:
@@ -354,7 +354,7 @@ def _writer(path, worker, count, queue):
 def test_concurrent_writers_to_one_path_never_fail_nor_leave_debris(tmp_path):
     """4 processes x 150 atomic writes to one path: no OSError, no leftover
     directory, and the path holds one complete write (the last to land)."""
-    from wearcheck.comparisons.runio import OUTPUT_MARKER
+    from wearcheck.comparisons.rundir import OUTPUT_MARKER
     path = tmp_path / "out"
     ctx = multiprocessing.get_context("fork")
     queue = ctx.Queue()
@@ -461,8 +461,8 @@ def test_fem_with_an_extreme_modulus_is_the_numerical_failure_exit(tmp_path, cap
 
 
 def test_refine_rerun_where_every_level_fails_removes_the_old_figures(tmp_path, capsys):
-    from wearcheck.comparisons.cli.refine import refine
-    from wearcheck.comparisons.study_figures import FIGURES
+    from wearcheck.comparisons.studies.refine import refine
+    from wearcheck.comparisons.present.study_figures import FIGURES
     out = tmp_path / "study"
     refine(HERTZ, [], "mdr", out, levels=[20, 40, 80], workers=1, quiet=True)
     umask = os.umask(0)
@@ -481,7 +481,7 @@ def test_refine_rerun_where_every_level_fails_removes_the_old_figures(tmp_path, 
 def test_refine_interrupt_message_says_what_was_written(tmp_path, capsys, monkeypatch):
     def interrupted(out):
         raise KeyboardInterrupt
-    monkeypatch.setattr("wearcheck.comparisons.study_figures.write_figures", interrupted)
+    monkeypatch.setattr("wearcheck.comparisons.present.study_figures.write_figures", interrupted)
     out = tmp_path / "study"
     assert cli_main(["refine", HERTZ, "--levels", "20,40", "--workers", "1", "--quiet",
                      "--out", str(out)]) == 130

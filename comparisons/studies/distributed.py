@@ -30,13 +30,13 @@ import time
 import traceback
 import uuid
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from wearcheck import cases
 from wearcheck.cases.case import read_raw
-from .progress import ProgressBar
-from .runio import _jsonable, write_run, write_text_atomic
+from wearcheck.comparisons.present.progress import ProgressBar
+from wearcheck.comparisons.rundir import jsonable, write_run, write_text_atomic
 
 #: seconds between two samples of a task's resident set size
 RSS_INTERVAL = 0.01
@@ -159,9 +159,10 @@ def execute(raw: dict, source: str, overrides: tuple[str, ...], solver: str, nam
     ``solve(case, solver, progress)`` defaults to ``comparisons.solvers.solve``.
     """
     if solve is None:
-        from .solvers import solve
+        from wearcheck.comparisons import registry
+        from wearcheck.comparisons.registry import solve
         try:  # a worker's first import of the solver is not part of its cost
-            importlib.import_module(f"wearcheck.{solver}")
+            importlib.import_module(registry.get(solver).module)
         except Exception:
             pass  # solve() meets the same failure below and reports it
     out = dict(ok=False, message="", case=None, result=None, traceback="")
@@ -174,7 +175,7 @@ def execute(raw: dict, source: str, overrides: tuple[str, ...], solver: str, nam
     with _PeakRSS() as rss:
         try:
             case = cases.from_dict(raw, source=source, overrides=list(overrides))
-            from .resources import check_memory
+            from wearcheck.comparisons.resources import check_memory
             check_memory(case, solver)  # this worker's memory, before allocating
             result = solve(case, solver, _progress_sender(topic, name))
             out.update(ok=True, case=case, result=result)
@@ -317,22 +318,26 @@ class _Reporter:
         self.bar.close()
 
 
-def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | Path, *,
+def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Task], out: str | Path, *,
               scheduler: str | None = None, workers: int | None = None, quiet: bool = False,
               solve=None, extra_meta: dict | None = None) -> list[Outcome]:
     """Run every task on Dask; write each successful one to ``out/<task.name>``.
 
-    ``base_overrides`` apply to every task before its own. Returns the outcomes
+    ``source`` is a case file or a :class:`cases.Case`; ``base_overrides`` apply
+    to every task before its own. Returns the outcomes
     in the order of ``tasks``; each run directory is written (atomically, by
-    ``runio.write_run``) as soon as its result arrives, so an interrupted study
+    ``rundir.write_run``) as soon as its result arrives, so an interrupted study
     keeps the levels already done.
     """
     from distributed import KilledWorker, as_completed
 
-    source = str(Path(source).absolute())
-    raw = read_raw(Path(source))  # as cases.load reads it (a BOM, errors)
+    if isinstance(source, cases.Case):  # a case built or derived in Python
+        raw, source = cases.to_dict(source), source.source
+    else:
+        source = str(Path(source).absolute())
+        raw = read_raw(Path(source))  # as cases.load reads it (a BOM, errors)
     check_workers(scheduler, workers)
-    from .outputs import study_directory
+    from wearcheck.comparisons.outputs import study_directory
     out = study_directory(out)
     names = [t.name for t in tasks]
     if len(set(names)) != len(names):
@@ -427,7 +432,7 @@ def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | 
 
 def discard_run(path: Path) -> None:
     """Remove an earlier run directory at ``path`` (only ever a wearcheck run)."""
-    from .outputs import remove_output
+    from wearcheck.comparisons.outputs import remove_output
     remove_output(path, "run")
 
 
@@ -446,7 +451,7 @@ def record_study(out: Path, study: str, case, overrides, prov) -> None:
     meta.setdefault("studies", {})[study] = dict(
         prov, case_file=str(getattr(case, "source", "")), overrides=list(overrides),
         resolved_case=cases.to_toml(case))
-    write_text_atomic(path, json.dumps(_jsonable(meta), indent=2) + "\n")
+    write_text_atomic(path, json.dumps(jsonable(meta), indent=2) + "\n")
 
 
 def fmt(v, spec=".4g"):

@@ -1,7 +1,8 @@
 """Run directories: atomic writing, provenance, and reading back.
 
-A run directory holds ``case.toml``, ``history.csv``, ``stages.npz`` and
-``meta.json`` (and ``fields.npz`` when the solver provides fields). It is
+A run directory holds the files of ``layout.RUN_FILES``: ``case.toml``,
+``history.csv``, ``stages.npz`` and ``meta.json`` (and ``fields.npz`` when the
+solver provides fields); ``layout`` gives every column and array its unit. It is
 built in a hidden sibling directory and renamed into place only when complete,
 so an interrupted or failed run leaves nothing that looks complete and never
 damages an earlier complete run at the same path.
@@ -27,13 +28,14 @@ import numpy as np
 from wearcheck import cases
 from wearcheck.cases import reference
 from wearcheck.cases.result import HISTORY_COLUMNS, RunResult
+from wearcheck.comparisons import layout
 
 DEPENDENCIES = ("numpy", "scipy", "scikit-fem", "meshio", "gmsh", "pyvista", "matplotlib",
                 "dask", "distributed")
 
 
 # output safety lives in comparisons.outputs; these names are kept for their users
-from .outputs import OUTPUT_MARKER, _umask, atomic_directory  # noqa: E402,F401
+from wearcheck.comparisons.outputs import OUTPUT_MARKER, _umask, atomic_directory  # noqa: E402,F401
 
 
 def write_text_atomic(path: str | Path, text: str) -> None:
@@ -100,11 +102,12 @@ def provenance(argv=None) -> dict:
     )
 
 
-def _jsonable(obj):
+def jsonable(obj):
+    """``obj`` with numpy arrays and scalars as lists and Python numbers, for json.dumps."""
     if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
+        return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
+        return [jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
         return obj.tolist()
     if isinstance(obj, np.generic):
@@ -113,7 +116,7 @@ def _jsonable(obj):
 
 
 def write_json(path: Path, data: dict) -> None:
-    Path(path).write_text(json.dumps(_jsonable(data), indent=2, allow_nan=True) + "\n",
+    Path(path).write_text(json.dumps(jsonable(data), indent=2, allow_nan=True) + "\n",
                           encoding="utf-8")
 
 
@@ -145,7 +148,17 @@ def write_run_files(directory: Path, case: cases.Case, result: RunResult, solver
     meta.update(provenance(argv))
     if extra_meta:
         meta.update(extra_meta)
+    meta["data_dictionary"] = layout.run_dictionary(_registered(solver), list(result.history),
+                                                    list(result.fields or {}))
     write_json(directory / "meta.json", meta)
+
+
+def _registered(solver: str):
+    from wearcheck.comparisons import registry
+    try:
+        return registry.get(solver)
+    except cases.CaseError:  # e.g. a stand-in solver of a test
+        return None
 
 
 def write_run(out: str | Path, case: cases.Case, result: RunResult, solver: str,
@@ -162,7 +175,7 @@ class Run:
     """A run directory read back: case, history, stages, meta."""
 
     def __init__(self, path: str | Path):
-        from .outputs import is_partial
+        from wearcheck.comparisons.outputs import is_partial
         self.path = Path(path)
         if is_partial(self.path):
             raise cases.CaseError(f"'{self.path}' is an incomplete run directory (a .partial "
