@@ -292,7 +292,19 @@ def test_sigterm_is_handled_like_sigint(tmp_path):
     proc = subprocess.Popen(_cli("run", cases.shipped("paper"), "--out", str(out),
                                  "--set", "mdr.elements=3000", "--quiet"),
                             stderr=subprocess.PIPE, text=True)
-    time.sleep(4.0)  # inside the solve (it takes over 10 s)
+    # once the CLI's handler is installed (Linux: SigCgt in /proc), i.e. inside
+    # the solve, which takes over 10 s
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        status = Path(f"/proc/{proc.pid}/status")
+        if not status.exists():
+            time.sleep(4.0)
+            break
+        caught = [l for l in status.read_text().splitlines() if l.startswith("SigCgt:")]
+        if caught and int(caught[0].split()[1], 16) & (1 << (signal.SIGTERM - 1)):
+            time.sleep(0.5)
+            break
+        time.sleep(0.1)
     proc.send_signal(signal.SIGTERM)
     err = proc.communicate(timeout=60)[1]
     assert proc.returncode == 143
