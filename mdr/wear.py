@@ -46,6 +46,8 @@ class Model:
     depth: float | None     # depth control
     force: float | None     # force control
     tangential: float = 0.0  # μ/G* with the tangential correction, else 0
+    exponent: float = 1.0    # n of the wear law dw/ds = K σ0 (p/σ0)^n
+    hardness: float = 1.0    # σ0 [Pa]; enters only when exponent != 1
 
     def __post_init__(self):
         self.t = self.x**2                              # nodes in t = r²
@@ -65,6 +67,20 @@ class State:
     m: int
     slip: np.ndarray | None = None     # slip factor S for the next step
     stats: dict = field(default_factory=dict)
+
+
+def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
+    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard)."""
+    if model.exponent == 1.0:
+        return model.wear_rate * p
+    return model.wear_rate * p * (np.maximum(p, 0.0) / model.hardness) ** (model.exponent - 1.0)
+
+
+def wear_speed_slope(model: Model, p: np.ndarray) -> np.ndarray:
+    """d(dw/ds)/dp = n K (p/σ0)^(n-1), divided by K (the implicit step's factor on h K)."""
+    if model.exponent == 1.0:
+        return np.ones_like(p)
+    return model.exponent * (np.maximum(p, 0.0) / model.hardness) ** (model.exponent - 1.0)
 
 
 def contact_state(model: Model, f: np.ndarray) -> State:
@@ -89,7 +105,7 @@ def _slip(model: Model, old: State, new: State, h: float) -> np.ndarray | None:
 def explicit_step(model: Model, state: State, h: float) -> State:
     """Forward Euler: wear by the pressure at the start of the step."""
     S = 1.0 if state.slip is None else state.slip
-    f = state.f + h * model.wear_rate * S * state.p
+    f = state.f + h * S * wear_speed(model, state.p)
     new = contact_state(model, f)
     new.slip = _slip(model, state, new, h)
     return new
@@ -117,6 +133,21 @@ LOOSE_RTOL = 1e-5
 COARSE_NODES = 256
 
 
+def compliance_block(model: Model, n: int) -> np.ndarray:
+    """A fresh copy of the leading n×n block of the model's compliance matrix.
+
+    The matrix is built once per grid (the largest block asked for so far,
+    grown by half on demand) and shared by the factorisations of every step
+    size of an adaptive run: building it costs as much as factorising it.
+    """
+    cached = getattr(model, "_compliance", None)
+    if cached is None or len(cached) < n:
+        size = min(len(model.x), max(n, int(1.5 * len(cached)) if cached is not None else n))
+        cached = transforms.compliance_matrix(size, model.dt, model.E_star)
+        model._compliance = cached
+    return cached[:n, :n].copy()
+
+
 class ImplicitSystem:
     """(T⁻¹ P⁻¹/E* + σ) p = r on the contact nodes, σ = h K S, for any contact set.
 
@@ -136,6 +167,7 @@ class ImplicitSystem:
         self.dt, self.E = model.dt, model.E_star
         self.nested = N <= DENSE_MAX
         self.N = N
+        self.model = model
         self.lu = None
         if self.nested:
             # factorise only the contact sets the run is likely to need; grow on demand
@@ -146,7 +178,7 @@ class ImplicitSystem:
 
     def _factor(self, n: int) -> None:
         n = min(n, self.N + 1)
-        A = transforms.compliance_matrix(n, self.dt, self.E)
+        A = compliance_block(self.model, n)
         A[np.diag_indices(n)] += self.sigma
         self.lu = linalg.NestedLU(A)
 
@@ -222,12 +254,15 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
     is the lagged first-order one of either scheme. ``system`` must be built
     for c h when it is to be used for the regular step directly.
 
+    With a pressure exponent n != 1 the wear speed K σ0 (p/σ0)^n is
+    linearised about the last iterate (Newton): wear compliance c h K S n
+    (p_k/σ0)^(n-1) and a shifted base, repeated until p settles.
+
     The contact set (nodes 0..m) is found by iterating: solve on a guess,
     grow it where the new 1D profile dips below the depth, shrink it where
     the line load turns negative.
     """
     N = len(model.x) - 1
-    E, K = model.E_star, model.wear_rate
     S = np.ones(N + 1) if state.slip is None else state.slip
     if previous is None:
         base, hc = state.f, h
@@ -236,6 +271,40 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
         base, hc = a * state.f + b * previous[0], c * h
     system = system or ImplicitSystem(model, hc)
     m = max(state.m if m_guess is None else m_guess, 0)
+    if model.exponent == 1.0:
+        new = _implicit_solve(model, state, base, hc, S, system, m, state.p)
+    else:
+        p_k, total = state.p, {"gmres_iterations": 0, "contact_iterations": 0}
+        for it in range(NEWTON_MAX):
+            slope = wear_speed_slope(model, p_k)
+            shift = hc * S * (wear_speed(model, p_k) - model.wear_rate * slope * p_k)
+            new = _implicit_solve(model, state, base + shift, hc, S * slope, system, m, p_k)
+            for k in total:
+                total[k] += new.stats[k]
+            change = np.max(np.abs(new.p - p_k))
+            p_k, m = new.p, new.m
+            if change <= NEWTON_TOL * np.max(new.p):
+                break
+        else:
+            raise SolverError(f"implicit wear step: the Newton iteration of the pressure "
+                              f"exponent did not converge in {NEWTON_MAX} iterations "
+                              f"(last change {change / np.max(new.p):.2e} of max p)")
+        # the converged profile by the wear law itself (not its linearisation)
+        new.f = base + hc * S * wear_speed(model, new.p)
+        new.stats = total
+    new.slip = _slip(model, state, new, h)
+    return new
+
+
+#: Newton iteration of the pressure exponent: relative change of p that ends it
+NEWTON_TOL = 1e-9
+NEWTON_MAX = 30
+
+
+def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
+    """The linear complementarity problem of one implicit step, contact set included."""
+    N = len(model.x) - 1
+    E, K = model.E_star, model.wear_rate
     stats = {"gmres_iterations": 0, "contact_iterations": 0}
     seen = set()
     tried = []
@@ -244,16 +313,16 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
     # accurately (warm-started) from the set found on, checking it again
     accurate = False
     marginal = None
-    x0 = state.p[:m + 1]
+    x0 = p_guess[:m + 1]
     while True:
         stats["contact_iterations"] += 1
         if m >= N - 1:
-            raise SolverError("the contact has reached the edge of the MDR domain during "
-                              "wear; raise mdr.domain_factor")
+            raise contact.DomainOutgrown("the contact has reached the edge of the MDR domain "
+                                         "during wear")
         n = m + 1
         sigma = hc * K * S[:n]
         if len(x0) != n:
-            x0 = np.r_[state.p[:n], np.zeros(max(n - len(state.p[:n]), 0))][:n]
+            x0 = np.r_[p_guess[:n], np.zeros(max(n - len(p_guess[:n]), 0))][:n]
         # the nested LU of the regular step is exact: no loose pass to redo
         accurate = accurate or system.exact(sigma)
         rtol = 1e-9 if accurate else LOOSE_RTOL
@@ -322,10 +391,8 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
     qq[:n] = np.maximum(q, 0.0)
     pp = np.zeros(N + 1)
     pp[:n] = p
-    new = State(f=f, depth=float(d), q=qq, p=pp, force=transforms.force(qq, model.dt),
-                contact_radius=contact.contact_radius(g, d, model.t, m), m=m, stats=stats)
-    new.slip = _slip(model, state, new, h)
-    return new
+    return State(f=f, depth=float(d), q=qq, p=pp, force=transforms.force(qq, model.dt),
+                 contact_radius=contact.contact_radius(g, d, model.t, m), m=m, stats=stats)
 
 
 # -- explicit Euler: stability ----------------------------------------------
