@@ -133,19 +133,22 @@ LOOSE_RTOL = 1e-5
 COARSE_NODES = 256
 
 
+_UNIT_COMPLIANCE: dict = {}
+
+
 def compliance_block(model: Model, n: int) -> np.ndarray:
     """A fresh copy of the leading n×n block of the model's compliance matrix.
 
-    The matrix is built once per grid (the largest block asked for so far,
-    grown by half on demand) and shared by the factorisations of every step
-    size of an adaptive run: building it costs as much as factorising it.
+    The matrix is sqrt(Δt)/E* times one of the grid size alone, so that one
+    is built once (the largest block asked for so far, grown by half on
+    demand) and shared by every grid a growing domain passes through and every
+    step size of an adaptive run: building it costs as much as factorising.
     """
-    cached = getattr(model, "_compliance", None)
-    if cached is None or len(cached) < n:
-        size = min(len(model.x), max(n, int(1.5 * len(cached)) if cached is not None else n))
-        cached = transforms.compliance_matrix(size, model.dt, model.E_star)
-        model._compliance = cached
-    return cached[:n, :n].copy()
+    unit = _UNIT_COMPLIANCE.get("C")
+    if unit is None or len(unit) < n:
+        size = max(n, int(1.5 * len(unit)) if unit is not None else n)
+        unit = _UNIT_COMPLIANCE["C"] = transforms.compliance_matrix(size, 1.0, 1.0)
+    return unit[:n, :n] * (math.sqrt(model.dt) / model.E_star)
 
 
 class ImplicitSystem:
@@ -218,6 +221,27 @@ class ImplicitSystem:
         rc = restrict(r)
         ec = lu_solve(self._coarse_lu(n, sigma), rc, check_finite=False)
         return prolong(ec) + (r - prolong(rc)) / sigma
+
+    def unit_response(self, n, sigma, stats, rtol):
+        """The solution p1 for a unit right-hand side on nodes 0..n-1 and its force F1.
+
+        Force control: the same for every step with this system's own σ,
+        cached per contact set.
+        """
+        def response():
+            p1 = self.solve(np.ones(n), sigma, None, stats, rtol)
+            w = transforms.force_weights(self.N, self.dt)[:n]
+            return p1, float(w @ transforms.line_load(p1, self.dt))
+
+        if not self.exact(sigma):
+            return response()
+        cache = self.__dict__.setdefault("_unit", {})
+        out = cache.get(n)
+        if out is None:
+            if len(cache) > 64:
+                cache.clear()
+            out = cache[n] = response()
+        return out
 
     def exact(self, sigma) -> bool:
         """Whether :meth:`solve` with this sigma is a direct solve (no GMRES)."""
@@ -331,10 +355,9 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
             p = system.solve(d - base[:n], sigma, x0, stats, rtol)
         else:
             # p = d p1 + p2 is linear in the unknown depth; the force fixes d
-            p1 = system.solve(np.ones(n), sigma, None, stats, rtol)
+            p1, F1 = system.unit_response(n, sigma, stats, rtol)
             p2 = system.solve(-base[:n], sigma, x0 - state.depth * p1, stats, rtol)
             w = transforms.force_weights(N, model.dt)[:n]
-            F1 = w @ transforms.line_load(p1, model.dt)
             F2 = w @ transforms.line_load(p2, model.dt)
             d = (model.force - F2) / F1
             p = d * p1 + p2
