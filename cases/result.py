@@ -8,9 +8,10 @@ import numpy as np
 
 #: the worn region (the scar) ends where the wear depth falls below this
 #: fraction of its largest value (a lab sees the scar's edge where wear is
-#: visible; on a worn sphere w ≈ (b² − r²)/2R near the edge, so 1 % of the
-#: central wear is reached 0.5 % inside the true edge b)
-SCAR_THRESHOLD = 0.01
+#: visible). On a worn sphere w ≈ (b² − r²)/2R near the edge, so 1e-3 of the
+#: central wear is reached 0.05 % inside the true edge b (1 % would be 0.5 %
+#: inside, and the lab's D⁴ volume formula 2 % low for that alone)
+SCAR_THRESHOLD = 1e-3
 
 
 def scar_radius(r, wear_depth, threshold: float = SCAR_THRESHOLD) -> float:
