@@ -145,12 +145,18 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     unknown = sorted(set(raw) - set(SECTIONS))
     if unknown:
         raise CaseError(f"unknown section [{unknown[0]}]; allowed: " + ", ".join(SECTIONS))
+    overridden = set()
     for text in overrides:
         section, k, value = parse_override(text)
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise CaseError(f"'{section}' must be a table [{section}]")
         raw[section][k] = value
+        overridden.add((section, k))
+        # stages given one way by an override replace the file's other way
+        other = {"s_hat": "cycles", "cycles": "s_hat"}.get(k) if section == "stages" else None
+        if other and ("stages", other) not in overridden:
+            raw[section].pop(other, None)
     for section in REQUIRED_SECTIONS:
         if section not in raw:
             raise CaseError(f"missing section [{section}]")

@@ -19,6 +19,7 @@ from wearcheck.comparisons.edge_peak import find_edge_peak
 from wearcheck.mdr import solver as mdr_solver
 
 BALL = cases.shipped("ball_on_flat")
+PAPER = cases.shipped("paper")
 
 
 def ball(*overrides):
@@ -36,13 +37,18 @@ def test_cycles_give_the_distance_and_the_stages():
     # the resolved case reads back to the same case (s_hat is derived, not written)
     text = cases.to_toml(case)
     assert "s_hat" not in text.split("[stages]")[1].split("[")[0]
+    # an override of one form replaces the file's other form
+    assert ball("stages.s_hat=[0.0, 1.0]").stages.cycles is None
+    assert cases.load(PAPER, ["sliding.stroke=1e-3", "stages.cycles=[0.0, 5.0]"]).stages.cycles \
+        == (0.0, 5.0)
 
 
 @pytest.mark.parametrize("overrides, pattern", [
     (["sliding.until=distance", "sliding.distance=1.0"],
      r"sliding\.cycles.*given but sliding\.until"),
     (["sliding.distance=1.0"], r"sliding\.distance.*given but sliding\.until = \"cycles\""),
-    (["stages.s_hat=[0.0, 1.0]"], r"stages\.s_hat.*stages\.cycles.*both given"),
+    (["stages.s_hat=[0.0, 1.0]", "stages.cycles=[0.0, 1.0]"],
+     r"stages\.s_hat.*stages\.cycles.*both given"),
     (["stages.cycles=[0.0, 10.0, 5.0]"], r"stages\.cycles.*increase"),
     (["sliding.tolerance=0.5"], r"sliding\.tolerance.*0\.5"),
     (["wear.pressure_exponent=0.5"], r"wear\.pressure_exponent.*\[1, 4\]"),
@@ -160,9 +166,6 @@ def test_fem_arc_is_sized_for_the_scar_and_outgrowing_it_is_an_error():
 
 
 # -- the adaptive scheme: error control and monotonicity ----------------------
-
-PAPER = cases.shipped("paper")
-
 
 def paper(*overrides):
     return cases.load(PAPER, ["stages.s_hat=[0.0, 0.5, 1.5, 3.0, 5.0, 8.0]", *overrides])
