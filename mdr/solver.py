@@ -83,7 +83,9 @@ def grow_domain(model: wear.Model, profile, arrays=()) -> tuple[wear.Model, list
     node, so profiles are carried over exactly at the nodes (piecewise linear
     in t in between, as everywhere); beyond the old domain nothing is worn
     and an array takes its value at the old edge (profiles: the unworn one).
-    ``profile(x)`` gives the unworn profile.
+    ``profile(x)`` gives the unworn profile. ``arrays``: (array or None,
+    kind) with kind "profile", "increment" (zero beyond) or "field" (the
+    edge value beyond).
     """
     N = len(model.x) - 1
     x = transforms.grid(N, model.x[-1] * math.sqrt(2.0))
@@ -97,6 +99,8 @@ def grow_domain(model: wear.Model, profile, arrays=()) -> tuple[wear.Model, list
             # worn = unworn + wear, the wear moved and zero beyond the old domain
             wear_depth = np.interp(new.t, model.t, a - model.f0, right=0.0)
             out.append(f0 + wear_depth)
+        elif kind == "increment":   # a change of the profile: none beyond the old domain
+            out.append(np.interp(new.t, model.t, a, right=0.0))
         else:
             out.append(np.interp(new.t, model.t, a))
     return new, out
@@ -227,25 +231,25 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
         ramp = [BDF2_FIRST_STEP * h]
         while sum(ramp) < h * (1 - 1e-9):
             ramp.append(sum(ramp))
+    corr = None     # adaptive: Richardson's correction for the next step's start
     if adaptive:
         per_m = scales["s_hat_per_m"]
         h_cur = min(ADAPTIVE_FIRST_STEP_HAT / per_m, h)
         F0, d0 = scales["F0"], scales["d0"]
         time_error = error_sum = 0.0
-        corr = None
         counters.update(rejected_steps=0, largest_step_hat=0.0)
     s = 0.0
     last_report = -1.0
     max_steps = ADAPTIVE_MAX_STEPS if adaptive else MAX_STEPS
 
     def grow():
-        nonlocal model, state, previous, systems
+        nonlocal model, state, previous, systems, corr
         if profile is None:
             raise SolverError("the contact has reached the edge of the MDR domain; raise "
                               "mdr.domain_factor")
         arrays = [(state.f, "profile"), (state.slip, "field"),
-                  (None if previous is None else previous[0], "profile")]
-        model, (f, slip, f_prev) = grow_domain(model, profile, arrays)
+                  (None if previous is None else previous[0], "profile"), (corr, "increment")]
+        model, (f, slip, f_prev, corr) = grow_domain(model, profile, arrays)
         state = wear.contact_state(model, f)
         state.slip = slip
         if previous is not None:
