@@ -339,7 +339,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
                     # Richardson's correction into the next step's start profile
                     new = two
                     corr = two.f - full.f
-                    if CORRECTION_BAND > 0:
+                    if CORRECTION_BAND >= 0:
                         # not at the nodes the edge crossed in this step: there w(s)
                         # has a kink and Richardson's estimate is not an O(h²) one
                         ms = (state.m, full.m, half.m, two.m)
