@@ -69,7 +69,46 @@ class Case:
         return None if self.sliding.stroke is None else 0.5 / self.sliding.stroke
 
     def replace(self, **sections) -> "Case":
-        return replace(self, **sections)
+        """A copy with whole sections replaced, validated like a case file.
+
+        ``case.replace(wear=dataclasses.replace(case.wear, mu=0.5))``; for single
+        keys :meth:`derive` is shorter.
+        """
+        unknown = sorted(set(sections) - set(SECTIONS))
+        if unknown:
+            raise CaseError(f"unknown section '{unknown[0]}'; allowed: " + ", ".join(SECTIONS))
+        raw = to_dict(self)
+        for name, obj in sections.items():
+            raw[name] = _section_dict(obj)
+        return from_dict(raw, source=self.source)
+
+    def derive(self, changes=None, /, **keys) -> "Case":
+        """A copy with some keys changed, validated like a case file.
+
+        Parameters
+        ----------
+        changes : mapping of dotted keys to values, ``{"wear.mu": 0.5}``, or a
+            list of ``"section.key=value"`` strings as on the command line.
+        **keys : the same with ``__`` for the dot: ``case.derive(wear__mu=0.5)``.
+
+        Raises
+        ------
+        CaseError
+            naming the key, the value and what is allowed, as for a case file.
+        """
+        raw = to_dict(self)
+        texts = []
+        items = dict(keys and {k.replace("__", "."): v for k, v in keys.items()})
+        if isinstance(changes, dict):
+            items = {**changes, **items}
+        elif changes is not None:
+            texts = [changes] if isinstance(changes, str) else list(changes)
+        for name, value in items.items():
+            if not isinstance(name, str) or name.count(".") != 1 or not all(name.split(".")):
+                raise CaseError(f"key '{name}': must be section.key, e.g. wear.mu")
+            section, key = name.split(".")
+            raw.setdefault(section, {})[key] = list(value) if isinstance(value, tuple) else value
+        return from_dict(raw, source=self.source, overrides=texts)
 
 
 def _compliance(rigid: bool, E, nu):
@@ -380,3 +419,18 @@ def key_reference() -> str:
                 doc += " (" + " \\| ".join(f"`{c}`" for c in meta["choices"]) + ")"
             rows.append(f"| `{section}.{name}` | {meta['unit'] or ''} | {default} | {doc} |")
     return "\n".join(rows)
+
+
+def _section_dict(obj) -> dict:
+    """One section as TOML would read it (keys left at None omitted)."""
+    out = {}
+    for f in fields(obj):
+        value = getattr(obj, f.name)
+        if value is not None:
+            out[f.name] = list(value) if isinstance(value, tuple) else value
+    return out
+
+
+def to_dict(case: Case) -> dict:
+    """The case as nested dicts, as a TOML file of it would read (``from_dict`` inverts it)."""
+    return {name: _section_dict(getattr(case, name)) for name in SECTIONS}

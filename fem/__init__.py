@@ -46,6 +46,6 @@ in the plane's frame (the top face has u_z = −d); ``stress`` (K, Np, 4) σ_rr,
 ``contact_pressure`` and ``wear_depth`` (K, Nc).
 """
 
-from .solver import solve
+from .solver import solve, supports
 
-__all__ = ["solve"]
+__all__ = ["solve", "supports"]

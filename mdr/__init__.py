@@ -16,4 +16,10 @@ Modules: :mod:`mdr.transforms` (the MDR transforms, pure functions),
 
 from .solver import solve
 
-__all__ = ["solve"]
+__all__ = ["solve", "supports"]
+
+
+def supports(case) -> str | None:
+    """None: the MDR runs every axisymmetric case the schema accepts."""
+    return None
+

@@ -14,8 +14,8 @@ import pytest
 
 from wearcheck import cases
 from wearcheck.cases import reference
-from wearcheck.comparisons import refine as rf
-from wearcheck.comparisons.runio import Run
+from wearcheck.comparisons.analysis import convergence as rf
+from wearcheck.comparisons.rundir import Run
 
 # the stand-in solvers below travel to the Dask workers by value, so the
 # workers need not import this test module
@@ -154,7 +154,7 @@ def cluster():
 
 @pytest.fixture(scope="module")
 def fake_study(cluster, tmp_path_factory):
-    from wearcheck.comparisons.cli.refine import refine
+    from wearcheck.comparisons.studies.refine import refine
     out = tmp_path_factory.mktemp("study")
     case = cases.shipped("paper")
     # level 1 is rejected by the case (mdr.elements >= 2); 24 fails in the solver
@@ -199,8 +199,8 @@ def test_study_recovers_the_known_order(fake_study):
 
 
 def test_second_solver_joins_the_same_directory(fake_study, cluster):
-    from wearcheck.comparisons.cli.refine import refine
-    from wearcheck.comparisons.study_figures import FIGURES, studies
+    from wearcheck.comparisons.studies.refine import refine
+    from wearcheck.comparisons.present.study_figures import FIGURES, studies
     out, _ = fake_study
     refine(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"], "fem", out,
            levels=[10, 20, 40], scheduler=cluster, quiet=True, solve=fake_solve)
@@ -264,7 +264,7 @@ def crashing_solve(case, solver, progress=None):
 
 
 def test_a_dead_worker_fails_only_its_level(tmp_path):
-    from wearcheck.comparisons.distributed import Task, run_cases
+    from wearcheck.comparisons.studies.distributed import Task, run_cases
     # the embedded cluster (no scheduler given): loopback, one task per worker
     tasks = [Task(f"mdr-elements-{n}", "mdr", (f"mdr.elements={n}",)) for n in (8, 16, 32, 64)]
     outcomes = run_cases(cases.shipped("paper"), [], tasks, tmp_path, workers=2, quiet=True,
@@ -277,7 +277,7 @@ def test_a_dead_worker_fails_only_its_level(tmp_path):
 
 
 def test_mdr_step_refinement_shows_backward_euler_first_order(cluster, tmp_path):
-    from wearcheck.comparisons.cli.refine import refine
+    from wearcheck.comparisons.studies.refine import refine
     # implicit (backward) Euler in ŝ has a global error Δŝ e1(ŝ) + O(Δŝ²): order
     # 1. With Δŝ <= 0.2 the O(Δŝ²) part moves the fitted slope by O(0.1)
     summary = refine(cases.shipped("paper"), ["sliding.force_fraction=0.3",
@@ -293,7 +293,7 @@ def test_mdr_step_refinement_shows_backward_euler_first_order(cluster, tmp_path)
 
 def test_a_failed_level_removes_an_earlier_run_of_that_level(cluster, tmp_path):
     import shutil
-    from wearcheck.comparisons.cli.refine import refine
+    from wearcheck.comparisons.studies.refine import refine
     out = tmp_path / "study"
     refine(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"], "mdr", out,
            levels=[8, 16], scheduler=cluster, quiet=True, solve=fake_solve)
