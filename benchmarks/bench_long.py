@@ -7,7 +7,7 @@
    the default; plain backward Euler; Richardson's extrapolated profile),
    against fixed-step implicit Euler and BDF2: solve time, steps, max |F/F0 −
    reference| over the history, the estimate the run reports, and the largest
-   edge-peak prominence over the stages (comparisons/edge_peak.py).
+   edge-peak prominence over the stages (comparisons/analysis/edge_peak.py).
    Reference: BDF2 at Δŝ = 1/80 and 1/160, Richardson-extrapolated.
 2. Paper case, MDR at a large N (default 102400), adaptive at the default
    tolerance, in a fresh process: solve time, peak RSS.
@@ -34,8 +34,8 @@ import numpy as np
 
 from wearcheck import cases, fem, mdr
 from wearcheck.cases import profiles, reference
-from wearcheck.comparisons import scar
-from wearcheck.comparisons.edge_peak import find_edge_peak
+from wearcheck.comparisons.analysis import scar
+from wearcheck.comparisons.analysis.edge_peak import find_edge_peak
 from wearcheck.mdr import linalg
 from wearcheck.mdr import solver as mdr_solver
 

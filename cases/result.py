@@ -47,8 +47,8 @@ class RunResult:
         with at least the keys of ``HISTORY_COLUMNS``: sliding distance s [m],
         normal force [N], indentation depth [m], contact radius [m], wear
         depth at r = 0 [m], worn volume [m³]. More columns may follow;
-        both solvers add ``scar_radius`` [m] (:func:`scar_radius`), and
-        ``cycles`` when the case gives a stroke.
+        both solvers add ``scar_radius`` [m] (:func:`scar_radius`) and
+        ``cycles`` (NaN when the case gives no stroke).
     stage_s : (K,) sliding distances [m] of the stored stages.
     r : (M,) radii [m] at which stage profiles and pressures are given.
     f : (K, M) worn profile heights f(r) [m] (unworn profile plus wear).

@@ -131,8 +131,8 @@ class Sliding:
                                      "the unworn contact only)")
     stroke: float | None = key(None, unit="m", positive=True,
                                doc="reciprocating stroke (one way); one cycle slides 2·stroke. "
-                                   "Required by until = cycles and stages.cycles; when given, "
-                                   "history.csv gains a column `cycles`")
+                                   "Required by until = cycles and stages.cycles; without it "
+                                   "history.csv's column `cycles` is NaN")
     cycles: float | None = key(None, minimum=0.0,
                                doc="until = cycles: number of cycles to run (0: the unworn "
                                    "contact only)")

@@ -245,8 +245,9 @@ def _solve(case, progress=None) -> RunResult:
                    wear_center=np.array(out.wear_center), wear_volume=np.array(out.wear_volume),
                    scar_radius=np.array(out.scar_radius))
     history["s_hat"] = history["s"] * per_m
-    if case.cycles_per_metre is not None:
-        history["cycles"] = history["s"] * case.cycles_per_metre
+    # cycles: NaN without a stroke (one set of columns for every case)
+    cpm = case.cycles_per_metre
+    history["cycles"] = history["s"] * (cpm if cpm is not None else math.nan)
     info = dict(
         solver="fem", scheme=sl.scheme,
         step_hat=step_hat if math.isfinite(step_hat) else "unlimited",

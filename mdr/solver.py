@@ -457,8 +457,9 @@ def _solve(case, progress=None) -> RunResult:
                           f"ŝ = {s_cap:g}")
     hist = out["history"]
     hist["s_hat"] = hist["s"] * per_m
-    if case.cycles_per_metre is not None:
-        hist["cycles"] = hist["s"] * case.cycles_per_metre
+    # cycles: NaN without a stroke (one set of columns for every case)
+    cpm = case.cycles_per_metre
+    hist["cycles"] = hist["s"] * (cpm if cpm is not None else math.nan)
     counters = out["counters"]
     info.update(counters)
     info["domain"] = counters.pop("domain")

@@ -14,8 +14,9 @@ import pytest
 from wearcheck import cases, fem, mdr
 from wearcheck.cases import CaseError, SolverError, reference
 from wearcheck.cases.result import scar_radius
-from wearcheck.comparisons import scar
-from wearcheck.comparisons.edge_peak import find_edge_peak
+from wearcheck.comparisons.analysis import scar
+from wearcheck.comparisons.present.scar_figure import scar_figure
+from wearcheck.comparisons.analysis.edge_peak import find_edge_peak
 from wearcheck.mdr import solver as mdr_solver
 
 BALL = cases.shipped("ball_on_flat")
@@ -323,5 +324,5 @@ def test_scar_table_of_a_long_run(ball_mdr, tmp_path):
     assert t["lab_volume_deviation"][early] > 1.0
     assert abs(end["lab_volume_deviation"]) < 0.03
     assert end["scar_diameter"] == pytest.approx(end["asymptote_diameter"], rel=3e-3)
-    path = scar.scar_figure(tmp_path / "scar.png", {"mdr": t})
+    path = scar_figure(tmp_path / "scar.png", {"mdr": t})
     assert path.stat().st_size > 10_000
