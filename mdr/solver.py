@@ -333,6 +333,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
                     continue
                 if accept == "extrapolated":
                     new = wear.contact_state(model, 2.0 * two.f - full.f)
+                    new.slip = two.slip
                 elif accept == "deferred":
                     # keep the backward-Euler state (monotone at the edge) and carry
                     # Richardson's correction into the next step's start profile
