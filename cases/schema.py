@@ -144,9 +144,10 @@ class Sliding:
                           "second-order backward differentiation formula, L-stable; or "
                           "explicit (forward) Euler as in the paper, stable below a step limit")
     tolerance: float = key(1e-4, minimum=0.0, maximum=0.1, open_minimum=True,
-                           doc="scheme = adaptive: local error allowed per step, relative "
-                               "(force /F0, central wear and depth /d0); the estimated global "
-                               "time error is recorded in meta.json info.time_error")
+                           doc="scheme = adaptive: local error allowed per step, estimated "
+                               "by step doubling (force /F0; depth and central wear /max(d0, "
+                               "value)); the global time error of the history comes out about "
+                               "this size and is recorded in meta.json info.time_error")
     step_hat: float | str = key("auto", positive=True,
                                 doc="sliding step in units of the dimensionless sliding "
                                     "ŝ = k μ E* s / (σ0 a0), or \"auto\": the solver's "
