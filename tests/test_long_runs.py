@@ -137,6 +137,21 @@ def test_long_run_approaches_the_asymptote(ball_mdr):
     assert h["scar_radius"][-1] == pytest.approx(h["contact_radius"][-1], rel=5e-3)
 
 
+def test_fem_long_run_approaches_the_asymptote():
+    # the FEM (120 arc nodes, 0.2 s): central wear against √(K F s/(π R)),
+    # measured deviations 0.65, 0.18, 2.4e-2, 4.5e-3, 7.8e-4, 1.5e-4 at 10 ...
+    # 10^6 cycles (its contact radius is limited by the 5 µm node spacing)
+    case = ball("fem.contact_nodes=120")
+    res = fem.solve(case)
+    h = res.history
+    asym = reference.worn_sphere_asymptote(case.indenter.radius, case.loading.force,
+                                           res.stage_s[1:], case.wear_rate)
+    i = np.searchsorted(h["s"], res.stage_s[1:])
+    dev = np.abs(h["wear_center"][i] / asym["wear_center"] - 1)
+    assert np.all(np.diff(dev) < 0) and dev[-1] < 1e-3
+    assert res.info["time_error"]["estimate"] <= case.sliding.tolerance
+
+
 def test_the_worn_flat_keeps_an_elastic_crown(ball_mdr):
     # unloaded, the worn profile rises from the centre to the scar's edge by the
     # elastic displacement difference of a uniform pressure, 2F(1 − 2/π)/(π b E*)
