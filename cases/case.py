@@ -89,26 +89,41 @@ class Case:
         ----------
         changes : mapping of dotted keys to values, ``{"wear.mu": 0.5}``, or a
             list of ``"section.key=value"`` strings as on the command line.
-        **keys : the same with ``__`` for the dot: ``case.derive(wear__mu=0.5)``.
+        **keys : the same with ``__`` for the dot: ``case.derive(wear__mu=0.5)``;
+            they win over ``changes``. numpy numbers and arrays are taken as
+            Python numbers and lists. A relative ``indenter.file`` given here is
+            relative to the working directory.
 
         Raises
         ------
         CaseError
             naming the key, the value and what is allowed, as for a case file.
         """
-        raw = to_dict(self)
-        texts = []
-        items = dict(keys and {k.replace("__", "."): v for k, v in keys.items()})
+        items = {}
         if isinstance(changes, dict):
-            items = {**changes, **items}
+            items.update(changes)
         elif changes is not None:
-            texts = [changes] if isinstance(changes, str) else list(changes)
+            for text in [changes] if isinstance(changes, str) else list(changes):
+                section, key, value = parse_override(text)
+                items[f"{section}.{key}"] = value
+        items.update({k.replace("__", "."): v for k, v in keys.items()})
+        raw = to_dict(self)
         for name, value in items.items():
             if not isinstance(name, str) or name.count(".") != 1 or not all(name.split(".")):
                 raise CaseError(f"key '{name}': must be section.key, e.g. wear.mu")
+            if isinstance(value, np.generic):
+                value = value.item()
+            elif isinstance(value, (np.ndarray, tuple)):
+                value = np.asarray(value).tolist() if isinstance(value, np.ndarray) \
+                    else list(value)
+            if name == "indenter.file" and isinstance(value, str) \
+                    and not Path(value).is_absolute():
+                value = str(Path.cwd() / value)
             section, key = name.split(".")
-            raw.setdefault(section, {})[key] = list(value) if isinstance(value, tuple) else value
-        return from_dict(raw, source=self.source, overrides=texts)
+            if section in raw and not isinstance(raw[section], dict):
+                raise CaseError(f"'{section}' must be a table [{section}]")
+            raw.setdefault(section, {})[key] = value
+        return from_dict(raw, source=self.source)
 
 
 def _compliance(rigid: bool, E, nu):

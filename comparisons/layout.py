@@ -100,7 +100,8 @@ METRICS = (
     Item("solvers", "", "the compared solvers, reference first"),
     Item("pairs", "", "per solver: stages (list of STAGE_METRICS), stages_compared, worst "
                       "(largest share of each tolerance), history (over the common sliding "
-                      "range), passed"),
+                      "range), checks (stages_reached: the same number of stages as the "
+                      "reference), passed"),
     Item("passed", "", "the verdict: every check of every solver within its tolerance"),
     Item("stages_compared", "", "stages reached by every solver"),
     Item("scales", "", "as in meta.json"),
@@ -152,11 +153,15 @@ def _table(items) -> dict:
     return {i.name: i.as_dict() for i in items}
 
 
-def run_dictionary(solver=None) -> dict:
+UNDECLARED = "not declared by the solver's registry entry"
+
+
+def run_dictionary(solver=None, history_names=(), field_names=()) -> dict:
     """The data dictionary of one run directory (written into its meta.json).
 
     ``solver`` is its registry entry (or None): its extra history columns and
-    fields are added.
+    fields are added; written columns and fields it does not declare are listed
+    as undeclared, never left out.
     """
     history = _table(HISTORY)
     fields = {}
@@ -165,6 +170,10 @@ def run_dictionary(solver=None) -> dict:
         history.update(_table(solver.history_columns))
         fields = _table(solver.fields)
         info = solver.description
+    for name in history_names:
+        history.setdefault(name, dict(unit="?", meaning=UNDECLARED))
+    for name in field_names:
+        fields.setdefault(name, dict(unit="?", meaning=UNDECLARED))
     return dict(files=_table(RUN_FILES), history_csv=history, stages_npz=_table(STAGES),
                 fields_npz=fields, meta_json=_table(META), solver=info)
 

@@ -28,6 +28,8 @@ class Solver:
     Parameters
     ----------
     name : short name used on the command line and as a key in outputs ("mdr").
+        The solve function is called as ``solve(case, progress=None)`` with
+        ``progress(fraction, text)`` or None, and returns a ``RunResult``.
     title : name in figures and reports ("MDR").
     module : import path of the package with ``solve`` and ``supports``.
     section : its case section ("mdr"), whose keys only it reads.
@@ -70,7 +72,11 @@ class Solver:
         if reason is not None:
             raise CaseError(f"solver '{self.name}' cannot run this case: {reason}")
         fn = self.solve_function or self._package().solve
-        return fn(case, progress=progress)
+        result = fn(case, progress=progress)
+        if not isinstance(result, RunResult):
+            raise TypeError(f"solver '{self.name}' returned {type(result).__name__}, "
+                            "not a wearcheck RunResult")
+        return result
 
     def supports(self, case: Case) -> str | None:
         """None when this solver can run ``case``, else the reason it cannot."""
@@ -84,7 +90,21 @@ _REGISTRY: dict[str, Solver] = {}
 
 
 def register(solver: Solver, *, replace: bool = False) -> Solver:
-    """Add a solver to the registry; returns it."""
+    """Add a solver to the registry; returns it.
+
+    The name becomes a directory and a key in outputs: lower-case letters,
+    digits, "_" and "-". ``section``, if given, must be a section declared in
+    ``cases/schema.py`` (a solver defined in a notebook has none).
+    """
+    import re
+
+    from wearcheck.cases.schema import SECTIONS
+    if not re.fullmatch(r"[a-z][a-z0-9_-]*", solver.name or ""):
+        raise ValueError(f"solver name '{solver.name}': use lower-case letters, digits, '_' "
+                         "and '-', starting with a letter (it names directories and keys)")
+    if solver.section is not None and solver.section not in SECTIONS:
+        raise ValueError(f"solver '{solver.name}': section '{solver.section}' is not declared "
+                         "in cases/schema.py (SECTIONS); a notebook solver has none")
     if solver.name in _REGISTRY and not replace:
         raise ValueError(f"a solver named '{solver.name}' is registered already")
     if solver.module is None and solver.solve_function is None:

@@ -200,7 +200,8 @@ def write_run_files(directory: Path, case: cases.Case, result: RunResult, solver
     meta.update(provenance(argv))
     if extra_meta:
         meta.update(extra_meta)
-    meta["data_dictionary"] = layout.run_dictionary(_registered(solver))
+    meta["data_dictionary"] = layout.run_dictionary(_registered(solver), list(result.history),
+                                                    list(result.fields or {}))
     write_json(directory / "meta.json", meta)
 
 

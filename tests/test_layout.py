@@ -19,7 +19,7 @@ def runs(tmp_path_factory):
     for solver, changes in (("mdr", {"mdr.elements": 200}), ("fem", {"fem.contact_nodes": 40})):
         case = wearcheck.load_case("paper", {**changes, "stages.s_hat": [0.0, 1.0],
                                              "sliding.until": "distance",
-                                             "sliding.distance": 0.02})
+                                             "sliding.distance": 0.04})
         out[solver] = wearcheck.solve(case, solver).write(tmp_path_factory.mktemp(solver) / "r")
     return out
 

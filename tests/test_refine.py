@@ -157,9 +157,9 @@ def fake_study(cluster, tmp_path_factory):
     from wearcheck.comparisons.studies.refine import refine
     out = tmp_path_factory.mktemp("study")
     case = cases.shipped("paper")
-    # level 1 is rejected by the case (mdr.elements >= 2); 24 fails in the solver
+    # 24 fails in the solver (a level the case rejects is refused up front, below)
     summary = refine(case, ["stages.s_hat=[0.0, 0.5, 1.0]"], "mdr", out,
-                     levels=[1, 8, 16, 24, 32, 64, 128], scheduler=cluster, quiet=True,
+                     levels=[8, 16, 24, 32, 64, 128], scheduler=cluster, quiet=True,
                      solve=fake_solve)
     return out, summary
 
@@ -169,8 +169,7 @@ def test_study_reports_failed_levels_and_writes_the_others(fake_study):
     with open(out / "refinement-mdr.csv", newline="") as fh:
         rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
     status = {r["level"]: r["status"] for r in rows}
-    assert len(rows) == 7
-    assert "mdr.elements" in status["mdr-elements-1"]
+    assert len(rows) == 6
     assert "injected failure at 24" in status["mdr-elements-24"]
     for n in (8, 16, 32, 64, 128):
         assert status[f"mdr-elements-{n}"] == "ok"
@@ -230,14 +229,16 @@ def test_second_solver_joins_the_same_directory(fake_study, cluster):
 def test_mdr_study_through_the_command_line(cluster, tmp_path):
     from wearcheck.comparisons.cli import main
     out = tmp_path / "mdr"
-    # a short run (until F < 0.3 F0, stages ŝ = 0, 1, 2); level 1 is rejected by the case
-    code = main(["refine", str(cases.shipped("paper")), "--solver", "mdr", "--out", str(out),
-                 "--levels", "1,25,50,100,200", "--set", "sliding.force_fraction=0.3",
-                 "--set", "stages.s_hat=[0.0, 1.0, 2.0]", "--scheduler", cluster, "--quiet"])
-    assert code == 1  # one level failed; the study is written all the same
+    # a level the case rejects (mdr.elements >= 2) refuses the study before it starts
+    args = ["refine", str(cases.shipped("paper")), "--solver", "mdr", "--out", str(out),
+            "--set", "sliding.force_fraction=0.3", "--set", "stages.s_hat=[0.0, 1.0, 2.0]",
+            "--scheduler", cluster, "--quiet"]
+    assert main(args + ["--levels", "1,25,50"]) == 2 and not out.exists()
+    # a short run (until F < 0.3 F0, stages ŝ = 0, 1, 2)
+    code = main(args + ["--levels", "25,50,100,200"])
+    assert code == 0
     summary = json.loads((out / "refinement-mdr.json").read_text())
     rows = {r["resolution"]: r for r in summary["levels"]}
-    assert "mdr.elements" in rows[1]["status"]
     ok = [25, 50, 100, 200]
     assert all(rows[n]["status"] == "ok" for n in ok)
     # the unworn contact (ŝ = 0) against the exact sphere solution (F0 by

@@ -20,7 +20,7 @@ Public names: :func:`load_case`, :func:`shipped_cases`, :func:`solvers`,
 """
 
 from wearcheck.cases import Case, CaseError, RunResult, SolverError, WearcheckError
-from wearcheck.comparisons import registry
+from wearcheck import registry
 from wearcheck.api import (Result, compare, export_vtk, load_case, read_run, refine,
                            shipped_cases, solve, solvers, sweep)
 

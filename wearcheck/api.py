@@ -12,7 +12,8 @@ The command line is built on the same functions, so the two cannot drift apart.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable, Mapping
 
@@ -70,7 +71,7 @@ def solvers(case: Case | None = None) -> tuple[str, ...]:
     return registry.supporting(case) if case is not None else registry.names()
 
 
-@dataclass
+@dataclass(repr=False)
 class Result:
     """One solver's run of one case, fresh from :func:`solve` or read by :func:`read_run`.
 
@@ -87,6 +88,7 @@ class Result:
     solve_seconds : time in the solver proper.
     path : the run directory, once written or when read from one.
     meta : its meta.json (provenance, scales, data dictionary), when read from one.
+    warnings : remarks on the case and the run (e.g. stages the run did not reach).
     """
 
     case: Case
@@ -98,7 +100,17 @@ class Result:
     solve_seconds: float
     path: Path | None = None
     meta: dict | None = None
-    _run: RunResult | None = None
+    warnings: list = field(default_factory=list)
+    _run: RunResult | None = field(default=None, repr=False)
+
+    def __repr__(self) -> str:
+        h = self.history
+        steps = len(h["s"]) - 1
+        end = h["force"][-1] / self.scales["F0"] if steps >= 0 else float("nan")
+        where = f", path='{self.path}'" if self.path else ""
+        return (f"Result(solver='{self.solver}', case='{Path(self.case.source).name}', "
+                f"steps={steps}, stages={len(self.stages['s'])}, F/F0 at the end={end:.4g}, "
+                f"solve_seconds={self.solve_seconds:.3g}{where})")
 
     @property
     def scales(self) -> dict:
@@ -129,9 +141,10 @@ class Result:
 
 
 def _progress(progress, label):
-    """A progress callable from None, True/False or a callable."""
+    """A solver's progress callable (fraction, text) from None, True/False or a
+    user's callable of the fraction alone."""
     if callable(progress):
-        return progress, None
+        return (lambda fraction, text="": progress(fraction)), None
     if progress:
         from wearcheck.comparisons.present.progress import ProgressBar
         bar = ProgressBar(label)
@@ -147,8 +160,8 @@ def solve(case: str | Path | Case, solver: str = "mdr", *,
     ----------
     case : a :class:`Case`, a case file or a shipped case's name.
     solver : a registered solver's name (see :func:`solvers`).
-    progress : True for a progress bar (a widget in Jupyter), or a callable
-        receiving the fraction done in [0, 1].
+    progress : True for a progress bar with an ETA (a widget in Jupyter), or a
+        callable ``progress(fraction)`` receiving the fraction done in [0, 1].
 
     Raises
     ------
@@ -158,28 +171,47 @@ def solve(case: str | Path | Case, solver: str = "mdr", *,
         the run failed numerically (never returned as a result).
     """
     case = load_case(case)
+    registry.get(solver)  # an unknown name fails before any work
     call, bar = _progress(progress, solver)
     try:
         run = registry.solve(case, solver, progress=call)
     finally:
         if bar is not None:
             bar.close()
+    notes = list(case.warnings)
+    missing = list(case.stages.s_hat)[len(run.stage_s):]
+    if missing:
+        text = ("the run ended before the stages at ŝ = " + ", ".join(f"{s:g}" for s in missing)
+                + f" ({_end_reason(case)}); they are not in result.stages")
+        notes.append(text)
+        warnings.warn(text, stacklevel=2)
     stages = dict(s=np.asarray(run.stage_s, float),
                   s_hat=np.asarray(run.stage_s, float) * reference.scales(case)["s_hat_per_m"],
                   r=np.asarray(run.r, float), f=np.asarray(run.f, float),
                   p=np.asarray(run.p, float))
     return Result(case=case, solver=solver, history=dict(run.history), stages=stages,
                   fields=run.fields, info=dict(run.info), solve_seconds=run.solve_seconds,
-                  _run=run)
+                  warnings=notes, _run=run)
+
+
+def _end_reason(case) -> str:
+    sl = case.sliding
+    if sl.until == "force_fraction":
+        return f"it stops once F < {sl.force_fraction:g} F0"
+    if sl.until == "distance":
+        return f"it stops at s = {sl.distance:g} m"
+    return f"it stops at its {sl.until}"
 
 
 def read_run(path: str | Path) -> Result:
     """A run directory written by ``wearcheck run``, ``compare``, ``refine`` or ``sweep``."""
+    if not Path(path).exists():
+        raise CaseError(f"run directory '{path}' does not exist")
     run = rundir.Run(path)
     return Result(case=run.case, solver=run.solver, history=run.history, stages=run.stages,
                   fields=run.fields, info=run.meta.get("info", {}),
                   solve_seconds=run.meta.get("solve_seconds", float("nan")), path=run.path,
-                  meta=run.meta)
+                  meta=run.meta, warnings=list(run.meta.get("warnings", [])))
 
 
 # -- studies -----------------------------------------------------------------
@@ -193,7 +225,14 @@ def compare(case: str | Path | Case, out: str | Path, *, solvers: Iterable[str] 
     Returns the metrics as in ``metrics.json``; ``["passed"]`` is the verdict.
     """
     from wearcheck.comparisons.studies.compare import compare as _compare
-    return _compare(load_case(case), out, solvers=list(solvers) if solvers else None,
+    if isinstance(solvers, str):
+        solvers = [solvers]
+    elif solvers is not None:
+        solvers = list(solvers)
+        if not solvers:
+            raise CaseError("solvers = []: name at least two solvers, or None for every "
+                            "solver that supports the case")
+    return _compare(load_case(case), out, solvers=solvers,
                     reference_solver=reference_solver, edge=edge_study, sphere=sphere_sweep,
                     render=render, quiet=quiet)
 
@@ -206,8 +245,9 @@ def refine(case: str | Path | Case, out: str | Path, solver: str = "mdr", *,
     Richardson's estimate, coarsest converged level); run directories go to ``out``."""
     from wearcheck.comparisons.studies.refine import refine as _refine
     case = load_case(case)
-    return _refine(case, (), solver, out, levels=list(levels) if levels else None,
-                   steps=list(steps) if steps else None, tolerance=tolerance,
+    levels = None if levels is None else [_plain(v) for v in np.ravel(levels)]
+    steps = None if steps is None else [_plain(v) for v in np.ravel(steps)]
+    return _refine(case, (), solver, out, levels=levels, steps=steps, tolerance=tolerance,
                    scheduler=scheduler, workers=workers, quiet=quiet, case=case)
 
 
@@ -220,15 +260,41 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
     """
     from wearcheck.comparisons.studies.sweep import sweep as _sweep
     case = load_case(case)
-    texts = [f"{key}=" + ",".join(_toml_value(v) for v in values)
-             for key, values in vary.items()]
-    return _sweep(case, (), texts, solver, out, scheduler=scheduler, workers=workers,
+    registry.get(solver)
+    values = {}
+    for key, vals in vary.items():
+        if isinstance(vals, (str, bytes)) or np.ndim(vals) == 0:
+            vals = [vals]  # one value, not a sequence of characters
+        values[key] = [_plain(v) for v in vals]
+        if not values[key]:
+            raise CaseError(f"vary '{key}': no values")
+        for v in values[key]:  # every value is checked before any run starts
+            case.derive({key: v})
+    texts = [f"{key}=" + ",".join(_toml_value(v) for v in vals) for key, vals in values.items()]
+    rows = _sweep(case, (), texts, solver, out, scheduler=scheduler, workers=workers,
                   quiet=quiet, case=case)
+    for row in rows:  # the values as given, not as text
+        for key, vals in values.items():
+            text = row.get(key)
+            match = [v for v in vals if _toml_value(v) == text]
+            if match:
+                row[key] = match[0]
+    return rows
+
+
+def _plain(v):
+    """numpy scalars and arrays as Python numbers and lists."""
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    return v
 
 
 def _toml_value(v) -> str:
+    import json
     if isinstance(v, str):
-        return v
+        return json.dumps(v)  # a TOML basic string
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, (list, tuple)):

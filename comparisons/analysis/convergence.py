@@ -65,7 +65,13 @@ def levels(solver: str, resolutions=None, steps=None) -> list[Level]:
     elif len(st) != len(res):
         raise CaseError(f"--levels has {len(res)} values and --steps {len(st)}: give one step, "
                         "one level, or as many steps as levels (they pair up)")
+    bad = [n for n in res if isinstance(n, bool) or not float(n).is_integer()]
+    if bad:
+        raise CaseError(f"levels: {bad[0]!r} is not a whole number of {entry.resolution_key}")
     out = [Level(solver, int(n), None if s is None else float(s)) for n, s in zip(res, st)]
+    if len(out) < 2:
+        raise CaseError(f"levels: a refinement study needs at least two levels, got "
+                        f"{[lv.resolution for lv in out]} (three for an observed order)")
     if len({lv.name for lv in out}) != len(out):
         raise CaseError("the levels repeat: " + ", ".join(lv.name for lv in out))
     varied = refined_parameter(out)

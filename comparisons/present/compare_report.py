@@ -186,6 +186,11 @@ def _failure_text(m) -> str:
                                   f"{c['tolerance']:g}")
         if not tr["solvers"]:
             failed.append("no solver has an ŝ = 0 stage to compare with the reference")
+    for solver, pair in m["pairs"].items():
+        c = pair.get("checks", {}).get("stages_reached")
+        if c and not c["passed"]:
+            failed.append(f"{title(solver)} reached {c['value']} stage(s), "
+                          f"{title(m['reference'])} {c['tolerance']}")
     if m["stages_compared"] == 0:
         failed.append("no stage reached by every solver")
     return "failed: " + "; ".join(failed)

@@ -57,11 +57,11 @@ def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tupl
                                if chosen else DEFAULT_REFERENCE)
     registry.get(ref)
     if ref not in chosen:
-        raise cases.CaseError(f"--reference {ref}: not among the compared solvers "
+        raise cases.CaseError(f"reference solver '{ref}': not among the compared solvers "
                               f"({', '.join(chosen) or 'none'})")
     if len(chosen) < 2:
-        why = "; ".join(f"{n}: {registry.get(n).supports(case)}" for n in registry.names()
-                        if n not in chosen)
+        why = "; ".join(f"{n}: {registry.get(n).supports(case) or 'not selected'}"
+                        for n in registry.names() if n not in chosen)
         raise cases.CaseError("a comparison needs two solvers that support the case; only "
                               f"{', '.join(chosen) or 'none'} can ({why})")
     return ref, (ref,) + tuple(n for n in chosen if n != ref)
@@ -178,6 +178,14 @@ def analyse(case, results, reference_solver=None) -> dict:
             edge_band=cmp.edge_band, **exclude)
     m = dict(reference=ref, solvers=list(results), pairs=pairs)
     m["stages_compared"] = min((p["stages_compared"] for p in pairs.values()), default=0)
+    # a stage one solver reached and another did not is a disagreement, not a
+    # stage to skip: a solver that stops early must not pass on its first stages
+    reached = {k: len(v.stage_s) for k, v in results.items()}
+    for name, pair in pairs.items():
+        same = reached[name] == reached[ref]
+        pair["checks"] = dict(stages_reached=dict(value=reached[name], tolerance=reached[ref],
+                                                  passed=same))
+        pair["passed"] = bool(pair["passed"] and same)
     m["passed"] = bool(pairs) and all(p["passed"] for p in pairs.values())
     m["scales"] = sc
     m["profile_scale_depth"] = depth

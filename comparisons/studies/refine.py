@@ -35,6 +35,8 @@ def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolera
         raise cases.CaseError(f"--stage {stage}: not a stage of the case; stages.s_hat = "
                               f"{list(case.stages.s_hat)}")
     lvls = rf.levels(solver, levels, steps)
+    for lv in lvls:  # a level the case cannot take is refused before any run starts
+        case.derive(list(lv.overrides))
     varied = rf.refined_parameter(lvls)
     tasks = [Task(lv.name, solver, lv.overrides) for lv in lvls]
     out = Path(out)

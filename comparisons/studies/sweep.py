@@ -67,6 +67,8 @@ def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=No
           quiet=False, solve=None, case=None) -> list[dict]:
     """Run every combination of the varied values into ``out``; return sweep.csv's rows."""
     case = case or cases.load(case_path, overrides)
+    from wearcheck.comparisons import registry
+    registry.get(solver)  # an unknown solver is refused before the cluster starts
     varied = [parse_vary(v) for v in vary]
     names = [n for n, _ in varied]
     if len(set(names)) != len(names):
