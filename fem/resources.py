@@ -20,21 +20,28 @@ def section_points(case, contact_nodes: int | None = None) -> float:
     return 30.0 * n + 5000.0
 
 
+#: dense (contact nodes)² matrices a run keeps at once, by time scheme (the
+#: compliance and its copies; adaptive stepping keeps factors for several steps)
+DENSE_MATRICES = {"adaptive": 40.0, "implicit": 8.0, "bdf2": 8.0, "explicit": 8.0}
+
+
 def memory_bytes(case, contact_nodes: int | None = None) -> float:
     """Peak memory [bytes] of an FEM run of ``case``.
 
-    Measured (P2, paper.toml, no sliding; peak RSS less the interpreter's):
-    250 contact nodes 51 MB, 1000: 239 MB, 2000: 589 MB, i.e. about 7 kB per
-    degree of freedom (sparse factor) plus 58 bytes per (contact node)²
-    (the dense compliance and its copies). The model: 30 MB fixed, 8 kB per
-    DOF, 64 bytes per contact node², and the stored fields (displacement and
-    stress, 48 bytes per node and stage).
+    Measured (P2, paper.toml; peak RSS less the interpreter's): without
+    sliding, 250 contact nodes 51 MB, 1000: 239 MB, 2000: 589 MB, i.e. about
+    7 kB per degree of freedom (sparse factor) plus 58 bytes per (contact
+    node)²; sliding with the adaptive scheme 250: 58 MB, 1000: 406 MB, 2000:
+    1442 MB (about 315 bytes per node²), implicit 1000: 234 MB. The model: 30 MB
+    fixed, 8 kB per DOF, DENSE_MATRICES[scheme] doubles per contact node², and
+    the stored fields (displacement and stress, 48 bytes per node and stage).
     """
     n = float(case.fem.contact_nodes if contact_nodes is None else contact_nodes)
     points = section_points(case, n)
     dofs = 2.0 * points
     stages = 48.0 * points * len(case.stages.s_hat)
-    return 30e6 + 8e3 * dofs + 64.0 * n * n + stages
+    per = DENSE_MATRICES.get(case.sliding.scheme, max(DENSE_MATRICES.values()))
+    return 30e6 + 8e3 * dofs + per * 8.0 * n * n + stages
 
 
 def profile_points(case) -> int:

@@ -209,16 +209,18 @@ def test_runs_beyond_the_memory_are_refused_before_solving(tmp_path, capsys, no_
     assert list(tmp_path.iterdir()) == []
 
 
-def test_the_mdr_memory_estimate_bounds_the_measured_peak():
+@pytest.mark.parametrize("scheme", ["adaptive", "implicit"])
+def test_the_mdr_memory_estimate_bounds_the_measured_peak(scheme):
     """The peak of a dense-LU MDR run (N = 1500, paper case; numpy's allocations
-    as tracemalloc sees them: 38 MB when written) against mdr.resources: the
-    estimate must not be below it (else a run that does not fit passes), nor
-    far above (within 4x plus the 40 MB fixed allowance, else useful runs are
-    refused)."""
+    as tracemalloc sees them: adaptive 193 MB, implicit 65 MB when written)
+    against mdr.resources: the estimate must not be below it (else a run that
+    does not fit passes), nor far above (within 4x plus the 40 MB fixed
+    allowance, else useful runs are refused)."""
     import tracemalloc
     from wearcheck import mdr
     from wearcheck.mdr.resources import memory_bytes
-    case = cases.load(cases.shipped("paper"), ["mdr.elements=1500"])
+    case = cases.load(cases.shipped("paper"), ["mdr.elements=1500",
+                                                f"sliding.scheme={scheme}"])
     tracemalloc.start()
     try:
         mdr.solve(case)
@@ -227,6 +229,30 @@ def test_the_mdr_memory_estimate_bounds_the_measured_peak():
         tracemalloc.stop()
     est = memory_bytes(case)
     assert used <= est <= 4 * used + 40e6, (used, est)
+    # the estimate's dense limit is the solver's
+    from wearcheck.mdr import resources, wear
+    assert resources._DENSE_MAX == wear.DENSE_MAX
+
+
+def test_the_fem_memory_estimate_bounds_the_measured_peak():
+    """Peak RSS growth of an FEM run (250 contact nodes, paper case, adaptive
+    steps; sparse factor included, so measured as RSS in a fresh process: 58 MB
+    when written) against fem.resources, with the same bounds as the MDR's."""
+    from wearcheck.fem.resources import memory_bytes
+    if not Path("/proc/self/status").exists():
+        pytest.skip("needs Linux's /proc/self/status (VmHWM)")
+    # VmHWM, not ru_maxrss: Linux carries ru_maxrss over from the parent (pytest)
+    # through fork and exec, VmHWM belongs to the new process's memory alone
+    code = ("from pathlib import Path; from wearcheck import cases; "
+            "from wearcheck.comparisons import registry; import wearcheck.fem; "
+            "hwm = lambda: int([l for l in Path('/proc/self/status').read_text().splitlines() "
+            "if l.startswith('VmHWM:')][0].split()[1]); "
+            "c = cases.load(cases.shipped('paper'), ['fem.contact_nodes=250']); "
+            "b = hwm(); registry.solve(c, 'fem'); print((hwm() - b) * 1024)")
+    used = float(subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                                check=True, timeout=300).stdout.split()[-1])
+    est = memory_bytes(cases.load(cases.shipped("paper"), ["fem.contact_nodes=250"]))
+    assert 0 < used <= est <= 4 * used + 40e6, (used, est)
 
 
 # -- 4. file-system failures -------------------------------------------------
