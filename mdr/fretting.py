@@ -223,7 +223,7 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
     loops = dict(cycles=[], u=[], Q=[])
     stage_set = sorted(set(int(c) for c in stage_cycles if c <= cycles))
     totals = dict(cycles=0, s=0.0, energy=0.0, energy_1d=0.0)
-    counters = dict(simulated_cycles=0, increments=0, jumps=0, rejected_jumps=0,
+    counters = dict(simulated_cycles=0, total_increments=0, jumps=0, rejected_jumps=0,
                     largest_jump=1)
 
     def record(acc, ramp=False):
@@ -261,7 +261,7 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
         totals["energy_1d"] += times * acc["energy_1d"]
 
     acc = run_path(model, st, ramp_path(model))
-    counters["increments"] += model.increments // 4
+    counters["total_increments"] += model.increments // 4
     add(acc)
     record(acc, ramp=True)
     path = cycle_path(model)
@@ -273,7 +273,7 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
         want_loop = bool(stage_set) and stage_set[0] == totals["cycles"] + 1
         acc = run_path(model, st, path, loop=want_loop)
         counters["simulated_cycles"] += 1
-        counters["increments"] += model.increments
+        counters["total_increments"] += model.increments
         if counters["simulated_cycles"] > MAX_SIMULATED_CYCLES:
             raise SolverError(f"the fretting run simulated more than {MAX_SIMULATED_CYCLES} "
                               "cycles; raise fretting.jump_tolerance or lower fretting.cycles")
@@ -339,3 +339,75 @@ def _extrapolate(model, st, totals, W, sums, jump):
         raise SolverError("cycle jumping produced non-finite values; lower "
                           "fretting.jump_tolerance")
     solve_normal(model, st)
+
+
+# -- the case -------------------------------------------------------------------
+
+def default_stage_cycles(cycles: int) -> list[int]:
+    """0, 1, 10, 100, ... below ``cycles``, and ``cycles``."""
+    out, c = [0], 1
+    while c < cycles:
+        out.append(c)
+        c *= 10
+    return out + [cycles]
+
+
+def build_model(case) -> tuple[Model, dict]:
+    """Grid (as the gross-slip solver's), unworn profile, materials and programme."""
+    sc = reference.scales(case)
+    N = case.mdr.elements
+    L = case.mdr.domain_factor * math.sqrt(2.0) * sc["a0"]
+    x = transforms.grid(N, L)
+    fr = case.fretting
+    model = Model(x=x, f0=profiles.height(case.indenter, x, case.table), E_star=case.E_star,
+                  G_star=case.G_star, mu=case.wear.mu,
+                  k_over_hardness=case.wear.k / case.wear.hardness,
+                  depth=case.loading.depth, force=case.loading.force,
+                  amplitude=fr.amplitude, force_amplitude=fr.force_amplitude,
+                  increments=fr.increments)
+    return model, sc
+
+
+def solve(case, progress=None) -> RunResult:
+    """Run the fretting case (``case.fretting`` set); see the module docstring.
+
+    ``RunResult.history`` has one row per simulated cycle (cycle 0: the first
+    quarter cycle from 0 to +U); ``stage_extra["tau"]`` the shear traction at
+    the stages (at +U, the end of the stage's cycle); ``fields`` the loops
+    Q(u_x) of the simulated cycles at the stage cycles (``loop_cycles`` (L,),
+    ``loop_displacement`` and ``loop_tangential_force`` (L, increments + 1)).
+    """
+    with linalg.single_threaded_blas():
+        return _solve(case, progress)
+
+
+def _solve(case, progress=None) -> RunResult:
+    t0 = time.perf_counter()
+    model, sc = build_model(case)
+    fr = case.fretting
+    stage_cycles = (default_stage_cycles(fr.cycles) if fr.stage_cycles is None
+                    else [int(c) for c in fr.stage_cycles])
+    out = run(model, fr.cycles, fr.jump_tolerance, stage_cycles, progress)
+    hist = out["history"]
+    hist["s_hat"] = hist["s"] * sc["s_hat_per_m"]
+    a0, F0 = sc["a0"], sc["F0"]
+    u_star = 3.0 * case.wear.mu * F0 / (4.0 * case.G_star * a0)
+    stg = out["stages"]
+    K, M = len(stg["cycles"]), len(model.x)
+    info = dict(solver="mdr", mode="fretting", N=case.mdr.elements, domain=float(model.x[-1]),
+                grid="uniform in r^2", increments=fr.increments,
+                jump_tolerance=fr.jump_tolerance, stage_cycles=stg["cycles"].tolist(),
+                gross_slip_displacement_unworn=u_star, **out["counters"])
+    loops = out["loops"]
+    fields = None
+    if loops["cycles"]:
+        fields = dict(loop_cycles=np.asarray(loops["cycles"], dtype=float),
+                      loop_displacement=np.asarray(loops["u"]),
+                      loop_tangential_force=np.asarray(loops["Q"]))
+    if progress is not None:
+        progress(1.0, "done")
+    return RunResult(history=hist, stage_s=np.asarray(stg["s"], dtype=float),
+                     r=model.x.copy(), f=np.asarray(stg["f"]).reshape(K, M),
+                     p=np.asarray(stg["p"]).reshape(K, M),
+                     solve_seconds=time.perf_counter() - t0, info=info, fields=fields,
+                     stage_extra=dict(tau=np.asarray(stg["tau"]).reshape(K, M)))
