@@ -45,6 +45,8 @@ MAX_SIMULATED_CYCLES = 200_000
 JUMP_SAFETY = 0.8
 #: largest growth of the jump length from one jump to the next
 JUMP_GROWTH = 2.0
+#: wear per cycle (relative to the depth) below which its changes do not limit a jump
+WEAR_FLOOR = 1e-12
 #: wear (relative to the depth) after which the normal contact is solved again
 #: within a cycle; below it the pressure lags by that fraction of p0
 NORMAL_RESOLVE = 1e-7
@@ -292,7 +294,8 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
         W = acc["wear"]
         ratio = 0.0
         if W_prev is not None and tol > 0:
-            scale = np.max(np.abs(W_prev))
+            # a floor for the limiting state, where the wear per cycle vanishes
+            scale = max(np.max(np.abs(W_prev)), WEAR_FLOOR * st.normal["depth"])
             change = np.max(np.abs(W - W_prev))
             ratio = change / (2.0 * tol * scale) if scale > 0 else (0.0 if change == 0
                                                                      else math.inf)
