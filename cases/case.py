@@ -310,9 +310,6 @@ def _check_fretting(case: Case) -> None:
                             "numbers")
         if any(b <= a for a, b in zip(st, st[1:])):
             raise CaseError(f"key 'fretting.stage_cycles' = {list(st)}: must increase strictly")
-        if st[-1] > fr.cycles:
-            raise CaseError(f"key 'fretting.stage_cycles' = {list(st)}: beyond fretting.cycles "
-                            f"= {fr.cycles}")
     if fr.force_amplitude is not None:
         from . import reference
         F = reference.scales(case)["F0"]

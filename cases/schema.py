@@ -209,8 +209,10 @@ class Fretting:
     stage_cycles: tuple[float, ...] | None = key(None, unit="1", minimum=0.0,
                                                  doc="cycle numbers (increasing integers) at "
                                                      "which profile, pressure and shear "
-                                                     "traction are kept; default 0, 1, 10, "
-                                                     "100, ... and the last cycle")
+                                                     "traction are kept (0: after the first "
+                                                     "quarter cycle); stages after the last "
+                                                     "cycle are not reached; default 0, 1, "
+                                                     "10, 100, ... and the last cycle")
 
 
 SECTIONS: dict[str, type] = {
