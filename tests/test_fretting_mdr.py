@@ -8,7 +8,6 @@ import pytest
 from wearcheck import cases, mdr
 from wearcheck.cases import reference as ref
 from wearcheck.cases import reference_fretting as rf
-from wearcheck.mdr import fretting, transforms
 
 R, FORCE, MU, K, H = 0.01, 30.0, 0.3, 1e-4, 2e9
 
