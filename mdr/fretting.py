@@ -35,7 +35,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from wearcheck.cases import RunResult, SolverError, profiles, reference
+from wearcheck.cases import CaseError, RunResult, SolverError, profiles, reference
 
 from . import contact, linalg, tangential, transforms
 
@@ -400,6 +400,10 @@ def _solve(case, progress=None) -> RunResult:
     t0 = time.perf_counter()
     model, sc = build_model(case)
     fr = case.fretting
+    if fr.jump_tolerance == 0 and fr.cycles > MAX_SIMULATED_CYCLES:
+        raise CaseError(f"key 'fretting.cycles' = {fr.cycles}: without cycle jumping "
+                        f"(fretting.jump_tolerance = 0) at most {MAX_SIMULATED_CYCLES} cycles "
+                        "are simulated; set a jump tolerance")
     stage_cycles = (default_stage_cycles(fr.cycles) if fr.stage_cycles is None
                     else [int(c) for c in fr.stage_cycles])
     out = run(model, fr.cycles, fr.jump_tolerance, stage_cycles, progress)

@@ -77,6 +77,12 @@ def test_force_amplitude_beyond_friction_is_a_solver_error_under_wear():
         mdr.solve(case)
 
 
+def test_too_many_cycles_without_jumps_refused_before_starting():
+    case = cases.from_dict(raw(cycles=10**6, amplitude=1e-7, jump_tolerance=0.0))
+    with pytest.raises(cases.CaseError, match="fretting.cycles"):
+        mdr.solve(case)
+
+
 def test_supports_and_fem_refuses_fretting():
     case = cases.from_dict(raw(cycles=2, amplitude=1e-7))
     assert mdr.supports(case) is None
