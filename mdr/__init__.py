@@ -24,5 +24,6 @@ __all__ = ["solve", "supports"]
 
 
 def supports(case) -> str | None:
-    """None: the MDR runs every valid case (gross slip and fretting)."""
+    """None: the MDR runs every axisymmetric case the schema accepts (fretting too)."""
     return None
+
