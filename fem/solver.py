@@ -51,6 +51,9 @@ MAX_POISSON_RATIO = 0.495
 
 def supports(case) -> str | None:
     """None when this FEM model can represent ``case``, else the reason it cannot."""
+    if getattr(case, "fretting", None) is not None:
+        return ("fretting (partial slip) needs a one-directional tangential load, which the "
+                "axisymmetric FEM cannot carry; use the MDR solver")
     ind, cf = case.indenter, case.counterface
     if ind.radius is None:
         return (f"the FEM needs 'indenter.radius' (the radius of the FEM sphere) for "

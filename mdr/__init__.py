@@ -15,6 +15,10 @@ single-threaded during a solve.
 Modules: :mod:`mdr.transforms` (the MDR transforms, pure functions),
 :mod:`mdr.contact` (normal contact), :mod:`mdr.wear` (the wear steps),
 :mod:`mdr.linalg` (nested-block LU, GMRES), :mod:`mdr.solver` (the run).
+
+A case with a [fretting] section is a partial-slip run: :mod:`mdr.fretting`
+(tangential springs with Coulomb memory in :mod:`mdr.tangential`, cycle
+jumping).
 """
 
 from .solver import solve
@@ -23,6 +27,6 @@ __all__ = ["solve", "supports"]
 
 
 def supports(case) -> str | None:
-    """None: the MDR runs every axisymmetric case the schema accepts."""
+    """None: the MDR runs every axisymmetric case the schema accepts (fretting too)."""
     return None
 
