@@ -25,6 +25,8 @@ def memory_bytes(case, elements: int | None = None) -> float:
     """
     n = float(case.mdr.elements if elements is None else elements) + 1.0
     per = DENSE_MATRICES.get(case.sliding.scheme, max(DENSE_MATRICES.values()))
+    if getattr(case, "fretting", None) is not None:
+        per = 0.0  # partial slip: no implicit gross-slip step (fretting.toml: 1.6 MB at N = 800)
     dense = per * 8.0 * n * n if n <= _DENSE_MAX + 1 else 0.0
     stages = 16.0 * n * len(case.stages.s_hat)
     return 40e6 + dense + 2e3 * n + stages

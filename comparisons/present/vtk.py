@@ -440,7 +440,7 @@ def export_run(run_dir, revolve: int = 0) -> Path:
 
     Parameters
     ----------
-    run_dir : a complete run directory (``comparisons.runio.Run`` reads it).
+    run_dir : a complete run directory (``comparisons.rundir.Run`` reads it).
     revolve : N > 0 also writes the FEM fields revolved in N segments
         (``solid`` series); ignored for runs without fields. N is also the
         number of segments of the worn surface (default ``SURFACE_SEGMENTS``).
@@ -450,7 +450,8 @@ def export_run(run_dir, revolve: int = 0) -> Path:
     run = Run(run_dir)
     target = run.path / "vtk"
     from wearcheck.comparisons.resources import check_export
-    check_export(len(run.fields["points"]) if run.fields is not None else 0,
+    mesh = run.fields is not None and "points" in run.fields  # a section mesh (FEM)
+    check_export(len(run.fields["points"]) if mesh else 0,
                  len(run.stages["r"]), revolve or SURFACE_SEGMENTS, len(run.stages["s"]),
                  run.path)
     with atomic_directory(target, "vtk") as tmp:
