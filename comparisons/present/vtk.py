@@ -450,8 +450,8 @@ def export_run(run_dir, revolve: int = 0) -> Path:
     run = Run(run_dir)
     target = run.path / "vtk"
     from wearcheck.comparisons.resources import check_export
-    mesh = run.fields is not None and "points" in run.fields  # a section mesh (FEM)
-    check_export(len(run.fields["points"]) if mesh else 0,
+    # the FEM's section mesh is what a revolution multiplies; other fields are small
+    check_export(len(run.fields["points"]) if run.fields and "points" in run.fields else 0,
                  len(run.stages["r"]), revolve or SURFACE_SEGMENTS, len(run.stages["s"]),
                  run.path)
     with atomic_directory(target, "vtk") as tmp:
