@@ -65,3 +65,17 @@ def slope(indenter: Indenter, r, table=None) -> np.ndarray:
         d = _table_interpolant(table).derivative()
         return d(np.minimum(r, rt[-1]))
     raise ValueError(f"unknown profile {kind!r}")
+
+
+def height_xy(indenter: Indenter, x, y, table=None) -> np.ndarray:
+    """Unworn surface height f(x, y) [m] over the plane, f(0, 0) = 0.
+
+    Bodies of revolution are f(√(x² + y²)); the ellipsoid (paraboloidal
+    approximation near its tip) is x²/2R1 + y²/2R2 with R1 = indenter.radius
+    along x and R2 = indenter.radius_y along y.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if indenter.profile == "ellipsoid":
+        return x**2 / (2.0 * indenter.radius) + y**2 / (2.0 * indenter.radius_y)
+    return height(indenter, np.hypot(x, y), table)
