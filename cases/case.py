@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .errors import CaseError
-from .schema import (PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS, SECTIONS,
+from .schema import (BEMSettings, PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS, SECTIONS,
                      CompareSettings, Counterface, FEMSettings, Indenter, Loading,
                      MDRSettings, Sliding, Stages, Wear, _fmt, build_section,
                      section_fields)
@@ -30,6 +30,7 @@ class Case:
     stages: Stages
     mdr: MDRSettings
     fem: FEMSettings
+    bem: BEMSettings
     compare: CompareSettings
     source: str = ""
     #: tabulated profile (r, f) in metres when indenter.profile == "table"
@@ -171,7 +172,7 @@ def _check_scales(case: Case) -> None:
 def _check_indenter(built, base: Path):
     ind: Indenter = built["indenter"]
     allowed, needed = PROFILE_KEYS[ind.profile], PROFILE_REQUIRED[ind.profile]
-    geometry = ("radius", "flat_radius", "slope_angle", "coefficient", "exponent", "file")
+    geometry = ("radius", "radius_y", "flat_radius", "slope_angle", "coefficient", "exponent", "file")
     for name in geometry:
         given = getattr(ind, name) is not None
         if given and name not in allowed:
