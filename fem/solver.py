@@ -47,6 +47,9 @@ MAX_POISSON_RATIO = 0.495
 def check_case(case) -> None:
     """Reject, with a CaseError, what this FEM model cannot represent."""
     ind, cf = case.indenter, case.counterface
+    if ind.profile == "ellipsoid":
+        raise CaseError("indenter.profile = \"ellipsoid\": the FEM is axisymmetric and cannot "
+                        "represent an ellipsoid; use the BEM (or the MDR, approximately)")
     if ind.radius is None:
         raise CaseError(f"the FEM needs 'indenter.radius' (the radius of the FEM sphere) for "
                         f"profile \"{ind.profile}\"; it is not given")
@@ -63,6 +66,15 @@ def check_case(case) -> None:
         raise CaseError(f"key 'indenter.poisson_ratio' = {ind.poisson_ratio!r}: the FEM "
                         f"(displacement elements) accepts ν <= {MAX_POISSON_RATIO}; nearly "
                         "incompressible material locks (use the MDR solver)")
+
+
+def supports(case) -> str | None:
+    """None when the FEM can run ``case``, else one line saying why not."""
+    try:
+        check_case(case)
+    except CaseError as exc:
+        return str(exc)
+    return None
 
 
 def mesh_parameters(case) -> meshes.SphereMeshParameters:

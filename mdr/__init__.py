@@ -1,5 +1,8 @@
 """MDR solver of gross-slip Reye–Archard wear (paper Sections 2 and 4).
 
+``supports(case)`` is None for every case (the ellipsoid runs as the
+paraboloid of the equivalent radius √(R1 R2), its result marked
+``info["approximate"]`` with ``info["warning"]``).
 ``solve(case, progress=None) -> cases.RunResult`` runs a case: N springs on
 0 <= x <= L = domain_factor·√2·a0, nodes uniform in t = x² (the 3D radii r
 share them), paper Eqs. 2, 3, 12, 13 integrated exactly over each segment,
@@ -14,6 +17,6 @@ Modules: :mod:`mdr.transforms` (the MDR transforms, pure functions),
 :mod:`mdr.linalg` (nested-block LU, GMRES), :mod:`mdr.solver` (the run).
 """
 
-from .solver import solve
+from .solver import solve, supports
 
-__all__ = ["solve"]
+__all__ = ["solve", "supports"]
