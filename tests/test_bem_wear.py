@@ -162,3 +162,25 @@ def test_ellipsoid_across_solvers():
     # far more than on a round contact (Hertz: below 0.08 p0 inside at 64²)
     assert rb.info["anisotropy"]["pressure_interior"][0] > 0.2
     assert mdr.supports(case) is None and bem.supports(case) is None
+
+
+def test_force_control_wear_stays_in_its_box():
+    # force control to ŝ = 5: the box is sized on the predicted flat scar
+    # (V = K F s held below a level of the paraboloid); the run must not reach
+    # the box edge, and the worn volume is K F s exactly (constant force,
+    # implicit Euler: K Σ h F_{n+1})
+    raw = tomllib.loads(cases.shipped("hertz").read_text())
+    raw["loading"] = dict(control="force", force=20.0)
+    raw["bem"] = dict(grid=32)
+    raw["sliding"] = dict(until="distance", distance=0.0, step_hat=0.1)
+    case = cases.from_dict(raw)
+    per = reference.scales(case)["s_hat_per_m"]
+    raw["sliding"]["distance"] = 5.0 / per
+    case = cases.from_dict(raw)
+    res = bem.solve(case)
+    h = res.history
+    assert np.allclose(h["force"], 20.0, rtol=1e-12)
+    assert h["wear_volume"][-1] == pytest.approx(case.wear_rate * 20.0 * h["s"][-1], rel=1e-10)
+    # the scar grew: the contact is wider than at the start, inside the box
+    assert h["contact_radius"][-1] > 1.2 * h["contact_radius"][0]
+    assert h["contact_radius"][-1] < 0.5 * res.info["box_side"]
