@@ -156,9 +156,10 @@ def checkerboard_symbol() -> float:
     """The symbol of the pixel operator at (π, π), for Δ = E* = 1 (about 0.5797).
 
     The partial sums over growing squares converge as 1/m (alternating
-    tail); Richardson's extrapolation of m = 256 and 512 removes that term
-    (the m = 8, 16, 24 sums 0.6107, 0.5952, 0.5903 extrapolate to the same).
+    tail); Richardson's extrapolation of m = 128 and 256 removes that term
+    (the m = 8, 16, 24 sums 0.6107, 0.5952, 0.5903 extrapolate to the same;
+    m = 256 and 512 give 0.580692, 128 and 256 0.580679: converged to 2e-5).
     """
     if not _CHECKERBOARD:
-        _CHECKERBOARD.append(2.0 * _checkerboard_partial(512) - _checkerboard_partial(256))
+        _CHECKERBOARD.append(2.0 * _checkerboard_partial(256) - _checkerboard_partial(128))
     return _CHECKERBOARD[0]
