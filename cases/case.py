@@ -55,7 +55,61 @@ class Case:
         return self.wear.k * self.wear.mu / self.wear.hardness
 
     def replace(self, **sections) -> "Case":
-        return replace(self, **sections)
+        """A copy with whole sections replaced, validated like a case file.
+
+        ``case.replace(wear=dataclasses.replace(case.wear, mu=0.5))``; for single
+        keys :meth:`derive` is shorter.
+        """
+        unknown = sorted(set(sections) - set(SECTIONS))
+        if unknown:
+            raise CaseError(f"unknown section '{unknown[0]}'; allowed: " + ", ".join(SECTIONS))
+        raw = to_dict(self)
+        for name, obj in sections.items():
+            raw[name] = _section_dict(obj)
+        return from_dict(raw, source=self.source)
+
+    def derive(self, changes=None, /, **keys) -> "Case":
+        """A copy with some keys changed, validated like a case file.
+
+        Parameters
+        ----------
+        changes : mapping of dotted keys to values, ``{"wear.mu": 0.5}``, or a
+            list of ``"section.key=value"`` strings as on the command line.
+        **keys : the same with ``__`` for the dot: ``case.derive(wear__mu=0.5)``;
+            they win over ``changes``. numpy numbers and arrays are taken as
+            Python numbers and lists. A relative ``indenter.file`` given here is
+            relative to the working directory.
+
+        Raises
+        ------
+        CaseError
+            naming the key, the value and what is allowed, as for a case file.
+        """
+        items = {}
+        if isinstance(changes, dict):
+            items.update(changes)
+        elif changes is not None:
+            for text in [changes] if isinstance(changes, str) else list(changes):
+                section, key, value = parse_override(text)
+                items[f"{section}.{key}"] = value
+        items.update({k.replace("__", "."): v for k, v in keys.items()})
+        raw = to_dict(self)
+        for name, value in items.items():
+            if not isinstance(name, str) or name.count(".") != 1 or not all(name.split(".")):
+                raise CaseError(f"key '{name}': must be section.key, e.g. wear.mu")
+            if isinstance(value, np.generic):
+                value = value.item()
+            elif isinstance(value, (np.ndarray, tuple)):
+                value = np.asarray(value).tolist() if isinstance(value, np.ndarray) \
+                    else list(value)
+            if name == "indenter.file" and isinstance(value, str) \
+                    and not Path(value).is_absolute():
+                value = str(Path.cwd() / value)
+            section, key = name.split(".")
+            if section in raw and not isinstance(raw[section], dict):
+                raise CaseError(f"'{section}' must be a table [{section}]")
+            raw.setdefault(section, {})[key] = value
+        return from_dict(raw, source=self.source)
 
 
 def _compliance(rigid: bool, E, nu):
@@ -329,3 +383,18 @@ def key_reference() -> str:
                 doc += " (" + " \\| ".join(f"`{c}`" for c in meta["choices"]) + ")"
             rows.append(f"| `{section}.{name}` | {meta['unit'] or ''} | {default} | {doc} |")
     return "\n".join(rows)
+
+
+def _section_dict(obj) -> dict:
+    """One section as TOML would read it (keys left at None omitted)."""
+    out = {}
+    for f in fields(obj):
+        value = getattr(obj, f.name)
+        if value is not None:
+            out[f.name] = list(value) if isinstance(value, tuple) else value
+    return out
+
+
+def to_dict(case: Case) -> dict:
+    """The case as nested dicts, as a TOML file of it would read (``from_dict`` inverts it)."""
+    return {name: _section_dict(getattr(case, name)) for name in SECTIONS}

@@ -44,37 +44,36 @@ MAX_STEPS = 2_000_000
 MAX_POISSON_RATIO = 0.495
 
 
-def check_case(case) -> None:
-    """Reject, with a CaseError, what this FEM model cannot represent."""
+def supports(case) -> str | None:
+    """None when this FEM model can represent ``case``, else the reason it cannot."""
     ind, cf = case.indenter, case.counterface
     if ind.profile == "ellipsoid":
-        raise CaseError("indenter.profile = \"ellipsoid\": the FEM is axisymmetric and cannot "
-                        "represent an ellipsoid; use the BEM (or the MDR, approximately)")
+        return ("indenter.profile = \"ellipsoid\": the FEM is axisymmetric and cannot "
+                "represent an ellipsoid; use the BEM (or the MDR, approximately)")
     if ind.radius is None:
-        raise CaseError(f"the FEM needs 'indenter.radius' (the radius of the FEM sphere) for "
-                        f"profile \"{ind.profile}\"; it is not given")
+        return (f"the FEM needs 'indenter.radius' (the radius of the FEM sphere) for "
+                f"profile \"{ind.profile}\"; it is not given")
     if not cf.rigid:
-        raise CaseError("counterface.rigid = false: the FEM models an elastic sphere against a "
-                        "rigid plane (node-to-node contact with the plane); set "
-                        "counterface.rigid = true or use the MDR solver")
+        return ("counterface.rigid = false: the FEM models an elastic sphere against a "
+                "rigid plane (node-to-node contact with the plane); set "
+                "counterface.rigid = true or use the MDR solver")
     if ind.rigid:
-        raise CaseError("indenter.rigid = true: the FEM body is the elastic sphere; a rigid "
-                        "indenter has nothing to deform (use the MDR solver)")
+        return ("indenter.rigid = true: the FEM body is the elastic sphere; a rigid "
+                "indenter has nothing to deform (use the MDR solver)")
     if ind.poisson_ratio > MAX_POISSON_RATIO:
         # displacement elements lock volumetrically as ν → 0.5 (measured on hertz.toml:
         # F/F0 = 1.0078 at ν = 0.45, 1.0081 at 0.495, 1.037 at 0.49999; 0.5 divides by 0)
-        raise CaseError(f"key 'indenter.poisson_ratio' = {ind.poisson_ratio!r}: the FEM "
-                        f"(displacement elements) accepts ν <= {MAX_POISSON_RATIO}; nearly "
-                        "incompressible material locks (use the MDR solver)")
-
-
-def supports(case) -> str | None:
-    """None when the FEM can run ``case``, else one line saying why not."""
-    try:
-        check_case(case)
-    except CaseError as exc:
-        return str(exc)
+        return (f"key 'indenter.poisson_ratio' = {ind.poisson_ratio!r}: the FEM "
+                f"(displacement elements) accepts ν <= {MAX_POISSON_RATIO}; nearly "
+                "incompressible material locks (use the MDR solver)")
     return None
+
+
+def check_case(case) -> None:
+    """Reject, with a CaseError, what this FEM model cannot represent."""
+    reason = supports(case)
+    if reason is not None:
+        raise CaseError(reason)
 
 
 def mesh_parameters(case) -> meshes.SphereMeshParameters:

@@ -17,6 +17,13 @@ Modules: :mod:`mdr.transforms` (the MDR transforms, pure functions),
 :mod:`mdr.linalg` (nested-block LU, GMRES), :mod:`mdr.solver` (the run).
 """
 
-from .solver import solve, supports
+from .solver import solve
 
 __all__ = ["solve", "supports"]
+
+
+def supports(case) -> str | None:
+    """None: the MDR runs every axisymmetric case the schema accepts, and the
+    ellipsoid approximately (as the paraboloid of radius √(R1 R2), its result
+    marked by the reason in ``info["approximate"]``)."""
+    return None

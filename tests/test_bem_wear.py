@@ -156,7 +156,7 @@ def test_ellipsoid_across_solvers():
     with pytest.raises(CaseError, match="ellipsoid"):
         fem.solve(case)
     rm = mdr.solve(case)
-    assert rm.info["approximate"] is True and "√(R1 R2)" in rm.info["warning"]
+    assert "√(R1 R2)" in rm.info["approximate"] and rm.info["warning"] == rm.info["approximate"]
     rb = bem.solve(case)
     # the BEM sees the ellipse: its pressure departs from the ring average by
     # far more than on a round contact (Hertz: below 0.08 p0 inside at 64²)
