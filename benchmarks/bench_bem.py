@@ -165,9 +165,8 @@ def ellipsoid_table(grid):
         Ab = np.interp(s, hb["s"], hb["contact_radius"]) ** 2
         Am = np.interp(s, hm["s"], hm["contact_radius"]) ** 2
         v = f"{Vm / Vb - 1:+.3f}" if Vb > 0 else "—"
-        print(f"| {s * sc['s_hat_per_m']:.1f} | {Fb / sc['F0']:.4f} | {(Fm - Fb) / sc['F0']:+.4f} | "
-              f"{Fm / Fb - 1:+.3f} | {v} | "
-              f"{Am / Ab - 1:+.3f} |")
+        print(f"| {s * sc['s_hat_per_m']:.1f} | {Fb / sc['F0']:.4f} | "
+              f"{(Fm - Fb) / sc['F0']:+.4f} | {Fm / Fb - 1:+.3f} | {v} | {Am / Ab - 1:+.3f} |")
     print(f"run ends (F < 1 % F0): BEM ŝ = {hb['s_hat'][-1]:.2f}, MDR ŝ = {hm['s_hat'][-1]:.2f}")
 
 

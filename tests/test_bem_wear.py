@@ -1,7 +1,6 @@
 """BEM wear: complementarity, volume balance, schemes, stability limit, the
 paper case against the MDR, stage outputs, the ellipsoid across solvers."""
 
-import math
 import tomllib
 
 import numpy as np
