@@ -12,8 +12,10 @@ from typing import Any
 import numpy as np
 
 from .errors import CaseError
-from .schema import (BEMSettings, PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS, SECTIONS,
-                     CompareSettings, Counterface, FEMSettings, Indenter, Loading,
+from .schema import (BEMSettings, OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED,
+                     REQUIRED_SECTIONS,
+                     SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
+                     Loading,
                      MDRSettings, Sliding, Stages, Wear, _fmt, build_section,
                      section_fields)
 
@@ -32,6 +34,8 @@ class Case:
     fem: FEMSettings
     bem: BEMSettings
     compare: CompareSettings
+    #: partial-slip (fretting) programme; None for a gross-slip run
+    fretting: Fretting | None = None
     source: str = ""
     #: tabulated profile (r, f) in metres when indenter.profile == "table"
     table: tuple[np.ndarray, np.ndarray] | None = field(default=None, compare=False, repr=False)
@@ -53,6 +57,21 @@ class Case:
     def wear_rate(self) -> float:
         """k_wear μ / σ0 [1/Pa]: wear depth per unit pressure and sliding distance."""
         return self.wear.k * self.wear.mu / self.wear.hardness
+
+    @property
+    def end_distance(self) -> float | None:
+        """Sliding distance [m] at which the run stops; None: when the force has fallen."""
+        sl = self.sliding
+        if sl.until == "distance":
+            return sl.distance
+        if sl.until == "cycles":
+            return 2.0 * sl.stroke * sl.cycles
+        return None
+
+    @property
+    def cycles_per_metre(self) -> float | None:
+        """Cycles per metre of sliding, 1/(2·stroke); None without a stroke."""
+        return None if self.sliding.stroke is None else 0.5 / self.sliding.stroke
 
     def replace(self, **sections) -> "Case":
         """A copy with whole sections replaced, validated like a case file.
@@ -185,22 +204,48 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     unknown = sorted(set(raw) - set(SECTIONS))
     if unknown:
         raise CaseError(f"unknown section [{unknown[0]}]; allowed: " + ", ".join(SECTIONS))
+    overridden = set()
     for text in overrides:
         section, k, value = parse_override(text)
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise CaseError(f"'{section}' must be a table [{section}]")
         raw[section][k] = value
+        overridden.add((section, k))
+        # stages given one way by an override replace the file's other way
+        other = {"s_hat": "cycles", "cycles": "s_hat"}.get(k) if section == "stages" else None
+        if other and ("stages", other) not in overridden:
+            raw[section].pop(other, None)
     for section in REQUIRED_SECTIONS:
         if section not in raw:
             raise CaseError(f"missing section [{section}]")
-    built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS}
+    st = raw.get("stages", {})
+    if isinstance(st, dict) and "s_hat" in st and "cycles" in st:
+        raise CaseError(f"keys 'stages.s_hat' = {_fmt(st['s_hat'])} and 'stages.cycles' = "
+                        f"{_fmt(st['cycles'])} both given; give the stages one way only")
+    built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS
+             if name not in OPTIONAL_SECTIONS or name in raw}
+    if "fretting" in raw:
+        for section in ("sliding", "stages"):
+            # (a case derived from a gross-slip one carries their defaults: harmless)
+            if raw.get(section) and built[section] != SECTIONS[section]():
+                raise CaseError(f"section [{section}] given with [fretting]; a fretting run "
+                                "lasts fretting.cycles and keeps fretting.stage_cycles — "
+                                f"remove [{section}]")
     base = Path(source).parent if source != "<dict>" else Path.cwd()
     built, table = _check_indenter(built, base)
     _check_materials(built)
     _check_programme(built)
     case = Case(**built, source=str(source), table=table)
     _check_scales(case)
+    if case.stages.cycles is not None:
+        # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
+        from . import reference
+        per_m = reference.scales(case)["s_hat_per_m"]
+        s_hat = tuple(c * 2.0 * case.sliding.stroke * per_m for c in case.stages.cycles)
+        case = replace(case, stages=replace(case.stages, s_hat=s_hat))
+    if case.fretting is not None:
+        _check_fretting(case)
     return replace(case, warnings=_warnings(case))
 
 
@@ -316,6 +361,8 @@ def _check_programme(built):
     if getattr(ld, other) is not None:
         raise CaseError(f"key 'loading.{other}' given but loading.control = \"{ld.control}\"; "
                         f"remove it or set loading.control = \"{other}\"")
+    if built.get("fretting") is not None:
+        return  # [sliding] and [stages] do not apply (from_dict refuses them)
     if sl.until == "distance" and sl.distance is None:
         raise CaseError("missing key 'sliding.distance', required by sliding.until = \"distance\"")
     if sl.until == "force_fraction" and sl.distance is not None:
@@ -323,10 +370,61 @@ def _check_programme(built):
                         "set sliding.until = \"distance\" to stop at a distance")
     if sl.until == "force_fraction" and ld.control == "force":
         raise CaseError("sliding.until = \"force_fraction\" cannot end a force-controlled run "
-                        "(the force does not fall); use sliding.until = \"distance\"")
-    s = built["stages"].s_hat
+                        "(the force does not fall); use sliding.until = \"distance\" or "
+                        "\"cycles\"")
+    if sl.until == "cycles":
+        for name in ("stroke", "cycles"):
+            if getattr(sl, name) is None:
+                raise CaseError(f"missing key 'sliding.{name}', required by sliding.until = "
+                                "\"cycles\"")
+        if sl.distance is not None:
+            raise CaseError(f"key 'sliding.distance' = {sl.distance!r} given but sliding.until = "
+                            "\"cycles\" (the distance is 2·stroke·cycles); remove one")
+    elif sl.cycles is not None:
+        raise CaseError(f"key 'sliding.cycles' = {sl.cycles!r} given but sliding.until = "
+                        f"\"{sl.until}\"; set sliding.until = \"cycles\" to stop after cycles")
+    st = built["stages"]
+    if st.cycles is not None:
+        if sl.stroke is None:
+            raise CaseError(f"key 'stages.cycles' = {list(st.cycles)} needs 'sliding.stroke' "
+                            "(one cycle slides 2·stroke)")
+        if any(b <= a for a, b in zip(st.cycles, st.cycles[1:])):
+            raise CaseError(f"key 'stages.cycles' = {list(st.cycles)}: must increase strictly")
+    s = st.s_hat
     if any(b <= a for a, b in zip(s, s[1:])):
         raise CaseError(f"key 'stages.s_hat' = {list(s)}: must increase strictly")
+
+
+def _check_fretting(case: Case) -> None:
+    """Combinations of [fretting] keys with each other and with the rest of the case."""
+    fr = case.fretting
+    given = [k for k in ("amplitude", "force_amplitude") if getattr(fr, k) is not None]
+    if len(given) != 1:
+        raise CaseError("[fretting] needs exactly one of 'fretting.amplitude' (m) and "
+                        "'fretting.force_amplitude' (N); got "
+                        + (" and ".join(given) if given else "neither"))
+    if fr.increments % 4:
+        raise CaseError(f"key 'fretting.increments' = {fr.increments}: must be a multiple of 4 "
+                        "(a quarter cycle ramps from 0 to the amplitude)")
+    if case.wear.tangential_correction:
+        raise CaseError("key 'wear.tangential_correction' = true: a fretting run always "
+                        "includes the elastic tangential displacement (the springs' "
+                        "deformation); remove the key")
+    if fr.stage_cycles is not None:
+        st = fr.stage_cycles
+        if any(c != int(c) for c in st):
+            raise CaseError(f"key 'fretting.stage_cycles' = {list(st)}: must be whole cycle "
+                            "numbers")
+        if any(b <= a for a, b in zip(st, st[1:])):
+            raise CaseError(f"key 'fretting.stage_cycles' = {list(st)}: must increase strictly")
+    if fr.force_amplitude is not None:
+        from . import reference
+        F = reference.scales(case)["F0"]
+        if fr.force_amplitude >= case.wear.mu * F:
+            raise CaseError(f"key 'fretting.force_amplitude' = {fr.force_amplitude!r}: must be "
+                            f"below μF = {case.wear.mu * F:.4g} N (the friction limit of the "
+                            "unworn contact); a larger force has no partial-slip equilibrium — "
+                            "use fretting.amplitude for gross slip")
 
 
 def _warnings(case: Case) -> tuple[str, ...]:
@@ -338,7 +436,9 @@ def _warnings(case: Case) -> tuple[str, ...]:
             "(0 when similar). The normal and tangential problems are coupled in reality; "
             "they are treated as uncoupled here"
             + (", and the tangential correction is approximate" if case.wear.tangential_correction
-               else "") + ".")
+               else "")
+            + (", and the partial-slip (fretting) solution is approximate"
+               if case.fretting is not None else "") + ".")
     return tuple(out)
 
 
@@ -350,11 +450,17 @@ def to_toml(case: Case) -> str:
     lines = [f"# resolved case, read from {case.source}"]
     for section in SECTIONS:
         obj = getattr(case, section)
+        if obj is None:
+            continue
+        if case.fretting is not None and section in ("sliding", "stages"):
+            continue
         lines.append(f"\n[{section}]")
         for name, f in section_fields(section):
             value = getattr(obj, name)
             if value is None:
                 continue
+            if section == "stages" and name == "s_hat" and case.stages.cycles is not None:
+                continue  # derived from stages.cycles (giving both is an error)
             if isinstance(value, tuple):
                 text = "[" + ", ".join(repr(v) for v in value) + "]"
             else:
@@ -397,4 +503,9 @@ def _section_dict(obj) -> dict:
 
 def to_dict(case: Case) -> dict:
     """The case as nested dicts, as a TOML file of it would read (``from_dict`` inverts it)."""
-    return {name: _section_dict(getattr(case, name)) for name in SECTIONS}
+    out = {name: _section_dict(getattr(case, name)) for name in SECTIONS
+           if getattr(case, name) is not None}
+    if case.fretting is not None:  # a fretting run has no [sliding] or [stages]
+        out.pop("sliding", None)
+        out.pop("stages", None)
+    return out

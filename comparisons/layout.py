@@ -58,6 +58,10 @@ STAGES = (
     Item("f", "m", "worn profile f(r), measured up from the unworn tip (K, M)"),
     Item("p", "Pa", "contact pressure p(r) (K, M)"),
 )
+#: stages.npz arrays that only some runs write (``RunResult.stage_extra``)
+STAGES_OPTIONAL = (
+    Item("tau", "Pa", "shear traction τ(r) (K, M); MDR fretting runs"),
+)
 
 #: meta.json keys
 META = (
@@ -156,25 +160,32 @@ def _table(items) -> dict:
 UNDECLARED = "not declared by the solver's registry entry"
 
 
-def run_dictionary(solver=None, history_names=(), field_names=()) -> dict:
+def run_dictionary(solver=None, history_names=(), field_names=(), stage_names=()) -> dict:
     """The data dictionary of one run directory (written into its meta.json).
 
     ``solver`` is its registry entry (or None): its extra history columns and
-    fields are added; written columns and fields it does not declare are listed
-    as undeclared, never left out.
+    fields that the run wrote are added (a solver may write different extras
+    by mode, e.g. the MDR's fretting runs); written columns and fields it does
+    not declare are listed as undeclared, never left out. ``stage_names``: the
+    optional stages.npz arrays written (``STAGES_OPTIONAL``).
     """
     history = _table(HISTORY)
     fields = {}
     info = ""
     if solver is not None:
-        history.update(_table(solver.history_columns))
-        fields = _table(solver.fields)
+        history.update({k: v for k, v in _table(solver.history_columns).items()
+                        if k in history_names})
+        fields = {k: v for k, v in _table(solver.fields).items() if k in field_names}
         info = solver.description
+    stages = _table(STAGES)
+    optional = _table(STAGES_OPTIONAL)
+    for name in stage_names:
+        stages[name] = optional.get(name, dict(unit="?", meaning="not declared in layout.py"))
     for name in history_names:
         history.setdefault(name, dict(unit="?", meaning=UNDECLARED))
     for name in field_names:
         fields.setdefault(name, dict(unit="?", meaning=UNDECLARED))
-    return dict(files=_table(RUN_FILES), history_csv=history, stages_npz=_table(STAGES),
+    return dict(files=_table(RUN_FILES), history_csv=history, stages_npz=stages,
                 fields_npz=fields, meta_json=_table(META), solver=info)
 
 
@@ -196,7 +207,7 @@ def readme_sections() -> dict[str, str]:
     return {
         "run-files": markdown(RUN_FILES, "file"),
         "history": markdown(HISTORY, "column"),
-        "stages": markdown(STAGES, "array"),
+        "stages": markdown(STAGES + STAGES_OPTIONAL, "array"),
         "meta": markdown(META, "key"),
         "comparison-files": markdown(COMPARISON_FILES, "file"),
         "metrics": markdown(METRICS, "key"),

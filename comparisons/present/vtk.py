@@ -363,9 +363,16 @@ def write_vtk_files(directory, run: Run, revolve: int = 0) -> list[Path]:
     xyz, cells = polyline(r, np.zeros_like(r))
     mesh = grid(xyz, cells)
 
+    tau = st.get("tau")  # shear traction of a fretting run
+
+    def with_tau(data, k, index=slice(None)):
+        if tau is not None:
+            data["shear_traction"] = tau[k][index]
+        return data
+
     def profile(k):
         mesh.points = np.column_stack([r, f[k], np.zeros_like(r)])
-        return dict(f=f[k], wear_depth=f[k] - f0, pressure=p[k])
+        return with_tau(dict(f=f[k], wear_depth=f[k] - f0, pressure=p[k]), k)
 
     out.append(_series(directory, "profile", mesh, run, profile))
     mesh = grid(xyz, cells)
@@ -378,7 +385,8 @@ def write_vtk_files(directory, run: Run, revolve: int = 0) -> list[Path]:
 
     def surface(k):
         mesh.points = np.column_stack([xyz[:, 0], f[k][source], xyz[:, 2]])
-        return dict(f=f[k][source], wear_depth=(f[k] - f0)[source], pressure=p[k][source])
+        return with_tau(dict(f=f[k][source], wear_depth=(f[k] - f0)[source],
+                             pressure=p[k][source]), k, source)
 
     out.append(_series(directory, "surface", mesh, run, surface))
 
