@@ -215,7 +215,11 @@ register(Solver(
                                                "contact solve"),
                      Item("complementarity_residual", "", "max |min(p/p0, gap/d)| at the "
                                                           "step's converged solve"),
-                     Item("s_hat", "", "dimensionless sliding ŝ")),
+                     Item("scar_radius", "m", "outer radius of the worn region: the largest r "
+                                              "with ring-averaged wear >= 1e-3 of its largest"),
+                     Item("s_hat", "", "dimensionless sliding ŝ"),
+                     Item("cycles", "", "reciprocating cycles s/(2·sliding.stroke); NaN "
+                                        "without a stroke")),
     fields=(Item("x", "m", "pixel-centre x coordinates (N,), first array axis"),
             Item("y", "m", "pixel-centre y coordinates (N,), second array axis"),
             Item("profile", "m", "worn profile f(x, y) per stage (K, N, N)"),
