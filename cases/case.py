@@ -12,7 +12,8 @@ from typing import Any
 import numpy as np
 
 from .errors import CaseError
-from .schema import (OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS,
+from .schema import (BEMSettings, OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED,
+                     REQUIRED_SECTIONS,
                      SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
                      Loading,
                      MDRSettings, Sliding, Stages, Wear, _fmt, build_section,
@@ -31,6 +32,7 @@ class Case:
     stages: Stages
     mdr: MDRSettings
     fem: FEMSettings
+    bem: BEMSettings
     compare: CompareSettings
     #: partial-slip (fretting) programme; None for a gross-slip run
     fretting: Fretting | None = None
@@ -278,7 +280,7 @@ def _check_scales(case: Case) -> None:
 def _check_indenter(built, base: Path):
     ind: Indenter = built["indenter"]
     allowed, needed = PROFILE_KEYS[ind.profile], PROFILE_REQUIRED[ind.profile]
-    geometry = ("radius", "flat_radius", "slope_angle", "coefficient", "exponent", "file")
+    geometry = ("radius", "radius_y", "flat_radius", "slope_angle", "coefficient", "exponent", "file")
     for name in geometry:
         given = getattr(ind, name) is not None
         if given and name not in allowed:

@@ -1,7 +1,9 @@
 """The unworn indenter profile f(r) and its slope, as the case defines them.
 
-Both solvers evaluate the geometry through these two functions, so that the
-case means the same shape to each of them.
+The solvers evaluate the geometry through these functions, so that the case
+means the same shape to each of them. The axisymmetric solvers see the
+ellipsoid as the paraboloid of the equivalent radius √(R1 R2) (an
+approximation); :func:`height_xy` gives the true surface over the plane.
 """
 
 from __future__ import annotations
@@ -10,6 +12,11 @@ import numpy as np
 from scipy.interpolate import PchipInterpolator
 
 from .schema import Indenter
+
+
+def equivalent_radius(indenter: Indenter) -> float:
+    """√(R1 R2) of an ellipsoid: the paraboloid of the same Gaussian curvature."""
+    return float(np.sqrt(indenter.radius * indenter.radius_y))
 
 
 def _table_interpolant(table):
@@ -34,6 +41,9 @@ def height(indenter: Indenter, r, table=None) -> np.ndarray:
         return r * np.tan(indenter.slope_angle)
     if kind == "power_law":
         return indenter.coefficient * r**indenter.exponent
+    if kind == "ellipsoid":
+        # the axisymmetric stand-in: a paraboloid of the equivalent radius √(R1 R2)
+        return r**2 / (2.0 * equivalent_radius(indenter))
     if kind == "table":
         rt, ft = table
         out = _table_interpolant(table)(np.minimum(r, rt[-1]))
@@ -60,8 +70,24 @@ def slope(indenter: Indenter, r, table=None) -> np.ndarray:
     if kind == "power_law":
         n = indenter.exponent
         return indenter.coefficient * n * r ** (n - 1.0)
+    if kind == "ellipsoid":
+        return r / equivalent_radius(indenter)
     if kind == "table":
         rt, _ = table
         d = _table_interpolant(table).derivative()
         return d(np.minimum(r, rt[-1]))
     raise ValueError(f"unknown profile {kind!r}")
+
+
+def height_xy(indenter: Indenter, x, y, table=None) -> np.ndarray:
+    """Unworn surface height f(x, y) [m] over the plane, f(0, 0) = 0.
+
+    Bodies of revolution are f(√(x² + y²)); the ellipsoid (paraboloidal
+    approximation near its tip) is x²/2R1 + y²/2R2 with R1 = indenter.radius
+    along x and R2 = indenter.radius_y along y.
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if indenter.profile == "ellipsoid":
+        return x**2 / (2.0 * indenter.radius) + y**2 / (2.0 * indenter.radius_y)
+    return height(indenter, np.hypot(x, y), table)

@@ -83,6 +83,64 @@ def truncated_paraboloid_pressure(r, E_star, R, b, contact_radius):
     return E_star / (math.pi * R) * out
 
 
+# -- elliptical Hertz (f = x²/2R1 + y²/2R2) --------------------------------
+
+def hertz_elliptical(E_star, R1, R2, depth=None, force=None):
+    """Hertz contact of an ellipsoid f = x²/2R1 + y²/2R2 on a half-space.
+
+    The pressure p0 √(1 - (u/a)² - (v/b)²) on an ellipse with semi-axes a >= b
+    (a along the larger radius) displaces the surface inside it by
+    (p0 b/E*) [K(e) - (K - E)/e² · u²/a² - (E/(1-e²) - K)/e² · v²/a²],
+    e² = 1 - b²/a², K, E the complete elliptic integrals (Johnson 1985, §3.9
+    with 1/E* for both bodies). Matching the profile's curvatures gives
+
+        R_small/R_large = (K - E) / (E/(1-e²) - K),
+        d = p0 b K / E*,   a² = 2 R_large d (K - E)/(e² K),   F = (2/3) π a b p0.
+
+    Returns semi_axis_x, semi_axis_y (along R1 and R2), depth, force, p0 and
+    the equivalent contact radius √(a b).
+    """
+    big, small = max(R1, R2), min(R1, R2)
+    ratio = small / big
+    if ratio > 1.0 - 1e-8:
+        # (nearly) a paraboloid of revolution: e² -> 0, where the equation
+        # above cancels; the error of taking √(R1 R2) is O((1 - ratio)²)
+        big = math.sqrt(R1 * R2)
+        c = hertz(E_star, big, depth=depth, force=force)
+        a = b = c["contact_radius"]
+        p_max = 2.0 * E_star * a / (math.pi * big)
+        e2 = 0.0
+        d = c["depth"]
+    else:
+        def mismatch(e2):
+            K, E = special.ellipk(e2), special.ellipe(e2)
+            return (K - E) / (E / (1.0 - e2) - K) - ratio
+        # the ratio falls from 1 (e → 0) to 0 (e → 1)
+        # near e = 0 the ratio is 1 - (3/4)e² + ...: bracket below that
+        e2 = optimize.brentq(mismatch, 0.1 * (1.0 - ratio), 1.0 - 1e-15, xtol=1e-16,
+                             rtol=1e-15)
+        K, E = special.ellipk(e2), special.ellipe(e2)
+        if depth is None:
+            # F ∝ d^(3/2): solve at a unit depth and scale
+            unit = hertz_elliptical(E_star, R1, R2, depth=1.0)
+            depth = (force / unit["force"]) ** (2.0 / 3.0)
+        d = depth
+        a = math.sqrt(2.0 * big * d * (K - E) / (e2 * K))
+        b = a * math.sqrt(1.0 - e2)
+        p_max = d * E_star / (b * K)
+    F = 2.0 / 3.0 * math.pi * a * b * float(p_max)
+    p_max = float(p_max)
+    ax, ay = (a, b) if R1 >= R2 else (b, a)
+    return dict(semi_axis_x=ax, semi_axis_y=ay, depth=d, force=F, max_pressure=p_max,
+                eccentricity_squared=e2, contact_radius=math.sqrt(a * b))
+
+
+def hertz_elliptical_pressure(x, y, p_max, semi_axis_x, semi_axis_y):
+    """p0 √(1 - x²/a_x² - y²/a_y²) inside the ellipse, 0 outside."""
+    q = 1.0 - (np.asarray(x) / semi_axis_x) ** 2 - (np.asarray(y) / semi_axis_y) ** 2
+    return p_max * np.sqrt(np.clip(q, 0.0, None))
+
+
 # -- other profiles --------------------------------------------------------
 
 def sphere(E_star, R, depth=None, force=None):
@@ -185,6 +243,9 @@ def unworn_contact(case):
         return cone(E, ind.slope_angle, **load)
     if kind == "power_law":
         return power_law(E, ind.coefficient, ind.exponent, **load)
+    if kind == "ellipsoid":
+        # contact_radius: the equivalent radius √(a b) of the contact ellipse
+        return hertz_elliptical(E, ind.radius, ind.radius_y, **load)
     return general(E, ind, case.table, **load)
 
 
@@ -192,7 +253,8 @@ def scales(case) -> dict:
     """Natural scales of a case (physics.md §3), from its unworn contact.
 
     a0, d0, F0: contact radius, depth, force of the unworn profile (Hertz's for
-    the paraboloid); p0 = 3 F0 / (2π a0²), Hertz's maximum pressure;
+    the paraboloid; for the ellipsoid a0 = √(a b) of its contact ellipse, so
+    that p0 is its maximum pressure); p0 = 3 F0 / (2π a0²), Hertz's maximum pressure;
     ŝ = s_hat_per_m · s = k μ E* s / (σ0 a0).
     """
     c = unworn_contact(case)

@@ -34,7 +34,10 @@ def key(default=REQUIRED, *, unit="", doc="", choices=None, positive=False,
 # --------------------------------------------------------------------------
 # Sections.  Order of fields is the order of the resolved case file.
 
-PROFILES = ("paraboloid", "sphere", "truncated_paraboloid", "cone", "power_law", "table")
+PROFILES = ("paraboloid", "sphere", "truncated_paraboloid", "cone", "power_law", "table",
+            "ellipsoid")
+#: profiles that are not bodies of revolution
+NON_AXISYMMETRIC = ("ellipsoid",)
 
 # which optional geometry keys each profile takes (besides `profile`)
 PROFILE_KEYS = {
@@ -44,6 +47,7 @@ PROFILE_KEYS = {
     "cone": {"slope_angle", "radius"},
     "power_law": {"coefficient", "exponent", "radius"},
     "table": {"file", "radius"},
+    "ellipsoid": {"radius", "radius_y"},
 }
 PROFILE_REQUIRED = {
     "paraboloid": {"radius"},
@@ -52,18 +56,23 @@ PROFILE_REQUIRED = {
     "cone": {"slope_angle"},
     "power_law": {"coefficient", "exponent"},
     "table": {"file"},
+    "ellipsoid": {"radius", "radius_y"},
 }
 
 
 @dataclass(frozen=True)
 class Indenter:
-    """The worn body: a body of revolution z = f(r), f(0) = 0 unworn."""
+    """The worn body: a body of revolution z = f(r), f(0) = 0 unworn (or an ellipsoid)."""
 
     profile: str = key(doc="shape of the unworn profile f(r)", choices=PROFILES)
     radius: float | None = key(None, unit="m", positive=True,
                                doc="radius of curvature R (paraboloid f = r^2/2R, sphere, "
-                                   "truncated paraboloid); for other profiles the radius of "
-                                   "the FEM body")
+                                   "truncated paraboloid); ellipsoid: the principal radius "
+                                   "R1 along x; for other profiles the radius of the FEM body")
+    radius_y: float | None = key(None, unit="m", positive=True,
+                                 doc="ellipsoid: the principal radius R2 along y, f = x²/2R1 + "
+                                     "y²/2R2 (R1 = radius); solved as it is by the BEM, with the "
+                                     "equivalent radius √(R1 R2) (approximately) by the MDR")
     flat_radius: float | None = key(None, unit="m", positive=True,
                                     doc="radius b of the flat tip of a truncated paraboloid "
                                         "(paper Eq. 17)")
@@ -195,6 +204,22 @@ class FEMSettings:
 
 
 @dataclass(frozen=True)
+class BEMSettings:
+    grid: int = key(128, minimum=8, maximum=4096,
+                    doc="pixels per side of the square surface grid")
+    box: float = key(2.5, minimum=2.0, open_minimum=True,
+                     doc="side of the square box as a multiple of the largest expected "
+                         "contact radius: √2·a0 for a paraboloid under depth control (the "
+                         "radius where f = d, complete wear), the predicted wear-scar radius "
+                         "under force control; the long semi-axis for the ellipsoid")
+    tolerance: float = key(1e-6, positive=True, maximum=1e-2,
+                           doc="complementarity tolerance of each contact solve: "
+                               "max |min(p/p0, gap/d)| over the pixels (1e-6: on the paper "
+                               "case at 128², 3e-5 p0 and 2e-6 F0 from 1e-7, far inside the "
+                               "pixel error, at 2/3 of the iterations)")
+
+
+@dataclass(frozen=True)
 class CompareSettings:
     profile_tolerance: float = key(0.01, positive=True,
                                    doc="max profile difference allowed, relative to the depth d")
@@ -252,6 +277,7 @@ SECTIONS: dict[str, type] = {
     "stages": Stages,
     "mdr": MDRSettings,
     "fem": FEMSettings,
+    "bem": BEMSettings,
     "compare": CompareSettings,
     "fretting": Fretting,
 }

@@ -1,7 +1,9 @@
 """FEM counterpart of the MDR solver: an axisymmetric elastic sphere in
 scikit-fem, condensed onto its candidate contact nodes, against a rigid plane.
 
-``solve(case, progress=None) -> cases.RunResult``.
+``solve(case, progress=None) -> cases.RunResult``; ``supports(case)`` says
+why a case cannot run (elastic counterface, rigid indenter, ellipsoid,
+ν > 0.495, no indenter.radius) or returns None.
 
 Geometry and conventions (SI units): r–z plane, the sphere's pole at the
 origin, the sphere above it (centre at (0, R), R = indenter.radius), its flat

@@ -55,6 +55,9 @@ def supports(case) -> str | None:
         return ("fretting (partial slip) needs a one-directional tangential load, which the "
                 "axisymmetric FEM cannot carry; use the MDR solver")
     ind, cf = case.indenter, case.counterface
+    if ind.profile == "ellipsoid":
+        return ("indenter.profile = \"ellipsoid\": the FEM is axisymmetric and cannot "
+                "represent an ellipsoid; use the BEM (or the MDR, approximately)")
     if ind.radius is None:
         return (f"the FEM needs 'indenter.radius' (the radius of the FEM sphere) for "
                 f"profile \"{ind.profile}\"; it is not given")

@@ -1,5 +1,8 @@
 """MDR solver of gross-slip Reye–Archard wear (paper Sections 2 and 4).
 
+``supports(case)`` is None for every case (the ellipsoid runs as the
+paraboloid of the equivalent radius √(R1 R2), its result marked
+``info["approximate"]`` with ``info["warning"]``).
 ``solve(case, progress=None) -> cases.RunResult`` runs a case: N springs on
 0 <= x <= L = domain_factor·√2·a0, nodes uniform in t = x² (the 3D radii r
 share them), paper Eqs. 2, 3, 12, 13 integrated exactly over each segment,
@@ -27,6 +30,7 @@ __all__ = ["solve", "supports"]
 
 
 def supports(case) -> str | None:
-    """None: the MDR runs every axisymmetric case the schema accepts (fretting too)."""
+    """None: the MDR runs every axisymmetric case the schema accepts (fretting too),
+    and the ellipsoid approximately (as the paraboloid of radius √(R1 R2), its
+    result marked by the reason in ``info["approximate"]``)."""
     return None
-

@@ -54,6 +54,12 @@ ADAPTIVE_ACCEPT = "deferred"
 #: 0.0024 p(0), absent at N = 400 and 1600 and at every other stage and tolerance)
 
 
+#: what the MDR result of an ellipsoid is (info["approximate"] and info["warning"])
+ELLIPSOID_WARNING = ("the ellipsoid (radii R1, R2) is run as the paraboloid of "
+                     "the equivalent radius √(R1 R2); MDR is exact only for bodies of "
+                     "revolution (use the BEM for the ellipsoid as it is)")
+
+
 def build_model(case) -> tuple[wear.Model, dict]:
     """Grid, unworn profile and load of a case; the scales of reference.scales."""
     sc = reference.scales(case)
@@ -431,6 +437,11 @@ def _solve(case, progress=None) -> RunResult:
         auto = IMPLICIT_STEP_HAT if sl.scheme == "implicit" else BDF2_STEP_HAT
         step_hat = auto if sl.step_hat == "auto" else sl.step_hat
     info["step_hat"] = float(step_hat) if math.isfinite(step_hat) else "unlimited"
+    # approximate: False, or the reason (what comparisons report per solver)
+    info["approximate"] = case.indenter.profile == "ellipsoid" and ELLIPSOID_WARNING
+    if info["approximate"]:
+        info["equivalent_radius"] = profiles.equivalent_radius(case.indenter)
+        info["warning"] = ELLIPSOID_WARNING
     s_cap = ADAPTIVE_MAX_S_HAT if adaptive else MAX_S_HAT
     s_end = case.end_distance
     if s_end is not None:

@@ -43,7 +43,7 @@ def test_wheel_holds_one_namespace(installed):
     tops = {n.split("/")[0] for n in names}
     info = {t for t in tops if t.endswith(".dist-info")}
     assert len(info) == 1 and tops - info == {"wearcheck"}
-    for package in ("cases", "mdr", "fem", "meshes", "comparisons"):
+    for package in ("cases", "mdr", "fem", "bem", "meshes", "comparisons"):
         assert f"wearcheck/{package}/__init__.py" in names
     assert "wearcheck/cases/paper.toml" in names
 

@@ -16,7 +16,8 @@ from wearcheck.comparisons import layout
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     out = {}
-    for solver, changes in (("mdr", {"mdr.elements": 200}), ("fem", {"fem.contact_nodes": 40})):
+    for solver, changes in (("mdr", {"mdr.elements": 200}), ("fem", {"fem.contact_nodes": 40}),
+                            ("bem", {"bem.grid": 32})):
         case = wearcheck.load_case("paper", {**changes, "stages.s_hat": [0.0, 1.0],
                                              "sliding.until": "distance",
                                              "sliding.distance": 0.04})
@@ -24,7 +25,7 @@ def runs(tmp_path_factory):
     return out
 
 
-@pytest.mark.parametrize("solver", ["mdr", "fem"])
+@pytest.mark.parametrize("solver", ["mdr", "fem", "bem"])
 def test_run_directory_matches_its_data_dictionary(runs, solver):
     path = runs[solver]
     meta = json.loads((path / "meta.json").read_text())

@@ -1,0 +1,253 @@
+"""``bem.solve(case)``: the boundary-element wear run of one case."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from scipy import optimize
+
+from wearcheck.cases import CaseError, RunResult, SolverError, profiles, reference
+
+from . import wear
+from .operator import HalfSpace
+
+#: implicit Euler's and BDF2's step in ŝ when sliding.step_hat = "auto" (as
+#: the MDR: the BEM's time error is the same ODE's, 0.08 Δŝ in F/F0 for
+#: implicit Euler on the paper case, 0.02 Δŝ² for BDF2)
+IMPLICIT_STEP_HAT = 0.1
+BDF2_STEP_HAT = 0.1
+#: runaway guards, as the other solvers: fixed steps (ŝ, steps); adaptive
+#: runs take far fewer steps per ŝ as wear slows, so they are capped in steps
+MAX_S_HAT = 1.0e4
+MAX_STEPS = 2_000_000
+ADAPTIVE_MAX_S_HAT = 1.0e9
+ADAPTIVE_MAX_STEPS = 100_000
+#: fewest pixels across the unworn contact radius
+MIN_PIXELS_IN_CONTACT = 4
+
+
+def largest_contact_radius(case, sc: dict) -> float:
+    """The largest contact radius the run can reach [m] (the box is sized on it).
+
+    Depth control: the radius where the unworn profile reaches the depth d,
+    the edge of the completely worn contact max(f, d) (√2·a0 for a
+    paraboloid; the long semi-axis √(2 R_max d) for the ellipsoid). Force
+    control: the radius of the flat scar that holds the volume worn at the end,
+    V = K F s (at least the unworn contact).
+    """
+    ind, ld = case.indenter, case.loading
+    if ind.profile == "ellipsoid":
+        r_big = max(ind.radius, ind.radius_y)
+        c = reference.hertz_elliptical(case.E_star, ind.radius, ind.radius_y,
+                                       **{ld.control: getattr(ld, ld.control)})
+        a_long = max(c["semi_axis_x"], c["semi_axis_y"])
+        if ld.control == "depth":
+            return math.sqrt(2.0 * r_big * ld.depth)
+        volume = case.wear_rate * ld.force * (case.sliding.distance or 0.0)
+        # an elliptic paraboloid holds V = π √(R1 R2) h² below the level h
+        level = math.sqrt(volume / (math.pi * profiles.equivalent_radius(ind)))
+        return max(a_long, math.sqrt(2.0 * r_big * level))
+
+    def f(r):
+        return float(profiles.height(ind, r, case.table))
+
+    def beyond(level):
+        hi = sc["a0"]
+        while f(hi) < level:
+            hi *= 2.0
+            if hi > 1e6 * sc["a0"]:
+                raise CaseError("the profile does not rise to the depth within 10^6 a0; "
+                                "the BEM box cannot be sized")
+        return optimize.brentq(lambda r: f(r) - level, 0.0, hi, xtol=1e-12 * hi)
+
+    if ld.control == "depth":
+        return max(sc["a0"], beyond(ld.depth))
+    volume = case.wear_rate * ld.force * (case.sliding.distance or 0.0)
+    if volume <= 0.0:
+        return sc["a0"]
+
+    def held(level):
+        rl = beyond(level)
+        r = np.linspace(0.0, rl, 2001)
+        return float(np.trapezoid(2.0 * np.pi * r * np.maximum(level - profiles.height(
+            ind, r, case.table), 0.0), r))
+    hi = sc["d0"]
+    while held(hi) < volume:
+        hi *= 2.0
+    level = optimize.brentq(lambda h: held(h) - volume, 0.0, hi, xtol=1e-12 * hi)
+    return max(sc["a0"], beyond(level))
+
+
+def grid(case, sc: dict) -> tuple[np.ndarray, float, float]:
+    """Pixel-centre coordinates (n,), pixel side Δ and the largest contact radius.
+
+    The pixel n // 2 is centred on the tip, x_i = (i - n//2) Δ, Δ = box·a_max/n.
+    """
+    n = case.bem.grid
+    a_max = largest_contact_radius(case, sc)
+    dx = case.bem.box * a_max / n
+    a_small = sc["a0"]
+    if case.indenter.profile == "ellipsoid":
+        c = reference.unworn_contact(case)
+        a_small = min(c["semi_axis_x"], c["semi_axis_y"])
+    if a_small / dx < MIN_PIXELS_IN_CONTACT:
+        need = math.ceil(MIN_PIXELS_IN_CONTACT * case.bem.box * a_max / a_small)
+        raise CaseError(f"key 'bem.grid' = {n}: only {a_small / dx:.1f} pixels span the unworn "
+                        f"contact radius; at least {MIN_PIXELS_IN_CONTACT} are needed, i.e. "
+                        f"bem.grid >= {need}")
+    x = (np.arange(n) - n // 2) * dx
+    return x, dx, a_max
+
+
+def ring_average(values: np.ndarray, ring: np.ndarray, rings: int) -> np.ndarray:
+    """Mean of ``values`` over the rings (ring index per pixel), for rings 0..rings-1."""
+    inside = ring < rings
+    total = np.bincount(ring[inside], values[inside], minlength=rings)
+    count = np.bincount(ring[inside], minlength=rings)
+    return total / np.maximum(count, 1)
+
+
+def supports(case) -> str | None:
+    """None when the BEM can run ``case``, else why not.
+
+    It solves every profile (axisymmetric or the ellipsoid) against either
+    counterface, in gross slip with the Reye–Archard law; not fretting
+    (partial slip) and not a pressure exponent other than 1.
+    """
+    if getattr(case, "fretting", None) is not None:
+        return ("fretting (partial slip) needs the tangential contact problem, which the BEM "
+                "does not solve (normal contact, gross slip only); use the MDR")
+    n = getattr(case.wear, "pressure_exponent", 1.0)
+    if n != 1.0:
+        return (f"key 'wear.pressure_exponent' = {n!r}: the BEM implements the Reye–Archard "
+                "law (exponent 1) only; use the MDR")
+    return None
+
+
+def solve(case, progress=None) -> RunResult:
+    """Run the BEM wear simulation of ``case`` (see :mod:`bem`)."""
+    reason = supports(case)
+    if reason is not None:
+        raise CaseError(reason)
+    t0 = time.perf_counter()
+    sc = reference.scales(case)
+    per_m = sc["s_hat_per_m"]
+    sl, bem = case.sliding, case.bem
+    x, dx, a_max = grid(case, sc)
+    n = len(x)
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    f0 = profiles.height_xy(case.indenter, X, Y, case.table)
+    f0 -= f0[n // 2, n // 2]
+    op = HalfSpace(n, dx, case.E_star)
+    d_scale = case.loading.depth if case.loading.control == "depth" else sc["d0"]
+    model = wear.Model(op=op, f0=f0, wear_rate=case.wear_rate, depth=case.loading.depth,
+                       force=case.loading.force, p_scale=sc["p0"], g_scale=d_scale,
+                       tol=bem.tolerance, centre=(n // 2, n // 2))
+    limit_hat = wear.explicit_limit(op, case.wear_rate) * per_m
+    info = dict(solver="bem", grid=n, pixel=dx, box_side=n * dx, largest_contact_radius=a_max,
+                scheme=sl.scheme, tolerance=bem.tolerance,
+                explicit_limit_step_hat=float(limit_hat),
+                operator="own DC-FFT on scipy.fft (Love 1929 pixel coefficients, zero-padded "
+                         "to 2N)",
+                contact_solver="preconditioned constrained CG (Polonsky-Keer)",
+                tangential_correction=("not modelled: wear.tangential_correction = "
+                                       f"{str(case.wear.tangential_correction).lower()} ignored")
+                if case.wear.tangential_correction else "off")
+    adaptive = sl.scheme == "adaptive"
+    if sl.scheme == "explicit":
+        step_hat = 0.5 * limit_hat if sl.step_hat == "auto" else float(sl.step_hat)
+        if step_hat > limit_hat:
+            raise CaseError(
+                f"key 'sliding.step_hat' = {sl.step_hat!r}: past the stability limit of "
+                f"explicit Euler on this grid; the largest stable step is {limit_hat:.4g} "
+                f"(pixel {dx:.3g} m, bem.grid = {n}); use a smaller step or "
+                "sliding.scheme = \"implicit\"")
+    elif adaptive:
+        step_hat = math.inf if sl.step_hat == "auto" else float(sl.step_hat)
+        info["tolerance"] = sl.tolerance
+    else:
+        auto = IMPLICIT_STEP_HAT if sl.scheme == "implicit" else BDF2_STEP_HAT
+        step_hat = auto if sl.step_hat == "auto" else float(sl.step_hat)
+    info["step_hat"] = float(step_hat) if math.isfinite(step_hat) else "unlimited"
+    s_cap = ADAPTIVE_MAX_S_HAT if adaptive else MAX_S_HAT
+    s_end = case.end_distance
+    if s_end is not None:
+        key = "sliding.distance" if sl.until == "distance" else "sliding.cycles"
+        if s_end * per_m > s_cap:
+            raise CaseError(f"key '{key}' = {getattr(sl, key.split('.')[1])!r}: ŝ = "
+                            f"{s_end * per_m:.4g} exceeds the solver's cap of {s_cap:g}"
+                            + ("" if adaptive else " for fixed steps (use sliding.scheme = "
+                               "\"adaptive\")"))
+        if s_end * per_m / step_hat > MAX_STEPS:
+            raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: the run would take "
+                            f"{s_end * per_m / step_hat:.3g} steps (cap {MAX_STEPS}); raise "
+                            "the step or use sliding.scheme = \"adaptive\"")
+    else:
+        s_end = s_cap / per_m
+    stage_s = [sh / per_m for sh in case.stages.s_hat]
+    if case.end_distance is not None:
+        stage_s = [s for s in stage_s if s <= s_end * (1 + 1e-12)]
+    until = "force_fraction" if sl.until == "force_fraction" else "distance"
+    rho = np.hypot(X, Y)
+    ring = np.rint(rho / dx).astype(np.int64)
+    rings = n // 2                      # whole rings inside the box
+    r = np.arange(rings) * dx
+    out = wear.run(model, sl.scheme, step_hat / per_m, stage_s, until, s_end,
+                   sl.force_fraction, progress, tolerance=sl.tolerance, scales=sc,
+                   ring=(ring, rings, r),
+                   max_steps=ADAPTIVE_MAX_STEPS if adaptive else MAX_STEPS)
+    if until == "force_fraction" and out["history"]["s"][-1] >= s_end * (1 - 1e-12):
+        raise SolverError(f"the force did not fall below {sl.force_fraction} F0 within "
+                          f"ŝ = {s_cap:g}")
+    hist = out["history"]
+    hist["s_hat"] = hist["s"] * per_m
+    # cycles: NaN without a stroke (one set of columns for every case)
+    cpm = case.cycles_per_metre
+    hist["cycles"] = hist["s"] * (cpm if cpm is not None else math.nan)
+
+    # stages: azimuthal averages on rings one pixel wide, the full fields, anisotropy
+    K = len(out["stages"])
+    f_avg, p_avg = np.zeros((K, rings)), np.zeros((K, rings))
+    fields = {k: np.zeros((K, n, n)) for k in ("profile", "wear_depth", "pressure", "gap")}
+    aniso = dict(s_hat=[], pressure=[], pressure_interior=[], wear=[])
+    inside = ring < rings
+    ring_in = np.where(inside, ring, 0)
+    for k, (s, f, p, gap, _d) in enumerate(out["stages"]):
+        w = f - f0
+        f_avg[k] = ring_average(f, ring, rings)
+        p_avg[k] = ring_average(p, ring, rings)
+        w_avg = ring_average(w, ring, rings)
+        fields["profile"][k], fields["wear_depth"][k] = f, w
+        fields["pressure"][k], fields["gap"][k] = p, gap
+        aniso["s_hat"].append(s * per_m)
+        aniso["pressure"].append(float(np.max(np.abs(p - p_avg[k][ring_in])[inside])) / sc["p0"])
+        # rings wholly in contact (the edge rings mix loaded and free pixels)
+        full = np.bincount(ring[inside], (p > 0)[inside], minlength=rings) == \
+            np.bincount(ring[inside], minlength=rings)
+        interior = inside & full[ring_in] & (p > 0)
+        aniso["pressure_interior"].append(
+            float(np.max(np.abs(p - p_avg[k][ring_in])[interior], initial=0.0)) / sc["p0"])
+        aniso["wear"].append(float(np.max(np.abs(w - w_avg[ring_in])[inside])) / d_scale)
+    fields["x"] = x.copy()
+    fields["y"] = x.copy()
+    info["anisotropy"] = dict(
+        aniso, note="largest |value - its ring average| over the box per stage: pressure "
+                    "over p0 (pressure_interior: on the rings wholly in contact), wear depth "
+                    "over d (d0 under force control)")
+    counters = out["counters"]
+    if adaptive:
+        info["time_error"] = dict(
+            estimate=counters["time_error"], rejected_steps=counters["rejected_steps"],
+            largest_step_hat=counters["largest_step_hat"],
+            meaning="largest step-doubling estimate of a step's local error (force /F0, depth "
+                    "and central wear /max(d0, value)), as the MDR's")
+    info.update(steps=counters["steps"], cg_iterations=counters["cg_iterations"],
+                operator_applications=op.applications,
+                max_complementarity_residual=float(np.max(hist["complementarity_residual"])))
+    if progress is not None:
+        progress(1.0, "done")
+    return RunResult(history=hist, stage_s=np.array([st[0] for st in out["stages"]]),
+                     r=r, f=f_avg, p=p_avg, solve_seconds=time.perf_counter() - t0, info=info,
+                     fields=fields)
