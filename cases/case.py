@@ -56,6 +56,21 @@ class Case:
         """k_wear μ / σ0 [1/Pa]: wear depth per unit pressure and sliding distance."""
         return self.wear.k * self.wear.mu / self.wear.hardness
 
+    @property
+    def end_distance(self) -> float | None:
+        """Sliding distance [m] at which the run stops; None: when the force has fallen."""
+        sl = self.sliding
+        if sl.until == "distance":
+            return sl.distance
+        if sl.until == "cycles":
+            return 2.0 * sl.stroke * sl.cycles
+        return None
+
+    @property
+    def cycles_per_metre(self) -> float | None:
+        """Cycles per metre of sliding, 1/(2·stroke); None without a stroke."""
+        return None if self.sliding.stroke is None else 0.5 / self.sliding.stroke
+
     def replace(self, **sections) -> "Case":
         """A copy with whole sections replaced, validated like a case file.
 
@@ -187,15 +202,25 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     unknown = sorted(set(raw) - set(SECTIONS))
     if unknown:
         raise CaseError(f"unknown section [{unknown[0]}]; allowed: " + ", ".join(SECTIONS))
+    overridden = set()
     for text in overrides:
         section, k, value = parse_override(text)
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise CaseError(f"'{section}' must be a table [{section}]")
         raw[section][k] = value
+        overridden.add((section, k))
+        # stages given one way by an override replace the file's other way
+        other = {"s_hat": "cycles", "cycles": "s_hat"}.get(k) if section == "stages" else None
+        if other and ("stages", other) not in overridden:
+            raw[section].pop(other, None)
     for section in REQUIRED_SECTIONS:
         if section not in raw:
             raise CaseError(f"missing section [{section}]")
+    st = raw.get("stages", {})
+    if isinstance(st, dict) and "s_hat" in st and "cycles" in st:
+        raise CaseError(f"keys 'stages.s_hat' = {_fmt(st['s_hat'])} and 'stages.cycles' = "
+                        f"{_fmt(st['cycles'])} both given; give the stages one way only")
     built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS
              if name not in OPTIONAL_SECTIONS or name in raw}
     if "fretting" in raw:
@@ -213,6 +238,12 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     _check_scales(case)
     if case.fretting is not None:
         _check_fretting(case)
+    if case.stages.cycles is not None:
+        # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
+        from . import reference
+        per_m = reference.scales(case)["s_hat_per_m"]
+        s_hat = tuple(c * 2.0 * case.sliding.stroke * per_m for c in case.stages.cycles)
+        case = replace(case, stages=replace(case.stages, s_hat=s_hat))
     return replace(case, warnings=_warnings(case))
 
 
@@ -337,8 +368,27 @@ def _check_programme(built):
                         "set sliding.until = \"distance\" to stop at a distance")
     if sl.until == "force_fraction" and ld.control == "force":
         raise CaseError("sliding.until = \"force_fraction\" cannot end a force-controlled run "
-                        "(the force does not fall); use sliding.until = \"distance\"")
-    s = built["stages"].s_hat
+                        "(the force does not fall); use sliding.until = \"distance\" or "
+                        "\"cycles\"")
+    if sl.until == "cycles":
+        for name in ("stroke", "cycles"):
+            if getattr(sl, name) is None:
+                raise CaseError(f"missing key 'sliding.{name}', required by sliding.until = "
+                                "\"cycles\"")
+        if sl.distance is not None:
+            raise CaseError(f"key 'sliding.distance' = {sl.distance!r} given but sliding.until = "
+                            "\"cycles\" (the distance is 2·stroke·cycles); remove one")
+    elif sl.cycles is not None:
+        raise CaseError(f"key 'sliding.cycles' = {sl.cycles!r} given but sliding.until = "
+                        f"\"{sl.until}\"; set sliding.until = \"cycles\" to stop after cycles")
+    st = built["stages"]
+    if st.cycles is not None:
+        if sl.stroke is None:
+            raise CaseError(f"key 'stages.cycles' = {list(st.cycles)} needs 'sliding.stroke' "
+                            "(one cycle slides 2·stroke)")
+        if any(b <= a for a, b in zip(st.cycles, st.cycles[1:])):
+            raise CaseError(f"key 'stages.cycles' = {list(st.cycles)}: must increase strictly")
+    s = st.s_hat
     if any(b <= a for a, b in zip(s, s[1:])):
         raise CaseError(f"key 'stages.s_hat' = {list(s)}: must increase strictly")
 
@@ -407,6 +457,8 @@ def to_toml(case: Case) -> str:
             value = getattr(obj, name)
             if value is None:
                 continue
+            if section == "stages" and name == "s_hat" and case.stages.cycles is not None:
+                continue  # derived from stages.cycles (giving both is an error)
             if isinstance(value, tuple):
                 text = "[" + ", ".join(repr(v) for v in value) + "]"
             else:

@@ -150,11 +150,14 @@ register(Solver(
     description="Method of Dimensionality Reduction: 1D springs, exact for axisymmetric "
                 "half-space contact",
     style=dict(ls="-", lw=1.4),
-    history_columns=(Item("max_pressure", "Pa", "largest contact pressure"),
+    history_columns=(Item("scar_radius", "m", "outer radius of the worn region: the largest r "
+                                              "with wear >= 1e-3 of the largest wear"),
+                     Item("max_pressure", "Pa", "largest contact pressure"),
                      Item("s_hat", "", "dimensionless sliding ŝ"),
+                     Item("cycles", "", "reciprocating cycles: gross slip s/(2·sliding.stroke), "
+                                        "NaN without a stroke; fretting: cycles done (0: after "
+                                        "the first quarter cycle)"),
                      # fretting runs ([fretting]): one row per simulated cycle
-                     Item("cycles", "", "fretting: cycles done (0: after the first quarter "
-                                        "cycle)"),
                      Item("tangential_force_amplitude", "N", "fretting: largest |Q| in the "
                                                              "cycle"),
                      Item("displacement_amplitude", "m", "fretting: half the indenter's "
@@ -181,7 +184,11 @@ register(Solver(
                 "against a rigid plane",
     style=dict(ls="none", marker="o", ms=3.5, mfc="none", mew=0.9),
     export_vtk="wearcheck.comparisons.present.vtk:write_fem_fields",
-    history_columns=(Item("s_hat", "", "dimensionless sliding ŝ"),),
+    history_columns=(Item("scar_radius", "m", "outer radius of the worn region: the largest r "
+                                              "with wear >= 1e-3 of the largest wear"),
+                     Item("s_hat", "", "dimensionless sliding ŝ"),
+                     Item("cycles", "", "reciprocating cycles s/(2·sliding.stroke); NaN "
+                                        "without a stroke")),
     fields=(Item("points", "m", "r, z of the mesh nodes, undeformed (Np, 2); P2 with midside "
                                 "nodes"),
             Item("cells", "", "triangles, counter-clockwise, meshio triangle/triangle6 order "
