@@ -154,7 +154,7 @@ register(Solver(
                                               "with wear >= 1e-3 of the largest wear"),
                      Item("max_pressure", "Pa", "largest contact pressure"),
                      Item("s_hat", "", "dimensionless sliding ŝ"),
-                     Item("cycles", "", "reciprocating cycles: gross slip s/(2·sliding.stroke), "
+                     Item("cycles", "", "gross slip: reciprocating cycles s/(2·sliding.stroke), "
                                         "NaN without a stroke; fretting: cycles done (0: after "
                                         "the first quarter cycle)"),
                      # fretting runs ([fretting]): one row per simulated cycle

@@ -221,8 +221,9 @@ def stick_radius(model: Model, st: State, acc: dict, ramp: bool) -> float:
 
 
 HISTORY_KEYS = ("cycles", "s", "force", "depth", "contact_radius", "wear_center", "wear_volume",
-                "scar_radius", "tangential_force_amplitude", "displacement_amplitude", "stick_radius",
-                "dissipated_energy", "dissipated_energy_1d", "energy_per_cycle", "max_pressure")
+                "scar_radius", "tangential_force_amplitude", "displacement_amplitude",
+                "stick_radius", "dissipated_energy", "dissipated_energy_1d", "energy_per_cycle",
+                "max_pressure")
 
 
 def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> dict:
