@@ -506,4 +506,6 @@ def to_dict(case: Case) -> dict:
     if case.fretting is not None:  # a fretting run has no [sliding] or [stages]
         out.pop("sliding", None)
         out.pop("stages", None)
+    elif case.stages.cycles is not None:  # s_hat is derived from the cycles
+        out["stages"].pop("s_hat", None)
     return out

@@ -6,6 +6,7 @@ import pytest
 
 import wearcheck
 from wearcheck import cases
+import wearcheck.cases.schema  # noqa: F401
 from wearcheck.cases import RunResult
 from wearcheck.registry import Solver, register, unregister
 
@@ -149,3 +150,12 @@ def test_sweep_values_are_single_values_and_come_back_typed(tmp_path):
                            workers=1)
     assert len(rows) == 1 and rows[0]["status"] == "ok"
     assert rows[0]["sliding.scheme"] == "bdf2" and rows[0]["wear.mu"] == 0.3
+
+
+@pytest.mark.parametrize("name", sorted(wearcheck.shipped_cases()))
+def test_every_shipped_case_derives_to_itself(name):
+    """A derived case with nothing changed is the case (to_dict inverts from_dict)."""
+    case = wearcheck.load_case(name)
+    same = case.derive({"wear.mu": case.wear.mu})
+    for section in cases.schema.SECTIONS:
+        assert getattr(same, section) == getattr(case, section), section

@@ -169,8 +169,6 @@ def test_api_derives_and_round_trips_a_fretting_case():
     assert case.fretting.cycles == 3
     again = cases.from_dict(cases.to_dict(case))
     assert again.fretting == case.fretting and again.loading == case.loading
-    # a gross-slip case whose [sliding] or [stages] is not the default cannot become a
-    # fretting one (paper.toml's [sliding] is all defaults since the adaptive scheme
-    # became the default; its [stages] is not)
+    # a gross-slip case whose [sliding] is not the default cannot become a fretting one
     with pytest.raises(cases.CaseError, match=r"\[(sliding|stages)\] given with \[fretting\]"):
         wearcheck.load_case("paper", {"fretting.amplitude": 1e-7, "fretting.cycles": 3})
