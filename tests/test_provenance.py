@@ -66,6 +66,9 @@ def test_installed_inside_another_git_repository_records_no_revision(tmp_path):
                           "--target", str(target), str(REPO)],
                          capture_output=True, text=True, timeout=600)
     assert pip.returncode == 0, pip.stderr[-2000:]
+    # package data: the shipped cases and the case file's JSON Schema
+    for name in ("paper.toml", "case.schema.json"):
+        assert (target / "wearcheck" / "cases" / name).is_file(), name
     probe = ("import json; from wearcheck.comparisons import runio; "
              "print(json.dumps([runio.__file__, runio.git_revision(), "
              "runio.source_checkout() and str(runio.source_checkout()), "

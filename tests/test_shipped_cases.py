@@ -121,3 +121,9 @@ def test_cases_command_prints_one_case_that_loads(capsys, tmp_path):
     copy.write_text(text)
     assert cases.load(copy).indenter.profile == "truncated_paraboloid"
     assert cli_main(["cases", "nosuch"]) == 2
+
+
+def test_cases_command_names_the_schema_file(capsys):
+    assert cli_main(["cases", "--schema"]) == 0
+    path = Path(capsys.readouterr().out.strip())
+    assert path == CASES_DIR / "case.schema.json" and path.is_file()

@@ -18,10 +18,17 @@ def add_parser(sub):
     p.add_argument("name", nargs="?", metavar="NAME",
                    help="print this shipped case's file (TOML) instead of the list")
     p.add_argument("--paths", action="store_true", help="also show where each file is")
+    p.add_argument("--schema", action="store_true",
+                   help="print the path of the JSON Schema of case files (for editors: "
+                        "put '#:schema PATH' on the first line of a case file)")
     return p
 
 
 def main(args) -> int:
+    if args.schema:
+        from wearcheck.cases.json_schema import SCHEMA_FILE
+        print(SCHEMA_FILE)
+        return 0
     available = cases.shipped_cases()
     if args.name is not None:
         sys.stdout.write(cases.shipped(args.name).read_text(encoding="utf-8"))
