@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import pkgutil
+import re
 import sys
 
 from wearcheck.cases import WearcheckError
@@ -18,6 +19,15 @@ def _subcommands():
     for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
         if not info.name.startswith("_"):
             yield importlib.import_module(f"{__name__}.{info.name}")
+
+
+def plain(text: str | None) -> str | None:
+    """Help text without reST markup: ``x`` and :role:`x` become x (the module
+    docstrings that serve as descriptions are written for Sphinx too)."""
+    if not text:
+        return text
+    text = re.sub(r":[a-z]+:`~?([^`]+)`", r"\1", text)
+    return text.replace("``", "")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -34,6 +44,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for module in _subcommands():
         p = module.add_parser(sub)
+        p.description = plain(p.description)
+        for action in p._actions:
+            action.help = plain(action.help)
         p.set_defaults(_main=module.main)
     return parser
 

@@ -41,7 +41,8 @@ def add_parser(sub):
                    help="a0/R of the sphere sweep (default: "
                         + ",".join(f"{v:g}" for v in SPHERE_RATIOS) + ")")
     p.add_argument("--no-render", action="store_true",
-                   help="do not call comparisons.render on the run directories")
+                   help="do not render pictures of the run directories (the report then "
+                        "shows none)")
     return p
 
 
