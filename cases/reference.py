@@ -189,7 +189,7 @@ def unworn_contact(case):
 
 
 def scales(case) -> dict:
-    """Natural scales of a case (physics.md §3), from its unworn contact.
+    """Natural scales of a case (docs/theory.md §5), from its unworn contact.
 
     a0, d0, F0: contact radius, depth, force of the unworn profile (Hertz's for
     the paraboloid); p0 = 3 F0 / (2π a0²), Hertz's maximum pressure;
@@ -209,5 +209,5 @@ def scales(case) -> dict:
 
 
 def complete_wear_profile(r, R, depth):
-    """Fixed-depth limit of a worn paraboloid: max(r²/2R, d) (physics.md §5)."""
+    """Fixed-depth limit of a worn paraboloid: max(r²/2R, d) (docs/theory.md §6)."""
     return np.maximum(np.asarray(r, dtype=float) ** 2 / (2.0 * R), depth)

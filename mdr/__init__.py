@@ -3,7 +3,7 @@
 ``solve(case, progress=None) -> cases.RunResult`` runs a case: N springs on
 0 <= x <= L = domain_factor·√2·a0, nodes uniform in t = x² (the 3D radii r
 share them), paper Eqs. 2, 3, 12, 13 integrated exactly over each segment,
-wear Δf = (k μ/σ0) p · slip (physics.md §3) by explicit Euler (the paper's;
+wear Δf = (k μ/σ0) p · slip (docs/theory.md §4) by explicit Euler (the paper's;
 stable below a step limit it estimates and enforces), implicit Euler
 (unconditionally stable, first order) or the variable-step BDF2 (L-stable,
 second order; the implicit step from a two-step history). BLAS runs

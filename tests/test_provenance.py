@@ -62,8 +62,13 @@ def test_installed_inside_another_git_repository_records_no_revision(tmp_path):
     user_head = _git(user, "rev-parse", "HEAD")
     (user / "notes.txt").write_text("changed, so the user's tree is dirty\n")
     target = user / "site"
+    # build from a copy: setuptools leaves build/ in the source tree, whose stale
+    # files could leak into later wheels
+    source = tmp_path / "source"
+    shutil.copytree(REPO, source, ignore=shutil.ignore_patterns(
+        ".git", ".venv", "build", "dist", "runs", "*.egg-info", "__pycache__", ".pytest_cache"))
     pip = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps",
-                          "--target", str(target), str(REPO)],
+                          "--target", str(target), str(source)],
                          capture_output=True, text=True, timeout=600)
     assert pip.returncode == 0, pip.stderr[-2000:]
     # package data: the shipped cases and the case file's JSON Schema
