@@ -20,7 +20,7 @@ import json
 import math
 from pathlib import Path
 
-from .schema import (PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS, SECTIONS, _base_types,
+from .schema import (PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS, SECTIONS, base_types,
                      section_fields)
 
 #: where the package keeps the generated schema
@@ -59,7 +59,7 @@ def _description(meta) -> str:
 def key_schema(f) -> dict:
     """The schema of one declared key (a dataclass field of ``schema.py``)."""
     meta = f.metadata
-    allowed = _base_types(f.type)
+    allowed = base_types(f.type)
     out: dict = {"description": _description(meta)}
     if any(getattr(t, "__origin__", None) is tuple for t in allowed):  # list of numbers
         out.update(type="array", minItems=1, items={"type": "number", **_number_bounds(meta)})
