@@ -12,10 +12,11 @@ from typing import Any
 import numpy as np
 
 from .errors import CaseError
-from .schema import (PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS, SECTIONS,
-                     CompareSettings, Counterface, FEMSettings, Indenter, Loading,
+from .schema import (OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS,
+                     SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
+                     Loading,
                      MDRSettings, Sliding, Stages, Wear, _fmt, build_section,
-                     section_fields)
+                     section_fields, toml_string)
 
 
 @dataclass(frozen=True)
@@ -31,6 +32,8 @@ class Case:
     mdr: MDRSettings
     fem: FEMSettings
     compare: CompareSettings
+    #: partial-slip (fretting) programme; None for a gross-slip run
+    fretting: Fretting | None = None
     source: str = ""
     #: tabulated profile (r, f) in metres when indenter.profile == "table"
     table: tuple[np.ndarray, np.ndarray] | None = field(default=None, compare=False, repr=False)
@@ -53,8 +56,77 @@ class Case:
         """k_wear μ / σ0 [1/Pa]: wear depth per unit pressure and sliding distance."""
         return self.wear.k * self.wear.mu / self.wear.hardness
 
+    @property
+    def end_distance(self) -> float | None:
+        """Sliding distance [m] at which the run stops; None: when the force has fallen."""
+        sl = self.sliding
+        if sl.until == "distance":
+            return sl.distance
+        if sl.until == "cycles":
+            return 2.0 * sl.stroke * sl.cycles
+        return None
+
+    @property
+    def cycles_per_metre(self) -> float | None:
+        """Cycles per metre of sliding, 1/(2·stroke); None without a stroke."""
+        return None if self.sliding.stroke is None else 0.5 / self.sliding.stroke
+
     def replace(self, **sections) -> "Case":
-        return replace(self, **sections)
+        """A copy with whole sections replaced, validated like a case file.
+
+        ``case.replace(wear=dataclasses.replace(case.wear, mu=0.5))``; for single
+        keys :meth:`derive` is shorter.
+        """
+        unknown = sorted(set(sections) - set(SECTIONS))
+        if unknown:
+            raise CaseError(f"unknown section '{unknown[0]}'; allowed: " + ", ".join(SECTIONS))
+        raw = to_dict(self)
+        for name, obj in sections.items():
+            raw[name] = _section_dict(obj)
+        return from_dict(raw, source=self.source)
+
+    def derive(self, changes=None, /, **keys) -> "Case":
+        """A copy with some keys changed, validated like a case file.
+
+        Parameters
+        ----------
+        changes : mapping of dotted keys to values, ``{"wear.mu": 0.5}``, or a
+            list of ``"section.key=value"`` strings as on the command line.
+        **keys : the same with ``__`` for the dot: ``case.derive(wear__mu=0.5)``;
+            they win over ``changes``. numpy numbers and arrays are taken as
+            Python numbers and lists. A relative ``indenter.file`` given here is
+            relative to the working directory.
+
+        Raises
+        ------
+        CaseError
+            naming the key, the value and what is allowed, as for a case file.
+        """
+        items = {}
+        if isinstance(changes, dict):
+            items.update(changes)
+        elif changes is not None:
+            for text in [changes] if isinstance(changes, str) else list(changes):
+                section, key, value = parse_override(text)
+                items[f"{section}.{key}"] = value
+        items.update({k.replace("__", "."): v for k, v in keys.items()})
+        raw = to_dict(self)
+        for name, value in items.items():
+            if not isinstance(name, str) or name.count(".") != 1 or not all(name.split(".")):
+                raise CaseError(f"key '{name}': must be section.key, e.g. wear.mu")
+            if isinstance(value, np.generic):
+                value = value.item()
+            elif isinstance(value, (np.ndarray, tuple)):
+                value = np.asarray(value).tolist() if isinstance(value, np.ndarray) \
+                    else list(value)
+            if name == "indenter.file" and isinstance(value, str) \
+                    and not Path(value).is_absolute():
+                value = str(Path.cwd() / value)
+            section, key = name.split(".")
+            if section in raw and not isinstance(raw[section], dict):
+                raise CaseError(f"'{section}' must be a table [{section}]")
+            raw.setdefault(section, {})[key] = value
+        return from_dict(raw, source=self.source)
 
 
 def _compliance(rigid: bool, E, nu):
@@ -106,8 +178,8 @@ def parse_override(text: str) -> tuple[str, str, Any]:
     return section, k, parsed
 
 
-def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Case:
-    """Read a case file, apply ``section.key=value`` overrides, validate."""
+def read_raw(path: str | Path) -> dict:
+    """The TOML tables of a case file, unvalidated; every failure a one-line CaseError."""
     path = Path(path)
     if path.is_dir():
         raise CaseError(f"case file '{path}' is a directory, not a TOML file")
@@ -115,12 +187,21 @@ def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Case:
         raise CaseError(f"case file '{path}' does not exist")
     try:
         # utf-8-sig: editors on some systems start the file with a byte-order mark
-        raw = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+        return tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"case file '{path}': TOML syntax error: {exc}") from None
     except UnicodeDecodeError as exc:
         raise CaseError(f"case file '{path}' is not UTF-8 text: {exc}") from None
-    return from_dict(raw, source=path, overrides=overrides)
+    except OSError as exc:
+        raise CaseError(f"case file '{path}' cannot be read: {exc.strerror or exc}") from None
+    except RecursionError:
+        raise CaseError(f"case file '{path}': nested too deeply to be a case") from None
+
+
+def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Case:
+    """Read a case file, apply ``section.key=value`` overrides, validate."""
+    path = Path(path)
+    return from_dict(read_raw(path), source=path, overrides=overrides)
 
 
 def from_dict(raw: dict, source: str | Path = "<dict>",
@@ -130,22 +211,48 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     unknown = sorted(set(raw) - set(SECTIONS))
     if unknown:
         raise CaseError(f"unknown section [{unknown[0]}]; allowed: " + ", ".join(SECTIONS))
+    overridden = set()
     for text in overrides:
         section, k, value = parse_override(text)
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise CaseError(f"'{section}' must be a table [{section}]")
         raw[section][k] = value
+        overridden.add((section, k))
+        # stages given one way by an override replace the file's other way
+        other = {"s_hat": "cycles", "cycles": "s_hat"}.get(k) if section == "stages" else None
+        if other and ("stages", other) not in overridden:
+            raw[section].pop(other, None)
     for section in REQUIRED_SECTIONS:
         if section not in raw:
             raise CaseError(f"missing section [{section}]")
-    built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS}
+    st = raw.get("stages", {})
+    if isinstance(st, dict) and "s_hat" in st and "cycles" in st:
+        raise CaseError(f"keys 'stages.s_hat' = {_fmt(st['s_hat'])} and 'stages.cycles' = "
+                        f"{_fmt(st['cycles'])} both given; give the stages one way only")
+    built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS
+             if name not in OPTIONAL_SECTIONS or name in raw}
+    if "fretting" in raw:
+        for section in ("sliding", "stages"):
+            # (a case derived from a gross-slip one carries their defaults: harmless)
+            if raw.get(section) and built[section] != SECTIONS[section]():
+                raise CaseError(f"section [{section}] given with [fretting]; a fretting run "
+                                "lasts fretting.cycles and keeps fretting.stage_cycles — "
+                                f"remove [{section}]")
     base = Path(source).parent if source != "<dict>" else Path.cwd()
     built, table = _check_indenter(built, base)
     _check_materials(built)
     _check_programme(built)
     case = Case(**built, source=str(source), table=table)
     _check_scales(case)
+    if case.stages.cycles is not None:
+        # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
+        from . import reference
+        per_m = reference.scales(case)["s_hat_per_m"]
+        s_hat = tuple(c * 2.0 * case.sliding.stroke * per_m for c in case.stages.cycles)
+        case = replace(case, stages=replace(case.stages, s_hat=s_hat))
+    if case.fretting is not None:
+        _check_fretting(case)
     return replace(case, warnings=_warnings(case))
 
 
@@ -198,22 +305,30 @@ def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
     if not file.is_file():
         raise CaseError(f"key '{name}' = \"{file}\": file does not exist")
     rows = []
-    with open(file, newline="", encoding="utf-8") as fh:
-        for lineno, row in enumerate(csv.reader(fh), start=1):
-            row = [c.strip() for c in row if c.strip()]
-            if not row or row[0].startswith("#"):
-                continue
-            try:
-                values = [float(c) for c in row]
-            except ValueError:
-                if not rows and lineno == 1:
-                    continue  # header line
-                raise CaseError(f"key '{name}' = \"{file}\": line {lineno} is not two numbers: "
-                                f"{','.join(row)}") from None
-            if len(values) != 2:
-                raise CaseError(f"key '{name}' = \"{file}\": line {lineno} has {len(values)} "
-                                "columns; expected 2 (r, f)")
-            rows.append(values)
+    try:
+        # utf-8-sig: a byte-order mark would otherwise glue onto the first number
+        with open(file, newline="", encoding="utf-8-sig") as fh:
+            lines = list(csv.reader(fh))
+    except UnicodeDecodeError as exc:
+        raise CaseError(f"key '{name}' = {_fmt(str(file))}: not UTF-8 text ({exc.reason} at "
+                        f"byte {exc.start}); save the table as UTF-8") from None
+    except (OSError, csv.Error) as exc:
+        raise CaseError(f"key '{name}' = {_fmt(str(file))}: cannot be read: {exc}") from None
+    for lineno, row in enumerate(lines, start=1):
+        row = [c.strip() for c in row if c.strip()]
+        if not row or row[0].startswith("#"):
+            continue
+        try:
+            values = [float(c) for c in row]
+        except ValueError:
+            if not rows and lineno == 1:
+                continue  # header line
+            raise CaseError(f"key '{name}' = \"{file}\": line {lineno} is not two numbers: "
+                            f"{','.join(row)}") from None
+        if len(values) != 2:
+            raise CaseError(f"key '{name}' = \"{file}\": line {lineno} has {len(values)} "
+                            "columns; expected 2 (r, f)")
+        rows.append(values)
     if len(rows) < 3:
         raise CaseError(f"key '{name}' = \"{file}\": needs at least 3 rows (r, f), got {len(rows)}")
     data = np.array(rows)
@@ -221,14 +336,14 @@ def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
     if not np.all(np.isfinite(data)):
         raise CaseError(f"key '{name}' = \"{file}\": contains NaN or inf")
     if r[0] != 0.0:
-        raise CaseError(f"key '{name}' = \"{file}\": the first radius must be 0, got {r[0]!r}")
+        raise CaseError(f"key '{name}' = \"{file}\": the first radius must be 0, got {float(r[0])!r}")
     if np.any(np.diff(r) <= 0):
         i = int(np.argmax(np.diff(r) <= 0))
         raise CaseError(f"key '{name}' = \"{file}\": radii must increase strictly; "
-                        f"row {i + 2} has r = {r[i + 1]!r} after r = {r[i]!r}")
+                        f"row {i + 2} has r = {float(r[i + 1])!r} after r = {float(r[i])!r}")
     if f[0] != 0.0:
         raise CaseError(f"key '{name}' = \"{file}\": the profile must start at f(0) = 0 "
-                        f"(the unworn tip), got {f[0]!r}")
+                        f"(the unworn tip), got {float(f[0])!r}")
     if np.any(f[1:] <= 0):
         raise CaseError(f"key '{name}' = \"{file}\": f must be positive for r > 0 "
                         "(the tip at r = 0 touches first)")
@@ -261,6 +376,8 @@ def _check_programme(built):
     if getattr(ld, other) is not None:
         raise CaseError(f"key 'loading.{other}' given but loading.control = \"{ld.control}\"; "
                         f"remove it or set loading.control = \"{other}\"")
+    if built.get("fretting") is not None:
+        return  # [sliding] and [stages] do not apply (from_dict refuses them)
     if sl.until == "distance" and sl.distance is None:
         raise CaseError("missing key 'sliding.distance', required by sliding.until = \"distance\"")
     if sl.until == "force_fraction" and sl.distance is not None:
@@ -268,10 +385,61 @@ def _check_programme(built):
                         "set sliding.until = \"distance\" to stop at a distance")
     if sl.until == "force_fraction" and ld.control == "force":
         raise CaseError("sliding.until = \"force_fraction\" cannot end a force-controlled run "
-                        "(the force does not fall); use sliding.until = \"distance\"")
-    s = built["stages"].s_hat
+                        "(the force does not fall); use sliding.until = \"distance\" or "
+                        "\"cycles\"")
+    if sl.until == "cycles":
+        for name in ("stroke", "cycles"):
+            if getattr(sl, name) is None:
+                raise CaseError(f"missing key 'sliding.{name}', required by sliding.until = "
+                                "\"cycles\"")
+        if sl.distance is not None:
+            raise CaseError(f"key 'sliding.distance' = {sl.distance!r} given but sliding.until = "
+                            "\"cycles\" (the distance is 2·stroke·cycles); remove one")
+    elif sl.cycles is not None:
+        raise CaseError(f"key 'sliding.cycles' = {sl.cycles!r} given but sliding.until = "
+                        f"\"{sl.until}\"; set sliding.until = \"cycles\" to stop after cycles")
+    st = built["stages"]
+    if st.cycles is not None:
+        if sl.stroke is None:
+            raise CaseError(f"key 'stages.cycles' = {list(st.cycles)} needs 'sliding.stroke' "
+                            "(one cycle slides 2·stroke)")
+        if any(b <= a for a, b in zip(st.cycles, st.cycles[1:])):
+            raise CaseError(f"key 'stages.cycles' = {list(st.cycles)}: must increase strictly")
+    s = st.s_hat
     if any(b <= a for a, b in zip(s, s[1:])):
         raise CaseError(f"key 'stages.s_hat' = {list(s)}: must increase strictly")
+
+
+def _check_fretting(case: Case) -> None:
+    """Combinations of [fretting] keys with each other and with the rest of the case."""
+    fr = case.fretting
+    given = [k for k in ("amplitude", "force_amplitude") if getattr(fr, k) is not None]
+    if len(given) != 1:
+        raise CaseError("[fretting] needs exactly one of 'fretting.amplitude' (m) and "
+                        "'fretting.force_amplitude' (N); got "
+                        + (" and ".join(given) if given else "neither"))
+    if fr.increments % 4:
+        raise CaseError(f"key 'fretting.increments' = {fr.increments}: must be a multiple of 4 "
+                        "(a quarter cycle ramps from 0 to the amplitude)")
+    if case.wear.tangential_correction:
+        raise CaseError("key 'wear.tangential_correction' = true: a fretting run always "
+                        "includes the elastic tangential displacement (the springs' "
+                        "deformation); remove the key")
+    if fr.stage_cycles is not None:
+        st = fr.stage_cycles
+        if any(c != int(c) for c in st):
+            raise CaseError(f"key 'fretting.stage_cycles' = {list(st)}: must be whole cycle "
+                            "numbers")
+        if any(b <= a for a, b in zip(st, st[1:])):
+            raise CaseError(f"key 'fretting.stage_cycles' = {list(st)}: must increase strictly")
+    if fr.force_amplitude is not None:
+        from . import reference
+        F = reference.scales(case)["F0"]
+        if fr.force_amplitude >= case.wear.mu * F:
+            raise CaseError(f"key 'fretting.force_amplitude' = {fr.force_amplitude!r}: must be "
+                            f"below μF = {case.wear.mu * F:.4g} N (the friction limit of the "
+                            "unworn contact); a larger force has no partial-slip equilibrium — "
+                            "use fretting.amplitude for gross slip")
 
 
 def _warnings(case: Case) -> tuple[str, ...]:
@@ -283,7 +451,9 @@ def _warnings(case: Case) -> tuple[str, ...]:
             "(0 when similar). The normal and tangential problems are coupled in reality; "
             "they are treated as uncoupled here"
             + (", and the tangential correction is approximate" if case.wear.tangential_correction
-               else "") + ".")
+               else "")
+            + (", and the partial-slip (fretting) solution is approximate"
+               if case.fretting is not None else "") + ".")
     return tuple(out)
 
 
@@ -292,14 +462,21 @@ def _warnings(case: Case) -> tuple[str, ...]:
 
 def to_toml(case: Case) -> str:
     """The resolved case, every default filled in, as TOML text."""
-    lines = [f"# resolved case, read from {case.source}"]
+    # the source in TOML string form: a newline in a file name must not end the comment
+    lines = [f"# resolved case, read from {toml_string(str(case.source))}"]
     for section in SECTIONS:
         obj = getattr(case, section)
+        if obj is None:
+            continue
+        if case.fretting is not None and section in ("sliding", "stages"):
+            continue
         lines.append(f"\n[{section}]")
         for name, f in section_fields(section):
             value = getattr(obj, name)
             if value is None:
                 continue
+            if section == "stages" and name == "s_hat" and case.stages.cycles is not None:
+                continue  # derived from stages.cycles (giving both is an error)
             if isinstance(value, tuple):
                 text = "[" + ", ".join(repr(v) for v in value) + "]"
             else:
@@ -328,3 +505,25 @@ def key_reference() -> str:
                 doc += " (" + " \\| ".join(f"`{c}`" for c in meta["choices"]) + ")"
             rows.append(f"| `{section}.{name}` | {meta['unit'] or ''} | {default} | {doc} |")
     return "\n".join(rows)
+
+
+def _section_dict(obj) -> dict:
+    """One section as TOML would read it (keys left at None omitted)."""
+    out = {}
+    for f in fields(obj):
+        value = getattr(obj, f.name)
+        if value is not None:
+            out[f.name] = list(value) if isinstance(value, tuple) else value
+    return out
+
+
+def to_dict(case: Case) -> dict:
+    """The case as nested dicts, as a TOML file of it would read (``from_dict`` inverts it)."""
+    out = {name: _section_dict(getattr(case, name)) for name in SECTIONS
+           if getattr(case, name) is not None}
+    if case.fretting is not None:  # a fretting run has no [sliding] or [stages]
+        out.pop("sliding", None)
+        out.pop("stages", None)
+    elif case.stages.cycles is not None:  # s_hat is derived from the cycles
+        out["stages"].pop("s_hat", None)
+    return out

@@ -31,8 +31,11 @@ p(0) = 0, and a bump of ~0.25 % d grows there under wear: measured, not used.)
 consistent 2πr-weighted boundary mass instead; it ripples odd-even (0.7 % p0
 unworn, up to 7 % p0 and negative values near a worn edge) and does not
 drive the wear, which always uses the lumped p.
-Wear dw_i/ds = (k μ/σ0) p_i by explicit or implicit Euler or variable-step
-BDF2 (:mod:`fem.wear`);
+Wear dw_i/ds = (k μ/σ0) σ0 (p_i/σ0)^n by the adaptive scheme (default; step
+doubling with a deferred Richardson correction), explicit or implicit Euler
+or variable-step BDF2 (:mod:`fem.wear`); the candidate contact arc is sized
+for the predicted final contact radius (√2·a0 under depth control, the
+long-run scar radius under force control);
 the contact radius is interpolated between the last loaded and the first
 free node from the free nodes' gaps (gap^{2/3} linear near a smooth edge).
 Not modelled: wear.tangential_correction (frictionless normal FEM).
@@ -46,6 +49,6 @@ in the plane's frame (the top face has u_z = −d); ``stress`` (K, Np, 4) σ_rr,
 ``contact_pressure`` and ``wear_depth`` (K, Nc).
 """
 
-from .solver import solve
+from .solver import solve, supports
 
-__all__ = ["solve"]
+__all__ = ["solve", "supports"]

@@ -92,8 +92,8 @@ def test_cli_runs_a_shipped_case_by_name_from_any_directory(monkeypatch, tmp_pat
     assert (run / "meta.json").is_file()
     resolved = tomllib.loads((run / "case.toml").read_text())
     assert resolved["indenter"]["profile"] == "paraboloid"
-    assert (run / "case.toml").read_text().startswith(
-        f"# resolved case, read from {CASES_DIR / 'hertz.toml'}")
+    first = (run / "case.toml").read_text().splitlines()[0]
+    assert first.startswith("# resolved case") and str(CASES_DIR / "hertz.toml") in first
 
 
 def test_cli_unknown_case_name_is_one_line(monkeypatch, tmp_path, capsys):

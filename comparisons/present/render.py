@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .runio import Run, atomic_directory
-from .vtk import (SURFACE_SEGMENTS, VTK_QUADRATIC_TRIANGLE, VTK_TRIANGLE, check_fields, grid,
+from wearcheck.comparisons.rundir import Run, atomic_directory
+from wearcheck.comparisons.present.vtk import (SURFACE_SEGMENTS, VTK_QUADRATIC_TRIANGLE, VTK_TRIANGLE, check_fields, grid,
                   orient_triangles, revolve_curve, section_data, unworn_profile)
 
 #: size (width, height) of every picture, pixels
@@ -151,8 +151,8 @@ def render_run(run_dir) -> list[Path]:
     if not len(run.stages["s"]):
         return []
     names = []
-    with atomic_directory(target) as tmp:
-        if run.fields is not None:
+    with atomic_directory(target, "render") as tmp:
+        if run.fields is not None and "cells" in run.fields:  # a section mesh (FEM)
             fields = run.fields
             K = len(run.stages["s"])
             check_fields(fields, K)

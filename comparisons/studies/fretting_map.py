@@ -1,0 +1,109 @@
+"""The running-condition map of fretting: partial or gross slip, and wear per cycle.
+
+One MDR fretting run per combination of the varied keys (typically
+``fretting.amplitude`` and ``loading.force``) on the Dask runner of
+:mod:`comparisons.distributed`; each run directory is kept. A run is in
+partial slip when a stick zone survives its last cycle (stick radius > 0),
+else in gross slip. ``fretting_map.csv`` lists every run with its regime,
+the amplitude over the unworn gross-slip threshold u* = 3μF/(4G*a), the
+worn volume per cycle and the energy dissipated in the last cycle;
+``fretting_map.png`` draws the map
+(:mod:`comparisons.present.fretting_map_figure`).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+from pathlib import Path
+
+from wearcheck import cases
+from wearcheck.cases import reference
+
+from wearcheck.comparisons.rundir import provenance, write_text_atomic
+from wearcheck.comparisons.studies.distributed import Task, fmt, record_study, run_cases
+
+COLUMNS = ("run", "status", "regime", "amplitude_over_u_star", "u_star", "normal_force",
+           "stick_radius_over_a0", "tangential_force_amplitude", "wear_volume_per_cycle",
+           "energy_last_cycle", "wall_seconds")
+
+
+def _dir_part(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9._+-]+", "_", text).strip("_") or "_"
+
+
+def tasks_for(varied: list[tuple[str, list[str]]]) -> list[Task]:
+    """One MDR task per combination of the varied values."""
+    names = [n for n, _ in varied]
+    out = []
+    for combo in itertools.product(*(vals for _, vals in varied)):
+        name = "-".join(["fretting"] + [f"{n}-{_dir_part(v)}" for n, v in zip(names, combo)])
+        out.append(Task(name, "mdr", tuple(f"{n}={v}" for n, v in zip(names, combo))))
+    return out
+
+
+def summarise(outcome) -> dict:
+    """One map row from a run's outcome (regime, u*, wear per cycle)."""
+    row = dict.fromkeys(COLUMNS, math.nan)
+    row.update(run=outcome.task.name, status=outcome.status, regime="",
+               wall_seconds=outcome.wall_seconds)
+    if not outcome.ok:
+        return row
+    case, h = outcome.case, outcome.result.history
+    sc = reference.scales(case)
+    u_star = 3.0 * case.wear.mu * sc["F0"] / (4.0 * case.G_star * sc["a0"])
+    amp = float(h["displacement_amplitude"][-1])
+    row.update(regime="partial slip" if h["stick_radius"][-1] > 0.0 else "gross slip",
+               amplitude_over_u_star=amp / u_star, u_star=u_star,
+               normal_force=float(h["force"][-1]),
+               stick_radius_over_a0=float(h["stick_radius"][-1]) / sc["a0"],
+               tangential_force_amplitude=float(h["tangential_force_amplitude"][-1]),
+               wear_volume_per_cycle=float(h["wear_volume"][-1]) / max(h["cycles"][-1], 1.0),
+               energy_last_cycle=float(h["energy_per_cycle"][-1]))
+    return row
+
+
+def fretting_map(case_path, overrides, varied, out, *, scheduler=None, workers=None,
+                 quiet=False, solve=None) -> list[dict]:
+    """Run the map into ``out``; write fretting_map.csv and fretting_map.png; return the rows."""
+    case = cases.load(case_path, overrides)
+    if case.fretting is None:
+        raise cases.CaseError(f"case '{case_path}' has no [fretting] section; the running-"
+                              "condition map varies a fretting case")
+    if not 1 <= len(varied) <= 2:
+        raise cases.CaseError(f"fretting-map takes one or two --vary keys, got {len(varied)}")
+    names = [n for n, _ in varied]
+    if len(set(names)) != len(names):
+        raise cases.CaseError("--vary names a key twice: " + ", ".join(names))
+    both = set(names) & {o.partition("=")[0].strip() for o in overrides}
+    if both:
+        raise cases.CaseError(f"key {sorted(both)[0]} is both in --set and --vary")
+    tasks = tasks_for(varied)
+    prov = provenance()
+    out = Path(out)
+    outcomes = run_cases(case_path, overrides, tasks, out, scheduler=scheduler, workers=workers,
+                         quiet=quiet, solve=solve, extra_meta=dict(study="fretting-map"))
+    rows = []
+    for t, o in zip(tasks, outcomes):
+        row = summarise(o)
+        row.update({n: ov.partition("=")[2] for n, ov in zip(names, t.overrides)})
+        rows.append(row)
+    record_study(out, "fretting-map", case, overrides, prov)
+    head = [f"# wearcheck fretting-map: {', '.join(names)}",
+            f"# command: {prov['command']}",
+            "# regime: partial slip when a stick zone survives the last cycle; "
+            "u_star = 3 mu F0 / (4 G* a0) of the unworn contact; wear_volume_per_cycle = "
+            "final worn volume / cycles [m^3]; energy_last_cycle [J]",
+            ",".join(list(names) + list(COLUMNS))]
+    body = [",".join(_cell(r[k]) for k in list(names) + list(COLUMNS)) for r in rows]
+    write_text_atomic(out / "fretting_map.csv", "\n".join(head + body) + "\n")
+    from wearcheck.comparisons.present.fretting_map_figure import write_figure
+    write_figure(rows, names, out / "fretting_map.png")
+    return rows
+
+
+def _cell(v):
+    if isinstance(v, str):
+        return '"' + v.replace('"', "'") + '"'
+    return fmt(v, ".10g")
