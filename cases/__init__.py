@@ -2,24 +2,17 @@
 
 ``cases.load(path, overrides)`` returns a validated, frozen :class:`Case`.
 The shipped cases (``hertz.toml``, ``truncated.toml``, ``paper.toml``) live
-beside this file; :func:`shipped` returns the path of one.
+beside this file; :func:`shipped` returns the path of one, :func:`resolve` the
+file a command line names (a path, or a shipped case's name).
 """
-
-from pathlib import Path
 
 from .case import (Case, dundurs_beta, effective_moduli, from_dict, key_reference, load, to_dict,
                    to_toml)
 from .errors import CaseError, SolverError, WearcheckError
 from .result import HISTORY_COLUMNS, RunResult
+from .catalog import describe, resolve, shipped, shipped_cases
 
 __all__ = ["Case", "CaseError", "SolverError", "WearcheckError", "RunResult",
            "HISTORY_COLUMNS", "load", "from_dict", "to_dict", "to_toml", "key_reference",
-           "effective_moduli", "dundurs_beta", "shipped"]
+           "effective_moduli", "dundurs_beta", "shipped", "shipped_cases", "resolve", "describe"]
 
-
-def shipped(name: str) -> Path:
-    """Path of a shipped case file, e.g. ``shipped("paper")``."""
-    path = Path(__file__).parent / f"{name.removesuffix('.toml')}.toml"
-    if not path.is_file():
-        raise CaseError(f"no shipped case '{name}'")
-    return path

@@ -250,7 +250,7 @@ def unworn_contact(case):
 
 
 def scales(case) -> dict:
-    """Natural scales of a case (physics.md §3), from its unworn contact.
+    """Natural scales of a case (docs/theory.md §5), from its unworn contact.
 
     a0, d0, F0: contact radius, depth, force of the unworn profile (Hertz's for
     the paraboloid; for the ellipsoid a0 = √(a b) of its contact ellipse, so
@@ -271,7 +271,7 @@ def scales(case) -> dict:
 
 
 def complete_wear_profile(r, R, depth):
-    """Fixed-depth limit of a worn paraboloid: max(r²/2R, d) (physics.md §5)."""
+    """Fixed-depth limit of a worn paraboloid: max(r²/2R, d) (docs/theory.md §6)."""
     return np.maximum(np.asarray(r, dtype=float) ** 2 / (2.0 * R), depth)
 
 
@@ -297,7 +297,7 @@ def worn_sphere_asymptote(R, F, s, wear_coefficient, *, exponent=1.0, hardness=1
 def predicted_scar_radius(case, s) -> float:
     """Radius the contact or scar can reach by sliding s [m], for sizing meshes.
 
-    Depth control: √2·a0 (complete wear, physics.md §5). Force control: the
+    Depth control: √2·a0 (complete wear, docs/theory.md §6). Force control: the
     long-run asymptote started from the unworn radius,
     (a0^(2(n+1)) + 2(n+1) R K_n (F/π)^n s)^(1/(2(n+1))), which bounds the scar
     from above at every s (the cap's elastic part only lowers it).

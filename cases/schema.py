@@ -301,7 +301,7 @@ def _type_name(tp) -> str:
     return str(tp)
 
 
-def _base_types(annotation) -> tuple:
+def base_types(annotation) -> tuple:
     """The non-None types a field's annotation allows."""
     tp = eval(annotation, vars(typing)) if isinstance(annotation, str) else annotation
     if isinstance(tp, types.UnionType) or typing.get_origin(tp) is typing.Union:
@@ -369,7 +369,7 @@ def _check_number(name, value, meta):
 def convert(name: str, f: dataclasses.Field, value: Any):
     """Check one raw TOML value against its declaration; return the typed value."""
     meta = f.metadata
-    allowed = _base_types(f.type)
+    allowed = base_types(f.type)
     origin = [typing.get_origin(t) for t in allowed]
     if tuple in origin:  # list of numbers
         if not isinstance(value, (list, tuple)) or not value:

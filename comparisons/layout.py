@@ -77,7 +77,9 @@ META = (
     Item("info", "", "the solver's facts about the run (steps, step used, grid, iterations)"),
     Item("command", "", "the command line that wrote this output"),
     Item("cwd", "", "the working directory of that command"),
-    Item("git_revision", "", "wearcheck's git revision when run from a checkout, else null"),
+    Item("wearcheck_version", "", "the version of wearcheck that wrote this output"),
+    Item("git_revision", "", "wearcheck's git revision (with -dirty for local changes) when it "
+                             "runs from a git checkout of wearcheck, else null"),
     Item("versions", "", "versions of Python, wearcheck and its dependencies"),
     Item("created", "", "local time of writing, ISO 8601"),
     Item("host", "", "the machine's name"),

@@ -21,6 +21,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -53,9 +54,21 @@ def write_text_atomic(path: str | Path, text: str) -> None:
         raise
 
 
+def wearcheck_version() -> str | None:
+    """The version of the wearcheck package that is running."""
+    try:
+        return importlib.metadata.version("wearcheck")
+    except importlib.metadata.PackageNotFoundError:
+        root = source_checkout()
+        if root is None:
+            return None
+        return tomllib.loads((root / "pyproject.toml").read_text(encoding="utf-8"))["project"].get(
+            "version")
+
+
 def versions() -> dict:
-    out = {"python": platform.python_version()}
-    for name in ("wearcheck",) + DEPENDENCIES:
+    out = {"python": platform.python_version(), "wearcheck": wearcheck_version()}
+    for name in DEPENDENCIES:
         try:
             out[name] = importlib.metadata.version(name)
         except importlib.metadata.PackageNotFoundError:
@@ -63,19 +76,48 @@ def versions() -> dict:
     return out
 
 
-def git_revision() -> str | None:
-    """The git revision of the source tree, with '-dirty' if it has changes."""
-    here = Path(__file__).resolve().parent
+def _git(args: list[str], cwd: Path) -> str | None:
     try:
-        rev = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True,
-                             text=True, timeout=5)
-        if rev.returncode != 0:
-            return None
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
-                               cwd=here, capture_output=True, text=True, timeout=5)
-        return rev.stdout.strip() + ("-dirty" if dirty.stdout.strip() else "")
+        done = subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True, timeout=5)
     except (OSError, subprocess.SubprocessError):
         return None
+    return done.stdout.strip() if done.returncode == 0 else None
+
+
+def source_checkout() -> Path | None:
+    """The root of the wearcheck git checkout this package runs from, or None.
+
+    The package's folders sit at the top level of the repository, so the root
+    is the folder above this one. It counts as a wearcheck checkout only when it
+    holds a pyproject.toml naming the project "wearcheck" and git's top level is
+    that very folder: an installed copy (site-packages/wearcheck/comparisons),
+    perhaps inside a user's own git repository, is not one.
+    """
+    root = Path(__file__).resolve().parent.parent
+    pyproject = root / "pyproject.toml"
+    try:
+        name = tomllib.loads(pyproject.read_text(encoding="utf-8"))["project"]["name"]
+    except (OSError, KeyError, TypeError, tomllib.TOMLDecodeError, UnicodeDecodeError):
+        return None
+    if name != "wearcheck":
+        return None
+    top = _git(["rev-parse", "--show-toplevel"], root)
+    if top is None or Path(top).resolve() != root:
+        return None
+    return root
+
+
+def git_revision() -> str | None:
+    """wearcheck's git revision, with '-dirty' if the checkout has changes; None
+    unless the package runs from a wearcheck checkout (see :func:`source_checkout`)."""
+    root = source_checkout()
+    if root is None:
+        return None
+    rev = _git(["rev-parse", "HEAD"], root)
+    if rev is None:
+        return None
+    dirty = _git(["status", "--porcelain", "--untracked-files=no"], root)
+    return rev + ("-dirty" if dirty else "")
 
 
 #: the command line of this process as the user typed it; set by the CLI
@@ -95,6 +137,9 @@ def provenance(argv=None) -> dict:
     return dict(
         command=shlex.join(argv),
         cwd=os.getcwd(),
+        wearcheck_version=wearcheck_version(),
+        # None unless running from a wearcheck git checkout (never the revision of a
+        # user's repository that an installed wearcheck happens to sit in)
         git_revision=git_revision(),
         versions=versions(),
         created=time.strftime("%Y-%m-%dT%H:%M:%S%z"),

@@ -7,7 +7,7 @@ nodal pressure p_i = f_i / A_i (A_i: lumped 2πr-weighted area).
 * explicit (forward) Euler: p from the contact at the start of the step;
   stable for Δs < 2 / (rate · λ_max(A⁻¹ C⁻¹)) (:func:`explicit_limit`);
 * implicit (backward) Euler: w_{n+1} = w_n + D f_{n+1}, D = rate Δs / A, so
-  one LCP with compliance C + D per step, no stability limit (physics.md §4);
+  one LCP with compliance C + D per step, no stability limit (docs/theory.md §7, §12);
 * adaptive: backward Euler with step doubling (one step of Δs, two of
   Δs/2); the difference estimates the local error and sets the step (a
   ladder of doublings and halvings); the two half steps are kept (monotone
@@ -47,7 +47,7 @@ def explicit_limit(C: np.ndarray, area: np.ndarray, rate: float) -> float:
     bound for any active subset (Schur complement), so the limit is safe.
     λ_max(A⁻¹ C⁻¹) = 1 / λ_min(A^½ C A^½), of order E*/h for node spacing h:
     measured Δŝ_max = (1.05-1.18) h/a0 with P2 and 1.46 h/a0 with P1, i.e.
-    Δs_max ≈ 1.1 h σ0 / (k μ E*) (physics.md §4 with C = O(1)).
+    Δs_max ≈ 1.1 h σ0 / (k μ E*) (docs/theory.md §7 with C = O(1)).
     """
     sa = np.sqrt(area)
     lam_min = linalg.eigvalsh(sa[:, None] * C * sa[None, :], subset_by_index=[0, 0])[0]

@@ -6,7 +6,7 @@ paraboloid of the equivalent radius √(R1 R2), its result marked
 ``solve(case, progress=None) -> cases.RunResult`` runs a case: N springs on
 0 <= x <= L = domain_factor·√2·a0, nodes uniform in t = x² (the 3D radii r
 share them), paper Eqs. 2, 3, 12, 13 integrated exactly over each segment,
-wear Δf = (k μ/σ0) σ0 (p/σ0)^n · slip (physics.md §3) by the adaptive scheme
+wear Δf = (k μ/σ0) σ0 (p/σ0)^n · slip (docs/theory.md §4) by the adaptive scheme
 (default: backward Euler with step doubling, error-controlled, Richardson's
 correction carried into the next step; docs/time-stepping.md), explicit
 Euler (the paper's; stable below a step limit it estimates and enforces),

@@ -7,7 +7,7 @@ segment integral is done in closed form (segment-exact) and depends only on
 the index difference, so each transform is a triangular Toeplitz convolution,
 applied by FFT in O(N log N) without forming a matrix.
 
-Paper Eq. 2 (with the tip offset f(0) kept, physics.md §2)::
+Paper Eq. 2 (with the tip offset f(0) kept, docs/theory.md §2)::
 
     g(x) = f(0) + x ∫_0^x f'(r) / sqrt(x² - r²) dr = f(0) + sqrt(t) ∫_0^t f_τ / sqrt(t - τ) dτ
 

@@ -1,4 +1,4 @@
-"""Gross-slip Reye–Archard wear steps (paper Eqs. 1, 14-16; physics.md §3-4).
+"""Gross-slip Reye–Archard wear steps (paper Eqs. 1, 14-16; docs/theory.md §4, §7-8).
 
 The state is the worn 3D profile f at the nodes. One step over a sliding
 increment h raises it by Δf = K p S h, K = k μ/σ0, where S is the slip per
@@ -10,7 +10,7 @@ uses the pressure at its end: on the contact nodes 0..m it solves
     T⁻¹[q/E*] + h K S p = d - f_n,      q = P⁻¹ p,
 
 the contact problem of the 3D compliance plus a diagonal wear compliance
-(physics.md §4). The variable-step BDF2 is the same problem with f_n replaced
+(docs/theory.md §7-8). The variable-step BDF2 is the same problem with f_n replaced
 by a f_n + b f_{n-1} and h by c h (:func:`bdf2_coefficients`).
 
 T⁻¹ and P⁻¹ are triangular, so on the contact set only their leading blocks

@@ -99,7 +99,7 @@ def test_truncated_paraboloid_depth_under_force_control():
     b, F = 5e-5, 10.0
     case, res = unworn("truncated_paraboloid", N=800, control="force", force=F)
     ref = reference.truncated_paraboloid(case.E_star, R, b, force=F)
-    # closed-form d for the force (physics.md §5); same edge and kink errors
+    # closed-form d for the force (docs/theory.md §6); same edge and kink errors
     # as above (measured 3.9e-5 relative at N = 800)
     assert res.history["force"][0] == pytest.approx(F, rel=1e-12)
     assert res.history["depth"][0] == pytest.approx(ref["depth"], rel=1e-4)

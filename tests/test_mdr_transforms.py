@@ -21,7 +21,7 @@ def test_paraboloid_to_1d_is_exact():
 
 
 def test_tip_offset_is_kept():
-    # physics.md §2: a worn tip f(0) != 0 shifts g by the same constant
+    # docs/theory.md §2: a worn tip f(0) != 0 shifts g by the same constant
     x = transforms.grid(200, L)
     f = x**2 / (2 * R)
     offset = 3e-7

@@ -49,7 +49,7 @@ def force_at(res, s_hat):
 
 
 def test_complete_wear_at_fixed_depth():
-    # physics.md §5: the worn tip ends flush at depth d, F -> 0, a -> sqrt(2) a0
+    # docs/theory.md §6: the worn tip ends flush at depth d, F -> 0, a -> sqrt(2) a0
     case = make(N=200, force_fraction=1e-4, step_hat=0.5)
     res = mdr.solve(case)
     sc = reference.scales(case)

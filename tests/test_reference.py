@@ -39,7 +39,7 @@ def test_hertz_pressure_integrates_to_force():
 
 
 def test_quadrature_transform_reproduces_known_pairs():
-    # paraboloid r²/2R <-> x²/R; cone r tanθ <-> (π/2) x tanθ (physics.md §2)
+    # paraboloid r²/2R <-> x²/R; cone r tanθ <-> (π/2) x tanθ (docs/theory.md §2)
     par = indenter(profile="paraboloid", radius=R)
     cone = indenter(profile="cone", slope_angle=0.1)
     for x in (1e-5, 7e-5, 2e-4):

@@ -87,7 +87,7 @@ def test_mdr_sweep_over_the_wear_coefficient_is_self_similar(cluster, tmp_path):
     with open(out / "sweep.csv", newline="") as fh:
         rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
     assert [r["wear.k"] for r in rows] == ["1e-5", "1e-4", "1e-3"]
-    # Archard wear depends on k and s only through ŝ ∝ k s (physics.md §3): the
+    # Archard wear depends on k and s only through ŝ ∝ k s (docs/theory.md §5): the
     # runs are one solution in ŝ, so k·s at the end and F/F0 agree to rounding
     # (sweep.csv keeps 10 digits)
     ks = [float(r["wear.k"]) * float(r["final_s"]) for r in rows]

@@ -17,6 +17,7 @@ import argparse
 import importlib
 import os
 import pkgutil
+import re
 import signal
 import sys
 import warnings
@@ -48,6 +49,15 @@ def _subcommands():
             yield importlib.import_module(f"{__name__}.{info.name}")
 
 
+def plain(text: str | None) -> str | None:
+    """Help text without reST markup: ``x`` and :role:`x` become x (the module
+    docstrings that serve as descriptions are written for Sphinx too)."""
+    if not text:
+        return text
+    text = re.sub(r":[a-z]+:`~?([^`]+)`", r"\1", text)
+    return text.replace("``", "")
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with its usage errors on one line (exit 2), like every other error."""
 
@@ -69,6 +79,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for module in _subcommands():
         p = module.add_parser(sub)
+        p.description = plain(p.description)
+        for action in p._actions:
+            action.help = plain(action.help)
         p.set_defaults(_main=module.main)
     return parser
 

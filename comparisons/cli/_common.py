@@ -9,7 +9,9 @@ from wearcheck import cases
 
 
 def add_case_arguments(parser) -> None:
-    parser.add_argument("case", type=Path, help="case file (TOML)")
+    parser.add_argument("case", type=Path, metavar="CASE",
+                        help="case file (TOML), or the name of a shipped case such as paper "
+                             "('wearcheck cases' lists them)")
     parser.add_argument("--set", dest="overrides", action="append", default=[],
                         metavar="SECTION.KEY=VALUE",
                         help="override a case key (repeatable), validated like the file")
@@ -17,7 +19,12 @@ def add_case_arguments(parser) -> None:
 
 
 def load_case(args) -> cases.Case:
-    """Load the case named on the command line; print its remarks unless quiet."""
+    """Load the case named on the command line; print its remarks unless quiet.
+
+    ``args.case`` becomes the case file's path (a shipped case's name resolved),
+    which is what the studies hand on to their workers.
+    """
+    args.case = cases.resolve(args.case)
     case = cases.load(args.case, args.overrides)
     if not getattr(args, "quiet", False):
         for text in case.warnings:

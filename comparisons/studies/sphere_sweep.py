@@ -63,7 +63,7 @@ def sphere_sweep(case, ratios=SPHERE_RATIOS, *, solver="fem", solve=None, quiet=
         if "force_rel" not in r or abs(r["force_rel"]) > tol:
             break
         limit = r["a0_over_R"]
-    # ΔF/F ≈ c · a0/R for small a0/R; physics.md §7's approach shift (4/(3π)) a/R
+    # ΔF/F ≈ c · a0/R for small a0/R; docs/theory.md §13: the approach shift (4/(3π)) a/R
     # with F ∝ d^(3/2) gives c = 2/π
     small = [(r["a0_over_R"], r["force_rel"]) for r in rows
              if "force_rel" in r and r["a0_over_R"] <= 0.02]

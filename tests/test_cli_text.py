@@ -1,0 +1,63 @@
+"""What the command line says: help without reST markup or internal module names,
+the elastic-similarity note once per command."""
+
+import argparse
+import re
+
+import pytest
+
+from wearcheck import cases
+from wearcheck.comparisons.cli import build_parser, main as cli_main, plain
+
+
+def _subparsers():
+    parser = build_parser()
+    action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return parser, action.choices
+
+
+def test_every_subcommand_has_help():
+    parser, choices = _subparsers()
+    assert {"run", "compare", "refine", "sweep", "mesh", "export", "render", "cases"} <= set(choices)
+
+
+@pytest.mark.parametrize("name", sorted(_subparsers()[1]))
+def test_help_has_no_markup_and_no_internal_module_names(name):
+    parser, choices = _subparsers()
+    text = choices[name].format_help() + parser.format_help()
+    assert "``" not in text
+    assert not re.search(r":(mod|func|class|meth|attr|data|ref):", text)
+    # internal modules: wearcheck.x, comparisons.x, cases.x, mdr/, *.py
+    assert not re.search(r"\b(wearcheck|comparisons|cases)\.[a-z_]+\b", text), text
+    assert not re.search(r"\b[a-z_]+\.py\b", text), text
+
+
+def test_plain_removes_roles_and_literals():
+    assert plain("``wearcheck run``: see :func:`~x.y` and :mod:`z`") == "wearcheck run: see x.y and z"
+    assert plain(None) is None
+
+
+def _note_count(text):
+    return text.count("elastic similarity (paper Eq. 7) does not hold")
+
+
+def test_hertz_case_has_the_note():
+    # the shipped hertz case (elastic sphere on a rigid plane) is not elastically
+    # similar: Dundurs' beta = (1 - 2ν) / (2 (1 - ν)) = 0.2857 for ν = 0.3
+    case = cases.load(cases.shipped("hertz"))
+    assert cases.dundurs_beta(case.indenter, case.counterface) == pytest.approx(0.4 / 1.4)
+    assert len(case.warnings) == 1
+
+
+@pytest.mark.parametrize("argv", [
+    ["run", "hertz", "--set", "mdr.elements=50"],
+    ["run", "hertz", "--solver", "fem", "--set", "fem.contact_nodes=30"],
+    ["compare", "hertz", "--no-render", "--set", "mdr.elements=100",
+     "--set", "fem.contact_nodes=30"],
+])
+def test_the_similarity_note_is_printed_once_per_command(argv, tmp_path, capsys):
+    code = cli_main(argv + ["--out", str(tmp_path / "out")])
+    assert code in (0, 1)  # a coarse comparison may fail its tolerances; not the point here
+    assert _note_count(capsys.readouterr().err) == 1
+    cli_main(argv + ["--out", str(tmp_path / "out"), "--quiet"])
+    assert _note_count(capsys.readouterr().err) == 0
