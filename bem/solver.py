@@ -45,7 +45,7 @@ def largest_contact_radius(case, sc: dict) -> float:
         a_long = max(c["semi_axis_x"], c["semi_axis_y"])
         if ld.control == "depth":
             return math.sqrt(2.0 * r_big * ld.depth)
-        volume = case.wear_rate * ld.force * (case.sliding.distance or 0.0)
+        volume = case.wear_rate * ld.force * (case.end_distance or 0.0)
         # an elliptic paraboloid holds V = π √(R1 R2) h² below the level h
         level = math.sqrt(volume / (math.pi * profiles.equivalent_radius(ind)))
         return max(a_long, math.sqrt(2.0 * r_big * level))
@@ -64,7 +64,7 @@ def largest_contact_radius(case, sc: dict) -> float:
 
     if ld.control == "depth":
         return max(sc["a0"], beyond(ld.depth))
-    volume = case.wear_rate * ld.force * (case.sliding.distance or 0.0)
+    volume = case.wear_rate * ld.force * (case.end_distance or 0.0)
     if volume <= 0.0:
         return sc["a0"]
 

@@ -100,6 +100,8 @@ COMPARISON_FILES = (
     Item("case.toml", "", "the resolved case"),
     Item("edge_study/", "", "with --edge-study: runs at other grids and step, edge_peak.png"),
     Item("finite_sphere.png", "", "with --sphere-sweep: FEM force against the half-space's"),
+    Item("scar.png", "", "a ball that slides: scar diameter and worn volume against cycles "
+                         "(log axes) with the long-run asymptote and the lab's π D⁴/64R"),
 )
 
 #: metrics.json keys
@@ -120,10 +122,17 @@ METRICS = (
     Item("step_hat", "", "per solver: median sliding step in ŝ"),
     Item("run_end", "", "per solver: ŝ and F/F0 where the run ended"),
     Item("approximate", "", "per solver that solved an approximation of the case: why"),
+    Item("anisotropy", "", "per solver with a square grid (BEM), per stage: largest "
+                           "deviation of pressure (/p0) and wear (/d) from ring averages"),
     Item("edge_peaks", "", "per solver and stage: the edge-peak detector's finding"),
     Item("truncated_reference", "", "truncated paraboloid: each solver against the quadrature"),
     Item("edge_study", "", "with --edge-study: levels, peaks and verdicts per solver"),
     Item("sphere_sweep", "", "with --sphere-sweep: finite-body force against half-space"),
+    Item("reference_note", "", "why the reference is not the default one (e.g. MDR solved "
+                               "an approximation of the case)"),
+    Item("scar", "", "per solver, at the end of the run: cycles, s, scar_diameter, "
+                     "wear_center, wear_volume, lab_volume (π D⁴/64R), lab_volume_deviation, "
+                     "and under force control archard_volume and the asymptotes [SI]"),
     Item("stages_requested_s_hat", "", "the stages the case asked for"),
     Item("stages_reached", "", "per solver: how many of them it stored"),
     Item("renders", "", "the pictures rendered into the run directories (relative paths)"),
@@ -134,7 +143,8 @@ METRICS = (
     Item("data_dictionary", "", "units and meanings of every file and key"),
 )
 #: metrics.json keys present only with their option or profile
-METRICS_OPTIONAL = ("truncated_reference", "edge_study", "sphere_sweep")
+METRICS_OPTIONAL = ("truncated_reference", "edge_study", "sphere_sweep", "reference_note",
+                    "scar")
 
 #: the per-stage entries of metrics.json pairs.<solver>.stages
 STAGE_METRICS = (

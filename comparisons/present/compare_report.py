@@ -67,6 +67,8 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
         blocks.append(R.para(f"Note: {w}"))
     for n, text in m.get("approximate", {}).items():
         blocks.append(R.para(f"Approximate: {title(n)} — {text}"))
+    if m.get("reference_note"):
+        blocks.append(R.para(f"Reference: {m['reference_note']}."))
     tol = m["tolerances"]
     blocks += [R.heading("Metrics per stage"),
                R.para(f"Tolerances: profile {tol['profile_tolerance']:g}·d, force "
@@ -105,6 +107,8 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
                              fmt(v["pressure_near_b_max"]), fmt(v["pressure_edge_max"]),
                              "pass" if v["passed"] else "FAIL"]
                             for n, v in tr["solvers"].items()])]
+    blocks += _scar_blocks(m)
+    blocks += _anisotropy_blocks(m)
     blocks += _edge_blocks(m)
     if "sphere_sweep" in m:
         blocks += _sphere_blocks(m["sphere_sweep"])
@@ -166,6 +170,48 @@ def _pair_blocks(m, name, pair) -> list:
                          f"({other} history interpolated onto {ref}'s steps; not part of the "
                          "verdict)."))
     return blocks
+
+
+def _scar_blocks(m) -> list:
+    """What an experimenter reads off at the end of the test, per solver."""
+    scars = m.get("scar")
+    if not scars:
+        return []
+    R, fmt = report, report.fmt
+    rows = []
+    for n, t in scars.items():
+        rows.append([title(n), fmt(t.get("cycles"), 4), fmt(t["s"], 4),
+                     fmt(t["scar_diameter"] * 1e3, 4), fmt(t["wear_center"] * 1e6, 4),
+                     fmt(t["wear_volume"] * 1e9, 4), fmt(t["lab_volume"] * 1e9, 4),
+                     f"{100 * t['lab_volume_deviation']:+.2f} %",
+                     fmt(t["asymptote_diameter"] * 1e3, 4) if "asymptote_diameter" in t
+                     else "—"])
+    return [R.heading("The scar (what a wear rig measures)"),
+            R.para("At the end of the run: scar diameter D (where the wear exceeds 1e-3 of "
+                   "its largest value), central wear depth, true worn volume, and the volume "
+                   "a laboratory computes from D by the ball formula π D⁴/(64 R), which "
+                   "ignores the elastic recovery of the worn surface. Under constant force "
+                   "the scar tends to 2(4 R K F s/π)^(1/4) (docs/time-stepping.md). Figure: "
+                   "scar.png."),
+            R.table(["solver", "cycles", "s [m]", "D [mm]", "central wear [µm]",
+                     "V [mm³]", "V lab [mm³]", "V lab / V − 1", "D asymptote [mm]"], rows)]
+
+
+def _anisotropy_blocks(m) -> list:
+    """The BEM's square grid against round contacts: deviation from ring averages."""
+    rows = []
+    for n, info in m.get("anisotropy", {}).items():
+        for k, (pi, w) in enumerate(zip(info.get("pressure_interior", []),
+                                        info.get("wear", []))):
+            rows.append([title(n), k, report.fmt(pi), report.fmt(w)])
+    if not rows:
+        return []
+    return [report.heading("Anisotropy of the grid", 3),
+            report.para("Largest deviation of the pressure (on the rings wholly in contact, "
+                        "relative to p0) and of the wear depth (relative to d) from their "
+                        "azimuthal averages, per stage: what a square grid does to a round "
+                        "contact."),
+            report.table(["solver", "stage", "max |p − ⟨p⟩|/p0", "max |w − ⟨w⟩|/d"], rows)]
 
 
 def _failure_text(m) -> str:

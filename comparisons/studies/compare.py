@@ -200,12 +200,28 @@ def analyse(case, results, reference_solver=None) -> dict:
                     for k, v in results.items()}
     m["approximate"] = {k: v.info.get("approximate") for k, v in results.items()
                         if v.info.get("approximate")}
+    m["anisotropy"] = {k: v.info["anisotropy"] for k, v in results.items()
+                       if isinstance(v.info.get("anisotropy"), dict)}
     tr = truncated_reference(case, results, sc)
     if tr is not None:
         m["truncated_reference"] = tr
         m["passed"] = bool(m["passed"] and tr["passed"])
     m["edge_peaks"] = {k: peaks_of(v, sc) for k, v in results.items()}
     return m
+
+
+def scar_tables(case, results) -> dict:
+    """Scar diameter, central wear and volume per solver for a ball that wears
+    long enough to have a scar (a sphere or paraboloid that slides), else {}."""
+    from wearcheck.comparisons.analysis import scar
+    if case.indenter.profile not in ("sphere", "paraboloid") or not case.indenter.radius:
+        return {}
+    out = {}
+    for name, res in results.items():
+        if "scar_radius" in res.history and len(res.history["s"]) > 1 \
+                and res.history["s"][-1] > 0:
+            out[name] = scar.scar_table(res.history, case)
+    return out
 
 
 def peaks_of(result, sc) -> list[dict]:
@@ -247,7 +263,24 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
     for name in names:
         check_memory(case, name)
     results = run_solvers(case, names, solve=solve, quiet=quiet)
+    switched = None
+    if reference_solver is None and results[ref].info.get("approximate"):
+        # the default reference solved an approximation of this case: the first
+        # solver that solved the case itself is the reference instead
+        exact = [n for n in names if not results[n].info.get("approximate")]
+        if exact:
+            switched = (ref, exact[0])
+            ref = exact[0]
+            results = {ref: results[ref], **{n: r for n, r in results.items() if n != ref}}
     m = analyse(case, results, ref)
+    if switched:
+        m["reference_note"] = (f"{registry.get(switched[0]).title} solved an approximation "
+                               f"of this case, so {registry.get(switched[1]).title} is the "
+                               "reference")
+    scars = scar_tables(case, results)
+    if scars:
+        from wearcheck.comparisons.analysis import scar
+        m["scar"] = {n: scar.summary(t) for n, t in scars.items()}
     study = None
     if edge:
         study = edge_mod.edge_study(case, results, solve=solve, quiet=quiet)
@@ -279,6 +312,11 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
         if sweep is not None:
             sweep["figure"] = compare_figures.draw_sphere_sweep(tmp, sweep)
             m["sphere_sweep"] = sweep
+        if scars:
+            from wearcheck.comparisons.present.scar_figure import scar_figure
+            scar_figure(tmp / "scar.png", {registry.get(n).title: t for n, t in scars.items()},
+                        title="scar diameter and worn volume")
+            figure_names.append("scar.png")
         notes = compare_figures.try_render([tmp / n for n in names])["notes"] if render else []
         renders = compare_figures.find_renders(tmp, names)
         m["renders"] = renders
