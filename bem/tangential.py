@@ -284,12 +284,13 @@ def _state(op, prev, tx, ty, wx, wy, bound, displacement, it, res):
 
 
 def solve_force(op, pressure, mu, force, previous=None, *, tol=1e-7, force_rtol=1e-6,
-                **kw) -> TangentialState:
+                max_solves=60, **kw) -> TangentialState:
     """The increment to the tangential force Qx = ``force`` (δy = 0), |Q| < μ Δ² Σ p.
 
-    Qx(δx) is continuous and non-decreasing; δx is found by Brent's method
-    between the previous displacement and the displacement at which the
-    whole contact slides (bracket grown as needed), each solve warm-started.
+    Qx(δx) is continuous and non-decreasing: δx is bracketed from the
+    previous displacement (steps doubling) and found by the Illinois variant
+    of regula falsi to |Qx - force| <= force_rtol·μF, each solve warm-started
+    from the last.
     """
     prev = previous if previous is not None else zero_state(op.n)
     area = op.spacing**2
@@ -297,29 +298,42 @@ def solve_force(op, pressure, mu, force, previous=None, *, tol=1e-7, force_rtol=
     if not abs(force) < limit:
         raise SolverError(f"tangential force {force:g} N is at or beyond μ·F = {limit:g} N: "
                           "gross slip")
-    last = {"state": prev}
+    warm = {"state": prev}
+    solves = [0]
 
     def excess(dx):
+        if solves[0] >= max_solves:
+            raise SolverError(f"tangential force control: {max_solves} solves did not reach "
+                              f"Q = {force:g} N to {force_rtol:g} μF")
+        solves[0] += 1
         st = solve(op, pressure, mu, (dx, prev.displacement[1]), prev, tol=tol, **kw)
-        last["state"] = st
-        return st.force[0] - force
+        # warm start of the next solve from this one's traction
+        warm["state"] = st
+        return st, st.force[0] - force
 
-    d0 = prev.displacement[0]
-    f0 = prev.force[0] - force
-    if f0 == 0.0:
-        return solve(op, pressure, mu, prev.displacement, prev, tol=tol, **kw)
-    step = math.copysign(limit * op.self_compliance / area, -f0)
+    ftol = force_rtol * limit
+    d0, f0 = prev.displacement[0], prev.force[0] - force
+    if abs(f0) <= ftol:
+        return excess(d0)[0]
+    # the full-stick stiffness bounds Q'(δ) from above: this first step undershoots
+    step = -f0 * op.self_compliance / area
     d1 = d0 + step
-    while excess(d1) * f0 > 0.0:
-        d0, f0 = d1, excess(d1)
+    st, f1 = excess(d1)
+    while f1 * f0 > 0.0 and abs(f1) > ftol:
+        d0, f0 = d1, f1
         step *= 2.0
         d1 = d0 + step
-        if abs(step) > 1e6 * op.self_compliance * limit / area:
-            raise SolverError("tangential force control: no bracket found")
-    lo, hi = sorted((d0, d1))
-    dx = optimize.brentq(excess, lo, hi, rtol=1e-12, xtol=force_rtol * abs(force) * 1e-3 *
-                         op.self_compliance / area + 1e-300)
-    st = solve(op, pressure, mu, (dx, prev.displacement[1]), prev, tol=tol, **kw)
+        st, f1 = excess(d1)
+    while abs(f1) > ftol:
+        d = d1 - f1 * (d1 - d0) / (f1 - f0)
+        st, fd = excess(d)
+        if fd * f1 < 0.0:
+            d0, f0 = d1, f1
+        else:
+            # Illinois: the end kept has its value halved, so the bracket
+            # shrinks from both sides
+            f0 *= 0.5
+        d1, f1 = d, fd
     return st
 
 
