@@ -123,7 +123,7 @@ def compare(mdr: dict, bem: dict, mu: float) -> dict:
 
     Tractions in units of μ max p (the BEM's): the largest difference of τx
     along the x axis and along the y axis from the MDR's τ(|x|), inside the
-    contact.
+    contact, and the RMS of τx - τ(ρ) over the BEM's contact.
     """
     scale = mu * float(np.max(bem["pressure"]))
     x = bem["x"]
@@ -131,13 +131,17 @@ def compare(mdr: dict, bem: dict, mu: float) -> dict:
     inside = np.abs(x) < bem["contact_radius"]
     dx_ = np.max(np.abs(bem["tau_x_along_x"] - t_mdr)[inside]) / scale
     dy_ = np.max(np.abs(bem["tau_x_along_y"] - t_mdr)[inside]) / scale
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    loaded = bem["pressure"] > 0
+    t_mdr_2d = np.interp(np.hypot(X, Y), mdr["r"], mdr["tau"])
+    rms = math.sqrt(np.mean((bem["traction"][0] - t_mdr_2d)[loaded] ** 2)) / scale
     stick_area_mdr = math.pi * mdr["stick_radius"] ** 2
     return dict(
         stick_radius_mdr=mdr["stick_radius"], stick_radius_bem=bem["stick_radius"],
         stick_extent_x=bem["stick_extent_x"], stick_extent_y=bem["stick_extent_y"],
         stick_area_rel=(bem["stick_area"] - stick_area_mdr) / stick_area_mdr
         if stick_area_mdr > 0 else math.nan,
-        tau_diff_x=dx_, tau_diff_y=dy_, tau_y_max=bem["tau_y_max"] / scale,
+        tau_diff_x=dx_, tau_diff_y=dy_, tau_rms=rms, tau_y_max=bem["tau_y_max"] / scale,
         energy_mdr=mdr["energy_per_cycle"], energy_bem=bem["energy_per_cycle"],
         energy_rel=(bem["energy_per_cycle"] - mdr["energy_per_cycle"])
         / mdr["energy_per_cycle"],
