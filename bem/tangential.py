@@ -48,7 +48,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.fft as sfft
-from scipy import optimize
 
 from wearcheck.cases import SolverError
 
@@ -147,8 +146,9 @@ class TangentialHalfSpace:
                     for K in (Kxx, Kyy, Kxy)]
         self.self_compliance = float(Kxx[0, 0])
         a, b, c = self.hat
-        self.largest_eigenvalue = float(np.max(0.5 * (a + b) + np.sqrt(0.25 * (a - b)**2
-                                                                      + c * c)))
+        # the largest eigenvalue of the 2 × 2 symbol: bounds A on any set of pixels
+        self.largest_eigenvalue = float(np.max(0.5 * (a + b)
+                                               + np.sqrt(0.25 * (a - b)**2 + c * c)))
         self._pad = np.zeros((2 * n, 2 * n))
         self.applications = 0
 

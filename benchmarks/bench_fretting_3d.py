@@ -22,12 +22,10 @@ times. The machine is shared (2 cores, several users): times are indicative.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
 
 from wearcheck import mdr
 from wearcheck.cases import load
@@ -82,25 +80,27 @@ def main(argv=None):
                              a_bem=b["contact_radius"]))
             print_row(rows[-1], header=(k == 0 and nu == 0.0))
             sys.stdout.flush()
-    print("\nc: stick radius over the MDR contact radius a of the stage; BEM c = √(A_stick/π), "
-          "cx, cy its half-widths on the axes (pixel Δ/a given); Δτx: max |τx,BEM - τMDR(|x|)| "
-          "on the x / y axis over μ max p, rms: RMS of τx,BEM - τMDR(ρ) over the contact; τy: max |τy,BEM| over μ max p; W: energy per cycle; "
-          "ΔQ: tangential force at +u0; loop: ∮Q dδ / W of the BEM (energy balance, "
-          f"trapezoidal rule on {4 * args.increments} increments per cycle).")
+    print("\nc: stick radius over the MDR contact radius a of the stage; BEM c = √(A_stick/π),"
+          "\ncx, cy its half-widths on the axes; Δτx: max |τx,BEM - τMDR(|x|)|"
+          "\non the x / y axis over μ max p; rms: RMS of τx,BEM - τMDR(ρ) over the contact;"
+          "\nτy: max |τy,BEM| over μ max p; W: energy per cycle; ΔQ: tangential force at +u0;"
+          "\nloop: ∮Q dδ / W of the BEM (energy balance, trapezoidal rule on "
+          f"{4 * args.increments} increments per cycle).")
     return rows
 
 
 def print_row(r, header=False):
     if header:
         print(f"{'ν':>4} {'cycles':>7} {'a µm':>7} {'c MDR':>7} {'c BEM':>7} {'cx':>6} "
-              f"{'cy':>6} {'ΔA_st':>7} {'Δτx(x)':>7} {'Δτx(y)':>7} {'rms':>6} {'τy':>6} {'W MDR nJ':>9} "
-              f"{'W BEM nJ':>9} {'ΔW':>7} {'ΔQ':>7} {'loop':>6} {'Δ/a':>6} {'t MDR':>6} "
-              f"{'t BEM':>6}")
+              f"{'cy':>6} {'ΔA_st':>7} {'Δτx(x)':>7} {'Δτx(y)':>7} {'rms':>6} {'τy':>6} "
+              f"{'W MDR nJ':>9} {'W BEM nJ':>9} {'ΔW':>7} {'ΔQ':>7} {'loop':>6} {'Δ/a':>6} "
+              f"{'t MDR':>6} {'t BEM':>6}")
     a = r["a"]
     print(f"{r['nu']:>4.1f} {r['cycles']:>7d} {a*1e6:>7.2f} {r['stick_radius_mdr']/a:>7.4f} "
           f"{r['stick_radius_bem']/a:>7.4f} {r['stick_extent_x']/a:>6.3f} "
           f"{r['stick_extent_y']/a:>6.3f} {r['stick_area_rel']:>+7.2%} {r['tau_diff_x']:>7.3f} "
-          f"{r['tau_diff_y']:>7.3f} {r['tau_rms']:>6.3f} {r['tau_y_max']:>6.3f} {r['energy_mdr']*1e9:>9.4f} "
+          f"{r['tau_diff_y']:>7.3f} {r['tau_rms']:>6.3f} {r['tau_y_max']:>6.3f} "
+          f"{r['energy_mdr']*1e9:>9.4f} "
           f"{r['energy_bem']*1e9:>9.4f} {r['energy_rel']:>+7.2%} {r['force_rel']:>+7.2%} "
           f"{r['loop']:>6.3f} {r['pixel']/a:>6.4f} {r['t_mdr']:>6.2f} {r['t_bem']:>6.1f}")
 
