@@ -85,18 +85,28 @@ def rectangle_integrals(x, y, half_x, half_y):
     return ones, xx, yy, xy
 
 
-def cerruti_kernels(n, spacing, shear_modulus, poisson):
+def padded_size(n):
+    """The FFT length of the zero padding: at least 2n, and fast for scipy.fft."""
+    return sfft.next_fast_len(2 * n, real=True)
+
+
+def cerruti_kernels(n, spacing, shear_modulus, poisson, m=None):
     """Influence coefficients K_xx, K_yy, K_xy [m/Pa] of a unit traction on one pixel.
 
     u_x at pixel offset (i, j) from τx = 1 on pixel (0, 0) is K_xx[i, j],
-    u_y from it K_xy[i, j]; u_y from τy is K_yy. On the 2n × 2n wrap-around
-    grid of the DC-FFT with the row and column at offset ±n zero
-    (:func:`bem.operator.influence_kernel`).
+    u_y from it K_xy[i, j]; u_y from τy is K_yy. On the m × m wrap-around
+    grid of the DC-FFT (m >= 2n, default :func:`padded_size`): offset i at
+    index i mod m for |i| < n, zero elsewhere, so the circular convolution
+    equals the linear one on the n × n box (:func:`bem.operator.influence_kernel`
+    with m = 2n).
     """
-    m = 2 * n
+    m = padded_size(n) if m is None else m
+    if m < 2 * n:
+        raise ValueError(f"padding {m} < 2n = {2 * n}")
     off = np.arange(m)
     off = np.where(off < n, off, off - m).astype(float)
-    off[n] = 0.0
+    far = np.abs(off) >= n
+    off[far] = 0.0
     X, Y = np.meshgrid(off * spacing, off * spacing, indexing="ij")
     ones, xx, yy, xy = rectangle_integrals(X, Y, 0.5 * spacing, 0.5 * spacing)
     c = 1.0 / (2.0 * math.pi * shear_modulus)
@@ -104,8 +114,8 @@ def cerruti_kernels(n, spacing, shear_modulus, poisson):
                c * ((1.0 - poisson) * ones + poisson * yy),
                c * poisson * xy]
     for K in kernels:
-        K[n, :] = 0.0
-        K[:, n] = 0.0
+        K[far, :] = 0.0
+        K[:, far] = 0.0
     return kernels
 
 
@@ -139,7 +149,8 @@ class TangentialHalfSpace:
     def __init__(self, n, spacing, shear_modulus, poisson, workers=1):
         self.n, self.spacing = n, spacing
         self.shear_modulus, self.poisson, self.workers = shear_modulus, poisson, workers
-        Kxx, Kyy, Kxy = cerruti_kernels(n, spacing, shear_modulus, poisson)
+        m = padded_size(n)
+        Kxx, Kyy, Kxy = cerruti_kernels(n, spacing, shear_modulus, poisson, m)
         # K_xx, K_yy are even in both offsets, K_xy odd in both: all three
         # transforms are real
         self.hat = [np.ascontiguousarray(sfft.rfft2(K, workers=workers).real)
@@ -149,7 +160,7 @@ class TangentialHalfSpace:
         # the largest eigenvalue of the 2 × 2 symbol: bounds A on any set of pixels
         self.largest_eigenvalue = float(np.max(0.5 * (a + b)
                                                + np.sqrt(0.25 * (a - b)**2 + c * c)))
-        self._pad = np.zeros((2 * n, 2 * n))
+        self._pad = np.zeros((m, m))
         self.applications = 0
 
     def __call__(self, tx, ty):
