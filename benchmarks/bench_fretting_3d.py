@@ -1,7 +1,14 @@
 """A 3D check of the MDR's fretting mapping with the BEM (issue 12, §5). Prints a table.
 
-    python benchmarks/bench_fretting_3d.py [--n 129] [--increments 2] [--quick]
+    python benchmarks/bench_fretting_3d.py [--n 129] [--increments 2] [--pixels 65,97,129]
+                                           [--quick]
 
+Table 1: the BEM's pixel convergence on the unworn sphere against the closed
+forms written with G* (Cattaneo–Mindlin stick radius, Mindlin–Deresiewicz
+energy per cycle, the force at +u0): exact at ν = 0, the size of Cattaneo–
+Mindlin's approximation at ν = 0.3.
+
+Table 2 (the comparison):
 For ν = 0 and ν = 0.3 (cases/fretting.toml with indenter.poisson_ratio set,
 rigid counterface, amplitude u0 = 0.18 µm held), the MDR fretting run to
 10^5 cycles gives worn profiles after 0 (unworn), 10, 10^3, 10^5 cycles.
@@ -22,13 +29,16 @@ times. The machine is shared (2 cores, several users): times are indicative.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from pathlib import Path
 
+import numpy as np
 
 from wearcheck import mdr
 from wearcheck.cases import load
+from wearcheck.cases import reference_fretting as rf
 from wearcheck.comparisons import fretting3d
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,13 +50,19 @@ def main(argv=None):
     ap.add_argument("--n", type=int, default=129, help="BEM pixels per side (odd)")
     ap.add_argument("--increments", type=int, default=2,
                     help="BEM increments per quarter cycle")
+    ap.add_argument("--pixels", default="65,97,129",
+                    help="pixels per side of table 1 (unworn sphere)")
     ap.add_argument("--quick", action="store_true", help="n = 65, stages 0 and 10")
     args = ap.parse_args(argv)
     n = 65 if args.quick else args.n
     stages = STAGES[:2] if args.quick else STAGES
     print("# 3D check of the MDR fretting mapping with the BEM "
           "(shared 2-core machine: times indicative)")
+    pixels = [65] if args.quick else [int(v) for v in args.pixels.split(",")]
+    pixel_convergence(pixels, args.increments)
     rows = []
+    print("\n## MDR against BEM on the MDR's profiles (BEM on "
+          f"{n if n % 2 else n + 1}² pixels)")
     for nu in (0.0, 0.3):
         case = load(ROOT / "cases" / "fretting.toml",
                     [f"indenter.poisson_ratio={nu}", f"fretting.cycles={stages[-1]}",
@@ -87,6 +103,35 @@ def main(argv=None):
           "\nloop: ∮Q dδ / W of the BEM (energy balance, trapezoidal rule on "
           f"{4 * args.increments} increments per cycle).")
     return rows
+
+
+def pixel_convergence(pixels, increments):
+    """Table 1: BEM on the unworn sphere against the closed forms with G*."""
+    print("\n## BEM on the unworn sphere against Cattaneo–Mindlin / Mindlin–Deresiewicz "
+          "(written with G*)")
+    print(f"{'ν':>4} {'n':>4} {'Δ/a':>7} {'a_BEM/a':>8} {'c_BEM/c':>8} {'cx/c':>6} {'cy/c':>6} "
+          f"{'Q/Q_CM':>8} {'W/W_MD':>8} {'τy/μp0':>7} {'t s':>6}")
+    for nu in (0.0, 0.3):
+        case = load(ROOT / "cases" / "fretting.toml", [f"indenter.poisson_ratio={nu}"])
+        R, F, mu, u0 = (case.indenter.radius, case.loading.force, case.wear.mu,
+                        case.fretting.amplitude)
+        a = (3.0 * F * R / (4.0 * case.E_star)) ** (1.0 / 3.0)
+        u_star = rf.gross_slip_displacement(mu, F, case.G_star, a)
+        c = rf.stick_radius(a, R, case.E_star, case.G_star, mu, u0)
+        Q = float(rf.tangential_force(u0, mu, F, u_star))
+        W = rf.energy_per_cycle_displacement(u0, mu, F, u_star)
+        r = np.linspace(0.0, 3.0 * a, 3001)
+        for n in pixels:
+            t0 = time.perf_counter()
+            b = fretting3d.bem_fretting(r, r**2 / (2 * R), R, F, case.E_star, case.G_star, mu,
+                                        u0, a, n=n, increments=increments)
+            t = time.perf_counter() - t0
+            p0 = 3 * F / (2 * math.pi * a * a)
+            print(f"{nu:>4.1f} {b['n']:>4d} {b['pixel']/a:>7.4f} {b['contact_radius']/a:>8.4f} "
+                  f"{b['stick_radius']/c:>8.4f} {b['stick_extent_x']/c:>6.3f} "
+                  f"{b['stick_extent_y']/c:>6.3f} {b['tangential_force']/Q:>8.5f} "
+                  f"{b['energy_per_cycle']/W:>8.5f} {b['tau_y_max']/(mu*p0):>7.4f} {t:>6.1f}")
+            sys.stdout.flush()
 
 
 def print_row(r, header=False):
