@@ -79,6 +79,15 @@ def explicit_limit(op: HalfSpace, wear_rate: float) -> float:
     return 2.0 * op.smallest_eigenvalue() / wear_rate
 
 
+def in_contact(model: Model, p: np.ndarray) -> np.ndarray:
+    """The loaded pixels: p above the solve's tolerance (p0 · tol).
+
+    A free pixel may keep a pressure below tol · p0 at convergence (the
+    complementarity residual allows it); it is not counted as in contact.
+    """
+    return p > model.tol * model.p_scale
+
+
 def check_edge(p: np.ndarray) -> None:
     """The contact must stay inside the box: no load on its outermost pixels."""
     if np.any(p[0] > 0) or np.any(p[-1] > 0) or np.any(p[:, 0] > 0) or np.any(p[:, -1] > 0):
@@ -126,7 +135,8 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
         hist["s"].append(s)
         hist["force"].append(st.force)
         hist["depth"].append(st.depth)
-        hist["contact_radius"].append(math.sqrt(np.count_nonzero(st.p > 0) * area / math.pi))
+        hist["contact_radius"].append(math.sqrt(np.count_nonzero(in_contact(model, st.p))
+                                                * area / math.pi))
         hist["wear_center"].append(float(w[i0, j0]))
         hist["wear_volume"].append(float(np.sum(w)) * area)
         hist["max_pressure"].append(float(np.max(st.p)))

@@ -1,0 +1,108 @@
+"""ParaView files of the BEM's surface fields: ImageData (.vti) per stage in a PVD series.
+
+``write_image_series(directory, fields, stage_s, ...)`` writes
+``NAME_KKK.vti`` for every stored stage K and ``NAME.pvd`` over them (time
+values: the sliding distances s [m]). Each image is the BEM's pixel grid:
+one VTK cell per pixel (the pressure is uniform on a pixel), origin and
+spacing in metres, x along the first array axis; cell data ``profile``,
+``wear_depth``, ``pressure``, ``gap`` [m, m, Pa, m] (and ``p_over_p0`` when
+p0 is given); field data ``s``, ``stage`` (and ``s_hat``).
+
+``export_run(run_dir)`` writes ``RUN_DIR/vtk/`` for a BEM run directory
+atomically: the ring-averaged series of :mod:`comparisons.vtk` (``profile``,
+``pressure``, ``surface``) plus the ``surface_fields`` image series.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from wearcheck.cases import WearcheckError
+
+from .runio import Run, atomic_directory
+from .vtk import pvd_text, write_vtk_files
+
+#: the per-stage surface fields of a BEM run (``RunResult.fields``)
+IMAGE_FIELDS = ("profile", "wear_depth", "pressure", "gap")
+
+
+def check_image_fields(fields, n_stages: int) -> None:
+    """Raise ``WearcheckError`` unless ``fields`` holds the BEM's x, y and (K, nx, ny) fields."""
+    missing = [k for k in ("x", "y", *IMAGE_FIELDS) if k not in fields]
+    if missing:
+        raise WearcheckError(f"fields.npz lacks {missing} (not a BEM run?)")
+    shape = (n_stages, len(fields["x"]), len(fields["y"]))
+    for key in IMAGE_FIELDS:
+        if np.shape(fields[key]) != shape:
+            raise WearcheckError(f"fields.npz: '{key}' has shape {np.shape(fields[key])}, "
+                                 f"expected {shape}")
+    for axis in ("x", "y"):
+        step = np.diff(np.asarray(fields[axis], dtype=float))
+        if len(step) == 0 or not np.allclose(step, step[0], rtol=1e-9, atol=0) or step[0] <= 0:
+            raise WearcheckError(f"fields.npz: '{axis}' is not an increasing uniform grid")
+
+
+def write_image_series(directory, fields, stage_s, *, s_hat_per_m: float | None = None,
+                       p0: float | None = None, name: str = "surface_fields") -> Path:
+    """Write the surface fields per stage as ImageData files plus their PVD; returns the .pvd.
+
+    Parameters
+    ----------
+    directory : existing output directory.
+    fields : mapping with ``x`` (nx,), ``y`` (ny,) pixel centres [m] and
+        ``profile``, ``wear_depth``, ``pressure``, ``gap`` (K, nx, ny).
+    stage_s : (K,) sliding distances [m] of the stages (the PVD time values).
+    s_hat_per_m, p0 : optional scales for ``s_hat`` and ``p_over_p0``.
+    """
+    import pyvista as pv
+
+    directory = Path(directory)
+    stage_s = np.asarray(stage_s, dtype=float)
+    check_image_fields(fields, len(stage_s))
+    x = np.asarray(fields["x"], dtype=float)
+    y = np.asarray(fields["y"], dtype=float)
+    dx, dy = x[1] - x[0], y[1] - y[0]
+    # one cell per pixel: the points are the pixel corners
+    image = pv.ImageData(dimensions=(len(x) + 1, len(y) + 1, 1), spacing=(dx, dy, 1.0),
+                         origin=(x[0] - dx / 2, y[0] - dy / 2, 0.0))
+    entries = []
+    for k, s in enumerate(stage_s):
+        image.clear_data()
+        for key in IMAGE_FIELDS:
+            # VTK orders cells with x fastest: Fortran order of the (x, y) array
+            image.cell_data[key] = np.asarray(fields[key][k], dtype=float).ravel(order="F")
+        if p0 is not None:
+            image.cell_data["p_over_p0"] = image.cell_data["pressure"] / p0
+        image.field_data["s"] = np.array([s])
+        image.field_data["stage"] = np.array([k])
+        if s_hat_per_m is not None:
+            image.field_data["s_hat"] = np.array([s * s_hat_per_m])
+        file = f"{name}_{k:03d}.vti"
+        image.save(directory / file)
+        entries.append((s, file))
+    pvd = directory / f"{name}.pvd"
+    pvd.write_text(pvd_text(entries), encoding="utf-8")
+    return pvd
+
+
+def export_run(run_dir) -> Path:
+    """Write ``RUN_DIR/vtk/`` for a BEM run directory, atomically; returns its path."""
+    run = Run(run_dir)
+    if run.fields is None:
+        raise WearcheckError(f"{run.path}: no fields.npz (run the BEM to have surface fields)")
+    fields, stage_s = run.fields, run.stages["s"]
+    check_image_fields(fields, len(stage_s))
+    target = run.path / "vtk"
+    with atomic_directory(target) as tmp:
+        # the ring averages as the axisymmetric solvers' series (no FEM mesh)
+        run.fields = None
+        try:
+            write_vtk_files(tmp, run)
+        finally:
+            run.fields = fields
+        if len(stage_s):
+            write_image_series(tmp, fields, stage_s, s_hat_per_m=run.scales["s_hat_per_m"],
+                               p0=run.scales["p0"])
+    return target

@@ -1,0 +1,164 @@
+"""BEM static contact against closed forms (Hertz, elliptical Hertz, flattened
+sphere), a fitted grid-convergence order, Tamaas, and its failure modes."""
+
+import math
+import tomllib
+
+import numpy as np
+import pytest
+
+from wearcheck import bem, cases
+from wearcheck.bem import contact, wear
+from wearcheck.bem.operator import HalfSpace
+from wearcheck.cases import CaseError, SolverError, reference
+
+
+def static(name, grid, *extra):
+    case = cases.load(cases.shipped(name), [f"bem.grid={grid}", *extra])
+    return case, bem.solve(case), reference.scales(case)
+
+
+def test_hertz_sphere():
+    # hertz.toml at 64² pixels: Δ = 0.055 a0 (box 2.5 · √2 a0)
+    case, res, sc = static("hertz", 64)
+    dx = res.info["pixel"] / sc["a0"]
+    h = res.history
+    # force: the collocation error is O(Δ²) (fitted below); Δ² = 3e-3
+    assert abs(h["force"][0] / sc["F0"] - 1) < dx**2
+    # contact radius √(A/π) from whole pixels: within one pixel
+    assert abs(h["contact_radius"][0] / sc["a0"] - 1) < dx
+    # ring-averaged pressure inside 0.9 a against Hertz: within 2 Δ·p0
+    # (the ring average of a curved field and the pixel collocation are O(Δ))
+    inner = res.r < 0.9 * sc["a0"]
+    p_ref = reference.hertz_pressure(res.r, case.E_star, case.indenter.radius, sc["a0"])
+    assert np.max(np.abs(res.p[0] - p_ref)[inner]) / sc["p0"] < 2 * dx
+    # the complementarity tolerance holds
+    assert h["complementarity_residual"][0] < case.bem.tolerance
+
+
+def test_force_control_gives_the_hertz_approach():
+    raw = tomllib.loads(cases.shipped("hertz").read_text())
+    raw["loading"] = dict(control="force", force=20.0)
+    raw["bem"] = dict(grid=64)
+    case = cases.from_dict(raw)
+    res, sc = bem.solve(case), reference.scales(case)
+    assert sc["d0"] == pytest.approx(reference.hertz(case.E_star, 0.01, force=20.0)["depth"])
+    assert abs(res.history["depth"][0] / sc["d0"] - 1) < (res.info["pixel"] / sc["a0"])**2
+    assert res.history["force"][0] == pytest.approx(case.loading.force, rel=1e-12)
+
+
+def test_grid_convergence_order():
+    # the Hertz force error against the closed form over five grids: the
+    # pixel collocation is second order where p is smooth, the √ edge lowers
+    # it (measured 1.80 over 24..256 pixels); asserted: order in [1.4, 2.6]
+    grids = (48, 64, 96, 128, 192)
+    errs, h = [], []
+    for g in grids:
+        _, res, sc = static("hertz", g)
+        errs.append(abs(res.history["force"][0] / sc["F0"] - 1))
+        h.append(res.info["pixel"] / sc["a0"])
+    order = np.polyfit(np.log(h), np.log(errs), 1)[0]
+    assert 1.4 < order < 2.6, order
+
+
+def test_elliptical_hertz():
+    # ellipsoid.toml unworn (R2/R1 = 3) at 96²: force and peak pressure against
+    # the elliptic-integral solution, semi-axes from the loaded pixels on the
+    # two axes (whole pixels: within one pixel each), and their ratio
+    case, res, sc = static("ellipsoid", 96, 'sliding.until="distance"', "sliding.distance=0.0")
+    ref = reference.unworn_contact(case)
+    x = res.fields["x"]
+    dx = x[1] - x[0]
+    n = len(x)
+    P = res.fields["pressure"][0]
+    on = P > case.bem.tolerance * sc["p0"]
+    ax = np.count_nonzero(on[:, n // 2]) * dx / 2
+    ay = np.count_nonzero(on[n // 2, :]) * dx / 2
+    b = min(ref["semi_axis_x"], ref["semi_axis_y"])
+    assert abs(res.history["force"][0] / ref["force"] - 1) < (dx / b) ** 2
+    assert abs(P.max() / ref["max_pressure"] - 1) < (dx / b) ** 2
+    assert abs(ax - ref["semi_axis_x"]) < dx and abs(ay - ref["semi_axis_y"]) < dx
+    ratio = ref["semi_axis_y"] / ref["semi_axis_x"]
+    assert abs(ay / ax - ratio) < ratio * (dx / ax + dx / ay)
+    # depth control at the given depth (the approach is the case's own)
+    assert res.history["depth"][0] == case.loading.depth
+
+
+def test_elliptical_hertz_reduces_to_hertz():
+    # R1 = R2: the sphere's Hertz solution (independent closed form)
+    c = reference.hertz_elliptical(1e11, 0.01, 0.01 * (1 + 1e-6), depth=1e-6)
+    h = reference.hertz(1e11, 0.01, depth=1e-6)
+    assert c["force"] == pytest.approx(h["force"], rel=1e-5)
+    assert c["semi_axis_x"] == pytest.approx(h["contact_radius"], rel=1e-5)
+    # and Johnson's approximation b/a ≈ (R_small/R_large)^(2/3) within 1 %
+    e = reference.hertz_elliptical(1e11, 0.01, 0.03, depth=1e-6)
+    assert e["semi_axis_x"] / e["semi_axis_y"] == pytest.approx((1 / 3) ** (2 / 3), rel=0.01)
+
+
+def test_flattened_sphere():
+    # truncated.toml (paper Eq. 17) at 64²: force and contact radius against
+    # paper Eqs. 18-19 (closed form), the same bounds as the Hertz case
+    case, res, sc = static("truncated", 64)
+    dx = res.info["pixel"] / sc["a0"]
+    assert abs(res.history["force"][0] / sc["F0"] - 1) < dx**2
+    assert abs(res.history["contact_radius"][0] / sc["a0"] - 1) < dx
+
+
+def _paraboloid_grid(n, box=3.0, R=0.01, d=1e-6, E=1e11):
+    a0 = math.sqrt(R * d)
+    dx = box * a0 / n
+    x = (np.arange(n) - n // 2) * dx
+    X, Y = np.meshgrid(x, x, indexing="ij")
+    return X, Y, HalfSpace(n, dx, E), a0
+
+
+def test_static_solve_matches_tamaas_on_a_worn_profile():
+    tm = pytest.importorskip("tamaas")
+    tm.set_log_level(tm.LogLevel.error)
+    # a worn paraboloid: flattened by wear to max(f, 0.3 d) plus a ripple
+    n, R, d, E = 64, 0.01, 1e-6, 1e11
+    X, Y, op, a0 = _paraboloid_grid(n, R=R, d=d, E=E)
+    f = np.maximum((X**2 + Y**2) / (2 * R), 0.3 * d) \
+        + 0.05 * d * np.cos(7 * X / a0) * np.exp(-(X**2 + Y**2) / a0**2)
+    F = 10.0
+    L = n * op.spacing
+    model = tm.ModelFactory.createModel(tm.model_type.basic_2d, [L, L], [n, n])
+    model.E, model.nu = E, 0.0          # E* = E/(1 - ν²) = E
+    tm.ModelFactory.registerNonPeriodic(model, "dcfft")
+    # Tamaas's surface is the rigid body's height (contact where it is highest)
+    solver = tm.PolonskyKeerRey(model, np.ascontiguousarray(-f), 1e-12,
+                                tm.PolonskyKeerRey.pressure, tm.PolonskyKeerRey.pressure)
+    solver.setIntegralOperator("dcfft")
+    solver.solve(F / L**2)
+    p_tm = np.array(model.traction).reshape(n, n)
+    c = contact.solve(op, f, force=F, p_scale=1e9, g_scale=d, tol=1e-10)
+    # both solve the same discrete problem to 1e-10-1e-12: the pressures agree
+    # to 1e-7 of the peak (measured 6e-10)
+    assert np.max(np.abs(c.pressure - p_tm)) < 1e-7 * np.max(p_tm)
+    assert np.array_equal(c.pressure > 1e-8 * p_tm.max(), p_tm > 1e-8 * p_tm.max())
+
+
+def test_not_converging_is_a_solver_error():
+    X, Y, op, a0 = _paraboloid_grid(32)
+    with pytest.raises(SolverError, match="did not converge"):
+        contact.solve(op, (X**2 + Y**2) / 0.02, depth=1e-6, p_scale=1e9, g_scale=1e-6,
+                      tol=1e-12, maxiter=2)
+
+
+def test_contact_reaching_the_box_edge_is_refused():
+    # depth 4 d in a box sized for d: the contact (2 a0) covers the box (1.5 a0)
+    X, Y, op, a0 = _paraboloid_grid(32)
+    f0 = (X**2 + Y**2) / 0.02
+    model = wear.Model(op=op, f0=f0, wear_rate=1e-14, depth=4e-6, force=None, p_scale=1e9,
+                       g_scale=1e-6)
+    with pytest.raises(SolverError, match="edge of the BEM box"):
+        wear.contact_state(model, f0)
+
+
+def test_bad_settings_are_case_errors():
+    with pytest.raises(CaseError, match="bem.grid"):
+        bem.solve(cases.load(cases.shipped("hertz"), ["bem.grid=8"]))
+    with pytest.raises(CaseError, match="bem.box"):
+        cases.load(cases.shipped("hertz"), ["bem.box=2.0"])
+    with pytest.raises(CaseError, match="bem.tolerance"):
+        cases.load(cases.shipped("hertz"), ["bem.tolerance=0"])

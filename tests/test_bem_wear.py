@@ -1,0 +1,186 @@
+"""BEM wear: complementarity, volume balance, schemes, stability limit, the
+paper case against the MDR, stage outputs, the ellipsoid across solvers."""
+
+import math
+import tomllib
+
+import numpy as np
+import pytest
+
+from wearcheck import bem, cases, fem, mdr
+from wearcheck.cases import CaseError, reference
+
+
+def paper(grid=32, s_hat=None, **sliding):
+    """paper.toml at a small grid; s_hat: slide to that ŝ (else to F < 1 % F0)."""
+    raw = tomllib.loads(cases.shipped("paper").read_text())
+    raw["bem"] = dict(grid=grid)
+    raw["sliding"].update(sliding)
+    case = cases.from_dict(raw)
+    if s_hat is not None:
+        per = reference.scales(case)["s_hat_per_m"]
+        raw["sliding"].update(until="distance", distance=s_hat / per)
+        raw["sliding"].pop("force_fraction", None)
+        raw["stages"] = dict(s_hat=[0.0, s_hat])
+        case = cases.from_dict(raw)
+    return case
+
+
+def test_complementarity_at_every_step():
+    case = paper(32, s_hat=2.0, step_hat=0.05)
+    res = bem.solve(case)
+    tol = case.bem.tolerance
+    assert np.all(res.history["complementarity_residual"] < tol)
+    sc = reference.scales(case)
+    for k in range(len(res.stage_s)):
+        p, gap = res.fields["pressure"][k], res.fields["gap"][k]
+        assert np.all(p >= 0.0)
+        assert np.all(gap >= -tol * case.loading.depth)
+        assert np.max(np.minimum(p / sc["p0"], gap / case.loading.depth)) < tol
+
+
+@pytest.mark.parametrize("scheme", ["implicit", "explicit"])
+def test_volume_balance(scheme):
+    # V = K ∫ F ds: each step wears Δw = h K p (implicit: the step's end
+    # pressure, explicit: its start), so V is exactly K Σ h F (right or left
+    # sum) to round-off, and the trapezoidal integral to O(h)
+    case = paper(32, s_hat=2.0, scheme=scheme, step_hat=0.05)
+    h = bem.solve(case).history
+    ds = np.diff(h["s"])
+    F = h["force"][1:] if scheme == "implicit" else h["force"][:-1]
+    V = case.wear_rate * np.cumsum(ds * F)
+    assert np.allclose(h["wear_volume"][1:], V, rtol=1e-10, atol=0)
+    trap = case.wear_rate * np.trapezoid(h["force"], h["s"])
+    assert h["wear_volume"][-1] == pytest.approx(trap, rel=0.02)
+
+
+def test_explicit_and_implicit_agree_as_the_step_shrinks():
+    # both first order: their difference in F(ŝ = 1) halves with the step
+    # (fitted order in [0.8, 1.3]), and is below 2e-3 F0 at Δŝ = 0.01
+    steps = (0.04, 0.02, 0.01)
+    diff = []
+    for hs in steps:
+        Fi = bem.solve(paper(32, s_hat=1.0, scheme="implicit", step_hat=hs)).history["force"]
+        Fe = bem.solve(paper(32, s_hat=1.0, scheme="explicit", step_hat=hs)).history["force"]
+        diff.append(abs(Fi[-1] - Fe[-1]) / Fi[0])
+    order = np.polyfit(np.log(steps), np.log(diff), 1)[0]
+    assert 0.8 < order < 1.3, (order, diff)
+    assert diff[-1] < 2e-3
+
+
+def test_bdf2_beats_implicit_euler():
+    # against a Richardson-extrapolated implicit Euler reference (first-order
+    # term removed): BDF2 at Δŝ = 0.05 errs at least 3 times less than
+    # implicit Euler at the same step
+    def F_end(scheme, hs):
+        return bem.solve(paper(32, s_hat=1.0, scheme=scheme, step_hat=hs)).history["force"][-1]
+    ref = 2 * F_end("implicit", 0.005) - F_end("implicit", 0.01)
+    e_bdf2 = abs(F_end("bdf2", 0.05) - ref)
+    e_impl = abs(F_end("implicit", 0.05) - ref)
+    assert e_bdf2 < e_impl / 3, (e_bdf2, e_impl)
+
+
+def test_a_step_past_the_explicit_limit_is_refused():
+    case = paper(32, s_hat=1.0, scheme="explicit", step_hat=0.01)
+    limit = bem.solve(case).info["explicit_limit_step_hat"]
+    # the limit is 2 λ_min(G)/K in ŝ: 2 · 0.5807 Δ/a0 (operator test)
+    sc = reference.scales(case)
+    pixel = bem.solve(case).info["pixel"]
+    assert limit == pytest.approx(2 * 0.5807 * pixel / sc["a0"], rel=1e-3)
+    with pytest.raises(CaseError, match=f"largest stable step is {limit:.4g}"):
+        bem.solve(paper(32, s_hat=1.0, scheme="explicit", step_hat=1.01 * limit))
+
+
+def test_paper_case_against_mdr():
+    # paper.toml at 64² (Δ = 0.055 a0) against the MDR at N = 800 (its
+    # spatial error 2e-5 F0), the same implicit Euler at Δŝ = 0.01 (so the
+    # time errors cancel). Tolerances from the pixel size: force 2e-3 F0
+    # (static collocation error <= (Δ/a0)² = 3e-3; measured 3.4e-4), contact
+    # radius one pixel (measured 0.19 Δ), wear at the centre and worn volume
+    # 1e-3 (measured 1e-4), ring-averaged pressure inside 0.9 a 1e-2 p0
+    # (measured 4e-3), profile 2e-2 d (ring averages across the worn edge's
+    # kink; measured 1.0e-2; 4.5e-3 at 128²)
+    case = paper(64)
+    sc = reference.scales(case)
+    rb, rm = bem.solve(case), mdr.solve(case)
+    hb, hm = rb.history, rm.history
+    s = hm["s"]
+    d = case.loading.depth
+    dx = rb.info["pixel"]
+    assert np.max(np.abs(np.interp(s, hb["s"], hb["force"]) - hm["force"])) < 2e-3 * sc["F0"]
+    assert np.max(np.abs(np.interp(s, hb["s"], hb["contact_radius"])
+                         - hm["contact_radius"])) < dx
+    assert np.max(np.abs(np.interp(s, hb["s"], hb["wear_center"]) - hm["wear_center"])) < 1e-3 * d
+    assert np.max(np.abs(np.interp(s, hb["s"], hb["wear_volume"]) - hm["wear_volume"])) \
+        < 1e-3 * hm["wear_volume"][-1]
+    # the run ends within one step of the MDR's end
+    assert abs(hb["s_hat"][-1] - hm["s_hat"][-1]) <= 0.0100001
+    assert np.allclose(rb.stage_s, rm.stage_s, rtol=1e-12)
+    for k in range(len(rb.stage_s)):
+        a = np.interp(rb.stage_s[k], s, hm["contact_radius"])
+        inner = rb.r < 0.9 * a
+        pm = np.interp(rb.r, rm.r, rm.p[k])
+        fm = np.interp(rb.r, rm.r, rm.f[k])
+        assert np.max(np.abs(rb.p[k] - pm)[inner]) < 1e-2 * sc["p0"]
+        assert np.max(np.abs(rb.f[k] - fm)) < 2e-2 * d
+
+
+def test_stage_outputs():
+    case = paper(32, s_hat=1.0, step_hat=0.05)
+    res = bem.solve(case)
+    n = case.bem.grid
+    dx = res.info["pixel"]
+    assert np.allclose(np.diff(res.r), dx) and res.r[0] == 0.0 and len(res.r) == n // 2
+    K = len(res.stage_s)
+    for key in ("profile", "wear_depth", "pressure", "gap"):
+        assert res.fields[key].shape == (K, n, n)
+    assert np.allclose(res.fields["profile"] - res.fields["wear_depth"],
+                       res.fields["profile"][0], atol=1e-18)
+    # the ring average of the pressure carries the force: 2π ∫ p r dr over
+    # rings (weights: the pixels per ring) equals Δ² Σ p
+    X, Y = np.meshgrid(res.fields["x"], res.fields["y"], indexing="ij")
+    ring = np.rint(np.hypot(X, Y) / dx).astype(int)
+    counts = np.bincount(ring.ravel())[:len(res.r)]
+    F_rings = dx**2 * np.sum(counts * res.p[-1])
+    assert F_rings == pytest.approx(res.history["force"][-1], rel=1e-12)
+    an = res.info["anisotropy"]
+    assert len(an["pressure"]) == len(an["wear"]) == K
+    assert all(0 <= v < 0.5 for v in an["pressure_interior"])
+
+
+def test_ellipsoid_across_solvers():
+    case = cases.load(cases.shipped("ellipsoid"),
+                      ['sliding.until="distance"', "sliding.distance=0.0", "mdr.elements=200",
+                       "bem.grid=64"])
+    assert "ellipsoid" in fem.supports(case)
+    with pytest.raises(CaseError, match="ellipsoid"):
+        fem.solve(case)
+    rm = mdr.solve(case)
+    assert rm.info["approximate"] is True and "√(R1 R2)" in rm.info["warning"]
+    rb = bem.solve(case)
+    # the BEM sees the ellipse: its pressure departs from the ring average by
+    # far more than on a round contact (Hertz: below 0.08 p0 inside at 64²)
+    assert rb.info["anisotropy"]["pressure_interior"][0] > 0.2
+    assert mdr.supports(case) is None and bem.supports(case) is None
+
+
+def test_force_control_wear_stays_in_its_box():
+    # force control to ŝ = 5: the box is sized on the predicted flat scar
+    # (V = K F s held below a level of the paraboloid); the run must not reach
+    # the box edge, and the worn volume is K F s exactly (constant force,
+    # implicit Euler: K Σ h F_{n+1})
+    raw = tomllib.loads(cases.shipped("hertz").read_text())
+    raw["loading"] = dict(control="force", force=20.0)
+    raw["bem"] = dict(grid=32)
+    raw["sliding"] = dict(until="distance", distance=0.0, step_hat=0.1)
+    case = cases.from_dict(raw)
+    per = reference.scales(case)["s_hat_per_m"]
+    raw["sliding"]["distance"] = 5.0 / per
+    case = cases.from_dict(raw)
+    res = bem.solve(case)
+    h = res.history
+    assert np.allclose(h["force"], 20.0, rtol=1e-12)
+    assert h["wear_volume"][-1] == pytest.approx(case.wear_rate * 20.0 * h["s"][-1], rel=1e-10)
+    # the scar grew: the contact is wider than at the start, inside the box
+    assert h["contact_radius"][-1] > 1.2 * h["contact_radius"][0]
+    assert h["contact_radius"][-1] < 0.5 * res.info["box_side"]
