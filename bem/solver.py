@@ -107,12 +107,22 @@ def ring_average(values: np.ndarray, ring: np.ndarray, rings: int) -> np.ndarray
 
 
 def supports(case) -> str | None:
-    """None: the BEM solves every profile, axisymmetric or the ellipsoid, either counterface."""
+    """None: the BEM solves every profile, axisymmetric or the ellipsoid, either counterface.
+
+    Not a fretting run: its tangential contact (:mod:`bem.tangential`) checks
+    the MDR's mapping (comparisons.fretting3d) but does not wear.
+    """
+    if getattr(case, "fretting", None) is not None:
+        return ("bem: fretting (partial-slip) wear is not implemented in the BEM; use the MDR "
+                "(benchmarks/bench_fretting_3d.py compares its tangential contact with the BEM's)")
     return None
 
 
 def solve(case, progress=None) -> RunResult:
     """Run the BEM wear simulation of ``case`` (see :mod:`bem`)."""
+    reason = supports(case)
+    if reason is not None:
+        raise CaseError(reason)
     t0 = time.perf_counter()
     sc = reference.scales(case)
     per_m = sc["s_hat_per_m"]

@@ -12,8 +12,9 @@ from typing import Any
 import numpy as np
 
 from .errors import CaseError
-from .schema import (BEMSettings, PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS, SECTIONS,
-                     CompareSettings, Counterface, FEMSettings, Indenter, Loading,
+from .schema import (OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS,
+                     SECTIONS, BEMSettings, CompareSettings, Counterface, FEMSettings, Fretting,
+                     Indenter, Loading,
                      MDRSettings, Sliding, Stages, Wear, _fmt, build_section,
                      section_fields)
 
@@ -32,6 +33,8 @@ class Case:
     fem: FEMSettings
     bem: BEMSettings
     compare: CompareSettings
+    #: partial-slip (fretting) programme; None for a gross-slip run
+    fretting: Fretting | None = None
     source: str = ""
     #: tabulated profile (r, f) in metres when indenter.profile == "table"
     table: tuple[np.ndarray, np.ndarray] | None = field(default=None, compare=False, repr=False)
@@ -140,13 +143,22 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     for section in REQUIRED_SECTIONS:
         if section not in raw:
             raise CaseError(f"missing section [{section}]")
-    built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS}
+    built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS
+             if name not in OPTIONAL_SECTIONS or name in raw}
+    if "fretting" in raw:
+        for section in ("sliding", "stages"):
+            if raw.get(section):
+                raise CaseError(f"section [{section}] given with [fretting]; a fretting run "
+                                "lasts fretting.cycles and keeps fretting.stage_cycles — "
+                                f"remove [{section}]")
     base = Path(source).parent if source != "<dict>" else Path.cwd()
     built, table = _check_indenter(built, base)
     _check_materials(built)
     _check_programme(built)
     case = Case(**built, source=str(source), table=table)
     _check_scales(case)
+    if case.fretting is not None:
+        _check_fretting(case)
     return replace(case, warnings=_warnings(case))
 
 
@@ -262,6 +274,8 @@ def _check_programme(built):
     if getattr(ld, other) is not None:
         raise CaseError(f"key 'loading.{other}' given but loading.control = \"{ld.control}\"; "
                         f"remove it or set loading.control = \"{other}\"")
+    if built.get("fretting") is not None:
+        return  # [sliding] and [stages] do not apply (from_dict refuses them)
     if sl.until == "distance" and sl.distance is None:
         raise CaseError("missing key 'sliding.distance', required by sliding.until = \"distance\"")
     if sl.until == "force_fraction" and sl.distance is not None:
@@ -275,6 +289,38 @@ def _check_programme(built):
         raise CaseError(f"key 'stages.s_hat' = {list(s)}: must increase strictly")
 
 
+def _check_fretting(case: Case) -> None:
+    """Combinations of [fretting] keys with each other and with the rest of the case."""
+    fr = case.fretting
+    given = [k for k in ("amplitude", "force_amplitude") if getattr(fr, k) is not None]
+    if len(given) != 1:
+        raise CaseError("[fretting] needs exactly one of 'fretting.amplitude' (m) and "
+                        "'fretting.force_amplitude' (N); got "
+                        + (" and ".join(given) if given else "neither"))
+    if fr.increments % 4:
+        raise CaseError(f"key 'fretting.increments' = {fr.increments}: must be a multiple of 4 "
+                        "(a quarter cycle ramps from 0 to the amplitude)")
+    if case.wear.tangential_correction:
+        raise CaseError("key 'wear.tangential_correction' = true: a fretting run always "
+                        "includes the elastic tangential displacement (the springs' "
+                        "deformation); remove the key")
+    if fr.stage_cycles is not None:
+        st = fr.stage_cycles
+        if any(c != int(c) for c in st):
+            raise CaseError(f"key 'fretting.stage_cycles' = {list(st)}: must be whole cycle "
+                            "numbers")
+        if any(b <= a for a, b in zip(st, st[1:])):
+            raise CaseError(f"key 'fretting.stage_cycles' = {list(st)}: must increase strictly")
+    if fr.force_amplitude is not None:
+        from . import reference
+        F = reference.scales(case)["F0"]
+        if fr.force_amplitude >= case.wear.mu * F:
+            raise CaseError(f"key 'fretting.force_amplitude' = {fr.force_amplitude!r}: must be "
+                            f"below μF = {case.wear.mu * F:.4g} N (the friction limit of the "
+                            "unworn contact); a larger force has no partial-slip equilibrium — "
+                            "use fretting.amplitude for gross slip")
+
+
 def _warnings(case: Case) -> tuple[str, ...]:
     out = []
     beta = dundurs_beta(case.indenter, case.counterface)
@@ -284,7 +330,9 @@ def _warnings(case: Case) -> tuple[str, ...]:
             "(0 when similar). The normal and tangential problems are coupled in reality; "
             "they are treated as uncoupled here"
             + (", and the tangential correction is approximate" if case.wear.tangential_correction
-               else "") + ".")
+               else "")
+            + (", and the partial-slip (fretting) solution is approximate"
+               if case.fretting is not None else "") + ".")
     return tuple(out)
 
 
@@ -296,6 +344,10 @@ def to_toml(case: Case) -> str:
     lines = [f"# resolved case, read from {case.source}"]
     for section in SECTIONS:
         obj = getattr(case, section)
+        if obj is None:
+            continue
+        if case.fretting is not None and section in ("sliding", "stages"):
+            continue
         lines.append(f"\n[{section}]")
         for name, f in section_fields(section):
             value = getattr(obj, name)

@@ -8,6 +8,8 @@ import numpy as np
 
 #: history columns every solver provides, in this order (SI units)
 HISTORY_COLUMNS = ("s", "force", "depth", "contact_radius", "wear_center", "wear_volume")
+#: arrays of stages.npz that every run has
+STAGE_KEYS = ("s", "s_hat", "r", "f", "p")
 
 
 @dataclass
@@ -28,6 +30,8 @@ class RunResult:
     info : JSON-serialisable solver facts (steps taken, step used, grid...).
     fields : optional solver-specific arrays for export (e.g. FEM mesh and
         displacements per stage); written to ``fields.npz`` when present.
+    stage_extra : optional further (K, M) arrays per stage (e.g. the shear
+        traction ``tau`` [Pa] of a fretting run); written into ``stages.npz``.
     """
 
     history: dict[str, np.ndarray]
@@ -38,6 +42,7 @@ class RunResult:
     solve_seconds: float
     info: dict = field(default_factory=dict)
     fields: dict[str, np.ndarray] | None = None
+    stage_extra: dict[str, np.ndarray] | None = None
 
     def __post_init__(self):
         missing = [c for c in HISTORY_COLUMNS if c not in self.history]
@@ -48,3 +53,9 @@ class RunResult:
             shape = np.shape(getattr(self, name))
             if shape != (K, M):
                 raise ValueError(f"{name} has shape {shape}, expected {(K, M)}")
+        for name, arr in (self.stage_extra or {}).items():
+            if name in STAGE_KEYS:
+                raise ValueError(f"stage_extra '{name}' would overwrite a stages.npz array")
+            if np.shape(arr) != (K, M):
+                raise ValueError(f"stage_extra '{name}' has shape {np.shape(arr)}, "
+                                 f"expected {(K, M)}")

@@ -207,6 +207,39 @@ class CompareSettings:
                                "contact radius, whose pressure is reported separately")
 
 
+@dataclass(frozen=True)
+class Fretting:
+    """Partial-slip (fretting) wear: a tangential oscillation under the normal load.
+
+    Optional section; when present the run is a fretting run (MDR only) and
+    replaces [sliding] and [stages].
+    """
+
+    amplitude: float | None = key(None, unit="m", positive=True,
+                                  doc="tangential displacement amplitude u0 of the indenter "
+                                      "(triangle wave between +u0 and -u0); give this or "
+                                      "force_amplitude")
+    force_amplitude: float | None = key(None, unit="N", positive=True,
+                                        doc="tangential force amplitude Q* (triangle wave "
+                                            "between +Q* and -Q*), below μF; give this or "
+                                            "amplitude")
+    cycles: int = key(unit="1", minimum=1, doc="number of fretting cycles (+U -> -U -> +U)")
+    increments: int = key(40, unit="1", minimum=4,
+                          doc="load increments per cycle, a multiple of 4 (the first "
+                              "quarter cycle from 0 to +U takes a quarter of them)")
+    jump_tolerance: float = key(0.02, unit="1", minimum=0.0, maximum=1.0, open_maximum=True,
+                                doc="cycle jumping: a jump over many cycles is accepted when "
+                                    "the wear per cycle changed by at most 2·jump_tolerance "
+                                    "(relative, max norm) across it; 0 simulates every cycle")
+    stage_cycles: tuple[float, ...] | None = key(None, unit="1", minimum=0.0,
+                                                 doc="cycle numbers (increasing integers) at "
+                                                     "which profile, pressure and shear "
+                                                     "traction are kept (0: after the first "
+                                                     "quarter cycle); stages after the last "
+                                                     "cycle are not reached; default 0, 1, "
+                                                     "10, 100, ... and the last cycle")
+
+
 SECTIONS: dict[str, type] = {
     "indenter": Indenter,
     "counterface": Counterface,
@@ -218,8 +251,11 @@ SECTIONS: dict[str, type] = {
     "fem": FEMSettings,
     "bem": BEMSettings,
     "compare": CompareSettings,
+    "fretting": Fretting,
 }
 REQUIRED_SECTIONS = ("indenter", "loading", "wear")
+#: sections that are None in a Case unless the file has them
+OPTIONAL_SECTIONS = ("fretting",)
 
 
 # --------------------------------------------------------------------------

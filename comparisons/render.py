@@ -152,7 +152,8 @@ def render_run(run_dir) -> list[Path]:
         return []
     names = []
     with atomic_directory(target) as tmp:
-        if run.fields is not None:
+        # an MDR fretting run's fields.npz holds its loops Q(u_x), not a mesh
+        if run.fields is not None and "loop_cycles" not in run.fields:
             fields = run.fields
             K = len(run.stages["s"])
             check_fields(fields, K)

@@ -187,7 +187,8 @@ def write_run_files(directory: Path, case: cases.Case, result: RunResult, solver
     np.savez(directory / "stages.npz", s=np.asarray(result.stage_s, float),
              s_hat=np.asarray(result.stage_s, float) * scales["s_hat_per_m"],
              r=np.asarray(result.r, float), f=np.asarray(result.f, float),
-             p=np.asarray(result.p, float))
+             p=np.asarray(result.p, float),
+             **{k: np.asarray(v, float) for k, v in (result.stage_extra or {}).items()})
     if result.fields:
         np.savez(directory / "fields.npz", **result.fields)
     meta = dict(solver=solver, scales=scales, solve_seconds=result.solve_seconds,

@@ -330,8 +330,10 @@ def write_vtk_files(directory, run: Run, revolve: int = 0) -> list[Path]:
     """Write every series of ``run`` into ``directory``; returns the .pvd paths."""
     directory = Path(directory)
     st = run.stages
-    if run.fields is not None:
-        check_fields(run.fields, len(st["s"]))
+    # an MDR fretting run's fields.npz holds its loops Q(u_x), not a mesh
+    fields = run.fields if run.fields is not None and "loop_cycles" not in run.fields else None
+    if fields is not None:
+        check_fields(fields, len(st["s"]))
     if not len(st["s"]):
         return []  # an empty collection would be a time series without times
     r, f, p = st["r"], st["f"], st["p"]
@@ -342,9 +344,16 @@ def write_vtk_files(directory, run: Run, revolve: int = 0) -> list[Path]:
     xyz, cells = polyline(r, np.zeros_like(r))
     mesh = grid(xyz, cells)
 
+    tau = st.get("tau")  # shear traction of a fretting run
+
+    def with_tau(data, k, index=slice(None)):
+        if tau is not None:
+            data["shear_traction"] = tau[k][index]
+        return data
+
     def profile(k):
         mesh.points = np.column_stack([r, f[k], np.zeros_like(r)])
-        return dict(f=f[k], wear_depth=f[k] - f0, pressure=p[k])
+        return with_tau(dict(f=f[k], wear_depth=f[k] - f0, pressure=p[k]), k)
 
     out.append(_series(directory, "profile", mesh, run, profile))
     mesh = grid(xyz, cells)
@@ -357,13 +366,13 @@ def write_vtk_files(directory, run: Run, revolve: int = 0) -> list[Path]:
 
     def surface(k):
         mesh.points = np.column_stack([xyz[:, 0], f[k][source], xyz[:, 2]])
-        return dict(f=f[k][source], wear_depth=(f[k] - f0)[source], pressure=p[k][source])
+        return with_tau(dict(f=f[k][source], wear_depth=(f[k] - f0)[source],
+                             pressure=p[k][source]), k, source)
 
     out.append(_series(directory, "surface", mesh, run, surface))
 
-    if run.fields is None:
+    if fields is None:
         return out
-    fields = run.fields
     points = np.asarray(fields["points"], dtype=float)
     cells = orient_triangles(points, fields["cells"])
     kind = VTK_TRIANGLE if cells.shape[1] == 3 else VTK_QUADRATIC_TRIANGLE

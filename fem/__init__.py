@@ -48,6 +48,25 @@ in the plane's frame (the top face has u_z = −d); ``stress`` (K, Np, 4) σ_rr,
 ``contact_pressure`` and ``wear_depth`` (K, Nc).
 """
 
-from .solver import solve, supports
+from wearcheck.cases import CaseError
+
+from .solver import solve as _solve
+from .solver import supports as _supports
 
 __all__ = ["solve", "supports"]
+
+
+def solve(case, progress=None):
+    """Run the FEM wear simulation of ``case``; a case it cannot run is a CaseError."""
+    reason = supports(case)
+    if reason is not None:
+        raise CaseError(reason)
+    return _solve(case, progress=progress)
+
+
+def supports(case) -> str | None:
+    """None when the FEM can run ``case``, else one line saying why not."""
+    if getattr(case, "fretting", None) is not None:
+        return ("fem: fretting (partial slip) needs a one-directional tangential load, "
+                "which the axisymmetric FEM cannot carry; use the MDR")
+    return _supports(case)

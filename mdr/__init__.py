@@ -15,6 +15,10 @@ single-threaded during a solve.
 Modules: :mod:`mdr.transforms` (the MDR transforms, pure functions),
 :mod:`mdr.contact` (normal contact), :mod:`mdr.wear` (the wear steps),
 :mod:`mdr.linalg` (nested-block LU, GMRES), :mod:`mdr.solver` (the run).
+
+A case with a [fretting] section is a partial-slip run: :mod:`mdr.fretting`
+(tangential springs with Coulomb memory in :mod:`mdr.tangential`, cycle
+jumping).
 """
 
 from .solver import solve, supports

@@ -196,7 +196,11 @@ def solve(case, progress=None) -> RunResult:
     """Run the MDR wear simulation of ``case`` (see the package docstring).
 
     BLAS runs single-threaded meanwhile (:func:`mdr.linalg.single_threaded_blas`).
+    A case with a [fretting] section runs :func:`mdr.fretting.solve`.
     """
+    if getattr(case, "fretting", None) is not None:
+        from .fretting import solve as solve_fretting
+        return solve_fretting(case, progress)
     with linalg.single_threaded_blas():
         return _solve(case, progress)
 

@@ -1,0 +1,432 @@
+"""Fretting (partial-slip) Reye–Archard wear by the MDR, with cycle jumping.
+
+The indenter oscillates tangentially, a triangle wave between +U and -U in
+displacement (``fretting.amplitude``) or tangential force
+(``fretting.force_amplitude``), under a normal depth or force held fixed. The
+1D springs carry normal line load q_z = E*(d - g) (paper Eq. 10) and
+tangential line load q_x = G* v with Coulomb friction and memory
+(:mod:`mdr.tangential`). Per increment, where the surface slides, the local
+law of paper Eq. 1 with the real slip
+
+    Δf(r) = (k/σ0) |τ(r)| |Δslip(r)|,
+
+τ from q_x by paper Eq. 13 and the slip from the 1D slip by Eq. 16, raises
+the profile (explicitly: the increment's wear is small against the profile;
+the normal contact is re-solved once the wear since the last solve exceeds
+NORMAL_RESOLVE = 1e-7 of the depth, in gross slip after every increment). The
+energy dissipated is accumulated as ∫ |τ| |Δslip| dA with the same
+quadrature as the worn volume, so V = (k/σ0) W holds to round-off.
+
+Cycle jumping: one cycle (+U -> -U -> +U) is simulated increment by
+increment, giving the profile change per cycle W_k; the profile is then
+extrapolated over n_k cycles, f += n_k W_k (forward Euler in the cycle
+number). The next simulated cycle gives W_{k+1}; the jump's local error is
+about (n_k/2) |W_{k+1} - W_k|, so a jump is accepted when the wear per cycle
+changed by at most 2·tol relative (max norm) across it, else it is undone and
+retried shorter. The next jump is sized from the change measured (at most
+doubling). ``tol = 0`` simulates every cycle.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from wearcheck.cases import CaseError, RunResult, SolverError, profiles, reference
+
+from . import contact, linalg, tangential, transforms
+
+#: most simulated cycles a run may take (runaway guard)
+MAX_SIMULATED_CYCLES = 200_000
+#: safety factor on the predicted jump length
+JUMP_SAFETY = 0.8
+#: largest growth of the jump length from one jump to the next
+JUMP_GROWTH = 2.0
+#: wear per cycle (relative to the depth) below which its changes do not limit a jump
+WEAR_FLOOR = 1e-12
+#: wear (relative to the depth) after which the normal contact is solved again
+#: within a cycle; below it the pressure lags by that fraction of p0
+NORMAL_RESOLVE = 1e-7
+
+
+@dataclass
+class Model:
+    """Grid, unworn profile, materials, normal load and tangential programme."""
+
+    x: np.ndarray
+    f0: np.ndarray
+    E_star: float
+    G_star: float
+    mu: float
+    k_over_hardness: float          # k_wear / σ0 [1/Pa]
+    depth: float | None             # normal depth control
+    force: float | None             # normal force control
+    amplitude: float | None         # tangential displacement amplitude U [m]
+    force_amplitude: float | None   # tangential force amplitude Q* [N]
+    increments: int = 40            # per cycle, a multiple of 4
+
+    def __post_init__(self):
+        self.t = self.x**2
+        self.dt = float(self.t[-1] / (len(self.x) - 1))
+        self.weights = transforms.force_weights(len(self.x) - 1, self.dt)
+
+
+@dataclass
+class State:
+    """Profile, normal contact, spring deformations and the indenter's position."""
+
+    f: np.ndarray
+    v: np.ndarray                   # tangential spring deformation [m]
+    u: float = 0.0                  # indenter displacement [m]
+    Q: float = 0.0                  # tangential force [N]
+    normal: dict = field(default_factory=dict)
+    L: np.ndarray | None = None     # spring limits μ q_z / G*
+    unsolved: float = 0.0           # largest wear since the last normal solve [m]
+
+    def copy(self) -> "State":
+        return replace(self, f=self.f.copy(), v=self.v.copy(), normal=dict(self.normal),
+                       L=self.L.copy())
+
+
+def solve_normal(model: Model, st: State) -> None:
+    """Normal contact of the current profile; updates the spring limits.
+
+    The transforms are causal (node i needs nodes 0..i), so after the first
+    solve only a window reaching past the contact edge is transformed; a
+    contact that reaches the window's end is solved again on the whole grid.
+    """
+    N1 = len(model.x)
+    m_prev = st.normal.get("m")
+    K = N1 if m_prev is None else min(N1, int(1.25 * (m_prev + 1)) + 16)
+    while True:
+        g = transforms.to_1d(st.f[:K])
+        q = contact.line_load(g, model.depth, model.E_star) if model.depth is not None else None
+        if q is None:
+            depth = contact.depth_for_force(g, model.force, model.E_star, model.weights[:K])
+            q = contact.line_load(g, depth, model.E_star)
+        else:
+            depth = model.depth
+        loaded = np.flatnonzero(q > 0.0)
+        m = int(loaded[-1]) if loaded.size else -1
+        if m < K - 2 or K == N1:
+            break
+        K = N1
+    m = contact.last_loaded(q) if K == N1 else m
+    qq = np.zeros(N1)
+    qq[:K] = q
+    pp = np.zeros(N1)
+    pp[:K] = transforms.pressure(q, model.dt)
+    st.normal = dict(depth=float(depth), q=qq, p=pp, force=float(model.weights[:K] @ q),
+                     contact_radius=contact.contact_radius(g, depth, model.t, m), m=m)
+    st.L = tangential.limit(qq, model.mu, model.G_star)
+    st.unsolved = 0.0
+
+
+def initial_state(model: Model) -> State:
+    st = State(f=model.f0.copy(), v=np.zeros_like(model.x))
+    solve_normal(model, st)
+    if not st.normal["force"] > 0.0:
+        raise SolverError("the unworn indenter carries no load (no node in contact); "
+                          "raise mdr.elements or the load")
+    return st
+
+
+def increment(model: Model, st: State, target: float, acc: dict) -> None:
+    """One load increment to the displacement or tangential force ``target``; wear by it."""
+    if model.amplitude is not None:
+        du = target - st.u
+    else:
+        du = tangential.displacement_for_force(st.v, st.L, target, model.G_star, model.weights)
+    v_new, slip = tangential.step(st.v, st.L, du)
+    st.v, st.u = v_new, st.u + du
+    st.Q = tangential.force(v_new, model.G_star, model.weights)
+    acc["slide"] += abs(du)
+    m = st.normal["m"]
+    sliding = np.abs(slip[:m + 1]) > 0.0
+    if not sliding.any():
+        return
+    acc["slipped"] |= np.abs(slip) > 0.0
+    # τ vanishes beyond the contact: the wear and the dissipation live on nodes 0..m
+    n = m + 2
+    tau = tangential.shear_traction(v_new[:n], model.G_star, model.dt)
+    s3 = tangential.slip_3d(slip[:n])
+    work = np.abs(tau) * np.abs(s3)                     # dissipation per area [J/m²]
+    acc["energy"] += transforms.volume(work, model.dt)
+    # the 1D springs' own dissipation, an independent sum (MDR energy equivalence)
+    acc["energy_1d"] += float(model.weights[:n] @ (np.abs(model.G_star * v_new[:n])
+                                                   * np.abs(slip[:n])))
+    df = model.k_over_hardness * work
+    st.f = st.f.copy()
+    st.f[:n] += df
+    acc["wear"][:n] += df
+    # the normal contact follows the worn profile; re-solving it after wear of
+    # 1e-7 of the depth changes the pressure by about that fraction of p0
+    st.unsolved += float(np.max(df))
+    if st.unsolved > NORMAL_RESOLVE * st.normal["depth"]:
+        solve_normal(model, st)
+
+
+def targets(model: Model, start: float, end: float, n: int) -> np.ndarray:
+    """n equal increments from start to end (excluded start, included end)."""
+    return start + (end - start) * np.arange(1, n + 1) / n
+
+
+def run_path(model: Model, st: State, path: np.ndarray, loop: bool = False) -> dict:
+    """Drive the indenter through the targets of ``path``; the cycle's sums."""
+    acc = dict(energy=0.0, energy_1d=0.0, slide=0.0, wear=np.zeros_like(st.f),
+               slipped=np.zeros(len(st.f), dtype=bool))
+    us, Qs = [st.u], [st.Q]
+    u_lo = u_hi = st.u
+    Q_amp = abs(st.Q)
+    for k, target in enumerate(path):
+        if k == len(path) // 2 and len(path) == model.increments:
+            # the stick zone of the cycle is the part that did not slip in its last stroke
+            acc["slipped"][:] = False
+        increment(model, st, float(target), acc)
+        u_lo, u_hi = min(u_lo, st.u), max(u_hi, st.u)
+        Q_amp = max(Q_amp, abs(st.Q))
+        if loop:
+            us.append(st.u)
+            Qs.append(st.Q)
+        if not math.isfinite(st.Q) or not math.isfinite(st.normal["force"]):
+            raise SolverError("the fretting run produced non-finite values")
+    if st.unsolved > 0.0:
+        solve_normal(model, st)   # what is recorded is the contact of the worn profile
+    acc.update(Q_amp=Q_amp, u_amp=0.5 * (u_hi - u_lo))
+    if loop:
+        acc.update(loop_u=np.asarray(us), loop_Q=np.asarray(Qs))
+    return acc
+
+
+def cycle_path(model: Model) -> np.ndarray:
+    amp = model.amplitude if model.amplitude is not None else model.force_amplitude
+    h = model.increments // 2
+    return np.concatenate([targets(model, amp, -amp, h), targets(model, -amp, amp, h)])
+
+
+def ramp_path(model: Model) -> np.ndarray:
+    amp = model.amplitude if model.amplitude is not None else model.force_amplitude
+    return targets(model, 0.0, amp, model.increments // 4)
+
+
+def stick_radius(model: Model, st: State, acc: dict, ramp: bool) -> float:
+    """Stick radius of the last stroke: the crossing of L - U, U the stroke's half travel."""
+    U = acc["u_amp"] if not ramp else abs(st.u)
+    margin = st.L - U
+    return tangential.stick_radius(acc["slipped"], margin, model.t)
+
+
+HISTORY_KEYS = ("cycles", "s", "force", "depth", "contact_radius", "wear_center", "wear_volume",
+                "tangential_force_amplitude", "displacement_amplitude", "stick_radius",
+                "dissipated_energy", "dissipated_energy_1d", "energy_per_cycle", "max_pressure")
+
+
+def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> dict:
+    """The fretting run from the unworn state; numerics without case handling.
+
+    Returns history (arrays, one entry per simulated cycle and the initial
+    ramp as cycle 0), stages (cycles, s, f, p, tau), loops (Q(u) of the
+    simulated cycles at the stage cycles) and counters.
+    """
+    st = initial_state(model)
+    hist = {k: [] for k in HISTORY_KEYS}
+    stages = dict(cycles=[], s=[], f=[], p=[], tau=[])
+    loops = dict(cycles=[], u=[], Q=[])
+    stage_set = sorted(set(int(c) for c in stage_cycles if c <= cycles))
+    totals = dict(cycles=0, s=0.0, energy=0.0, energy_1d=0.0)
+    counters = dict(simulated_cycles=0, total_increments=0, jumps=0, rejected_jumps=0,
+                    largest_jump=1)
+
+    def record(acc, ramp=False):
+        n = st.normal
+        w = st.f - model.f0
+        hist["cycles"].append(totals["cycles"])
+        hist["s"].append(totals["s"])
+        hist["force"].append(n["force"])
+        hist["depth"].append(n["depth"])
+        hist["contact_radius"].append(n["contact_radius"])
+        hist["wear_center"].append(w[0])
+        hist["wear_volume"].append(transforms.volume(w, model.dt))
+        hist["tangential_force_amplitude"].append(acc["Q_amp"])
+        hist["displacement_amplitude"].append(acc["u_amp"] if not ramp else abs(st.u))
+        hist["stick_radius"].append(stick_radius(model, st, acc, ramp))
+        hist["dissipated_energy"].append(totals["energy"])
+        hist["dissipated_energy_1d"].append(totals["energy_1d"])
+        hist["energy_per_cycle"].append(acc["energy"])
+        hist["max_pressure"].append(float(np.max(n["p"])))
+        if stage_set and stage_set[0] == totals["cycles"]:
+            stage_set.pop(0)
+            stages["cycles"].append(totals["cycles"])
+            stages["s"].append(totals["s"])
+            stages["f"].append(st.f.copy())
+            stages["p"].append(n["p"].copy())
+            stages["tau"].append(tangential.shear_traction(st.v, model.G_star, model.dt))
+            if "loop_u" in acc and not ramp:
+                loops["cycles"].append(totals["cycles"])
+                loops["u"].append(acc["loop_u"])
+                loops["Q"].append(acc["loop_Q"])
+
+    def add(acc, times=1.0):
+        totals["s"] += times * acc["slide"]
+        totals["energy"] += times * acc["energy"]
+        totals["energy_1d"] += times * acc["energy_1d"]
+
+    acc = run_path(model, st, ramp_path(model))
+    counters["total_increments"] += model.increments // 4
+    add(acc)
+    record(acc, ramp=True)
+    path = cycle_path(model)
+    W_prev = None
+    jump = 1                       # cycles covered by the last step (1: no extrapolation)
+    saved = None                   # (state, totals, W, sums) after the last accepted cycle
+    last_report = -1.0
+    while totals["cycles"] < cycles:
+        want_loop = bool(stage_set) and stage_set[0] == totals["cycles"] + 1
+        acc = run_path(model, st, path, loop=want_loop)
+        counters["simulated_cycles"] += 1
+        counters["total_increments"] += model.increments
+        if counters["simulated_cycles"] > MAX_SIMULATED_CYCLES:
+            raise SolverError(f"the fretting run simulated more than {MAX_SIMULATED_CYCLES} "
+                              "cycles; raise fretting.jump_tolerance or lower fretting.cycles")
+        W = acc["wear"]
+        ratio = 0.0
+        if W_prev is not None and tol > 0:
+            # a floor for the limiting state, where the wear per cycle vanishes
+            scale = max(np.max(np.abs(W_prev)), WEAR_FLOOR * st.normal["depth"])
+            change = np.max(np.abs(W - W_prev))
+            ratio = change / (2.0 * tol * scale) if scale > 0 else (0.0 if change == 0
+                                                                     else math.inf)
+        if jump > 1 and ratio > 1.0:
+            # the last jump changed the wear per cycle too much: undo it, retry shorter
+            counters["rejected_jumps"] += 1
+            st = saved[0].copy()
+            totals.clear()
+            totals.update(saved[1])
+            jump = max(1, int((jump - 1) * JUMP_SAFETY / ratio) + 1)
+            if jump > 1:
+                _extrapolate(model, st, totals, saved[2], saved[3], jump)
+            continue
+        totals["cycles"] += 1
+        add(acc)
+        record(acc)
+        # size the next jump from the change measured across the last one
+        if tol <= 0:
+            nxt = 1
+        elif W_prev is None:
+            nxt = 2
+        elif ratio == 0.0:
+            nxt = int(JUMP_GROWTH * jump)
+        else:
+            nxt = int(min(JUMP_GROWTH * jump, JUMP_SAFETY * jump / ratio))
+        # land on the next stage and on the end: a simulated cycle must end there
+        limit = (stage_set[0] if stage_set else cycles) - totals["cycles"]
+        limit = min(limit, cycles - totals["cycles"])
+        jump = max(1, min(nxt, limit))
+        W_prev = W
+        sums = {k: acc[k] for k in ("slide", "energy", "energy_1d")}
+        saved = (st.copy(), dict(totals), W, sums)
+        if jump > 1:
+            counters["jumps"] += 1
+            counters["largest_jump"] = max(counters["largest_jump"], jump)
+            _extrapolate(model, st, totals, W, sums, jump)
+        if progress is not None:
+            frac = totals["cycles"] / cycles
+            if frac - last_report >= 0.01:
+                last_report = frac
+                progress(min(frac, 1.0), f"cycle {totals['cycles']}")
+    return dict(history={k: np.asarray(v, dtype=float) for k, v in hist.items()},
+                stages={k: np.asarray(v) for k, v in stages.items()},
+                loops=loops, counters=counters)
+
+
+def _extrapolate(model, st, totals, W, sums, jump):
+    """Advance over jump - 1 further cycles at the wear per cycle W (forward Euler)."""
+    n = jump - 1
+    st.f = st.f + n * W
+    totals["cycles"] += n
+    totals["s"] += n * sums["slide"]
+    totals["energy"] += n * sums["energy"]
+    totals["energy_1d"] += n * sums["energy_1d"]
+    if not np.all(np.isfinite(st.f)):
+        raise SolverError("cycle jumping produced non-finite values; lower "
+                          "fretting.jump_tolerance")
+    solve_normal(model, st)
+
+
+# -- the case -------------------------------------------------------------------
+
+def default_stage_cycles(cycles: int) -> list[int]:
+    """0, 1, 10, 100, ... below ``cycles``, and ``cycles``."""
+    out, c = [0], 1
+    while c < cycles:
+        out.append(c)
+        c *= 10
+    return out + [cycles]
+
+
+def build_model(case) -> tuple[Model, dict]:
+    """Grid (as the gross-slip solver's), unworn profile, materials and programme."""
+    sc = reference.scales(case)
+    N = case.mdr.elements
+    L = case.mdr.domain_factor * math.sqrt(2.0) * sc["a0"]
+    x = transforms.grid(N, L)
+    fr = case.fretting
+    model = Model(x=x, f0=profiles.height(case.indenter, x, case.table), E_star=case.E_star,
+                  G_star=case.G_star, mu=case.wear.mu,
+                  k_over_hardness=case.wear.k / case.wear.hardness,
+                  depth=case.loading.depth, force=case.loading.force,
+                  amplitude=fr.amplitude, force_amplitude=fr.force_amplitude,
+                  increments=fr.increments)
+    return model, sc
+
+
+def solve(case, progress=None) -> RunResult:
+    """Run the fretting case (``case.fretting`` set); see the module docstring.
+
+    ``RunResult.history`` has one row per simulated cycle (cycle 0: the first
+    quarter cycle from 0 to +U); ``stage_extra["tau"]`` the shear traction at
+    the stages (at +U, the end of the stage's cycle); ``fields`` the loops
+    Q(u_x) of the simulated cycles at the stage cycles (``loop_cycles`` (L,),
+    ``loop_displacement`` and ``loop_tangential_force`` (L, increments + 1)).
+    """
+    with linalg.single_threaded_blas():
+        return _solve(case, progress)
+
+
+def _solve(case, progress=None) -> RunResult:
+    t0 = time.perf_counter()
+    model, sc = build_model(case)
+    fr = case.fretting
+    if fr.jump_tolerance == 0 and fr.cycles > MAX_SIMULATED_CYCLES:
+        raise CaseError(f"key 'fretting.cycles' = {fr.cycles}: without cycle jumping "
+                        f"(fretting.jump_tolerance = 0) at most {MAX_SIMULATED_CYCLES} cycles "
+                        "are simulated; set a jump tolerance")
+    stage_cycles = (default_stage_cycles(fr.cycles) if fr.stage_cycles is None
+                    else [int(c) for c in fr.stage_cycles])
+    out = run(model, fr.cycles, fr.jump_tolerance, stage_cycles, progress)
+    hist = out["history"]
+    hist["s_hat"] = hist["s"] * sc["s_hat_per_m"]
+    a0, F0 = sc["a0"], sc["F0"]
+    u_star = 3.0 * case.wear.mu * F0 / (4.0 * case.G_star * a0)
+    stg = out["stages"]
+    K, M = len(stg["cycles"]), len(model.x)
+    info = dict(solver="mdr", mode="fretting", N=case.mdr.elements, domain=float(model.x[-1]),
+                grid="uniform in r^2", increments=fr.increments,
+                jump_tolerance=fr.jump_tolerance, stage_cycles=stg["cycles"].tolist(),
+                gross_slip_displacement_unworn=u_star, **out["counters"])
+    loops = out["loops"]
+    fields = None
+    if loops["cycles"]:
+        fields = dict(loop_cycles=np.asarray(loops["cycles"], dtype=float),
+                      loop_displacement=np.asarray(loops["u"]),
+                      loop_tangential_force=np.asarray(loops["Q"]))
+    if progress is not None:
+        progress(1.0, "done")
+    return RunResult(history=hist, stage_s=np.asarray(stg["s"], dtype=float),
+                     r=model.x.copy(), f=np.asarray(stg["f"]).reshape(K, M),
+                     p=np.asarray(stg["p"]).reshape(K, M),
+                     solve_seconds=time.perf_counter() - t0, info=info, fields=fields,
+                     stage_extra=dict(tau=np.asarray(stg["tau"]).reshape(K, M)))

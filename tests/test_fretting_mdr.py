@@ -1,0 +1,214 @@
+"""MDR fretting against Cattaneo–Mindlin, Mindlin–Deresiewicz and the energy–wear identity."""
+
+import math
+
+import numpy as np
+import pytest
+
+from wearcheck import cases, mdr
+from wearcheck.cases import reference as ref
+from wearcheck.cases import reference_fretting as rf
+
+R, FORCE, MU, K, H = 0.01, 30.0, 0.3, 1e-4, 2e9
+
+
+def make(N=200, amplitude=0.5, force_amplitude=None, cycles=2, control="force", k=K,
+         jump_tolerance=0.0, increments=40, stage_cycles=None):
+    """A paraboloid fretting case; amplitude as a fraction of u*, force_amplitude of μF."""
+    base = cases.from_dict(dict(
+        indenter=dict(profile="paraboloid", radius=R, youngs_modulus=210e9, poisson_ratio=0.3),
+        loading=dict(control="force", force=FORCE), wear=dict(k=k, mu=MU, hardness=H),
+        fretting=dict(amplitude=1e-9, cycles=1)))
+    a = ref.hertz(base.E_star, R, force=FORCE)["contact_radius"]
+    u_star = rf.gross_slip_displacement(MU, FORCE, base.G_star, a)
+    fr = dict(cycles=cycles, increments=increments, jump_tolerance=jump_tolerance)
+    if force_amplitude is None:
+        fr["amplitude"] = amplitude * u_star
+    else:
+        fr["force_amplitude"] = force_amplitude * MU * FORCE
+    if stage_cycles is not None:
+        fr["stage_cycles"] = stage_cycles
+    loading = dict(control="force", force=FORCE) if control == "force" else \
+        dict(control="depth", depth=ref.hertz(base.E_star, R, force=FORCE)["depth"])
+    case = cases.from_dict(dict(
+        indenter=dict(profile="paraboloid", radius=R, youngs_modulus=210e9, poisson_ratio=0.3),
+        loading=loading, wear=dict(k=k, mu=MU, hardness=H), fretting=fr,
+        mdr=dict(elements=N)))
+    return case, a, u_star
+
+
+@pytest.mark.parametrize("frac", [0.2, 0.5, 0.8])
+def test_stick_radius_is_cattaneo_mindlin(frac):
+    # c² = a² - R G* u0/(μE*): the spring limit μE*(d - x²/R)/G* is linear in t = x²,
+    # so the sub-grid crossing is exact up to the grid's contact radius (a to 1e-5 at N = 200)
+    case, a, u_star = make(amplitude=frac, cycles=1)
+    res = mdr.solve(case)
+    c = rf.stick_radius(a, R, case.E_star, case.G_star, MU, frac * u_star)
+    h = res.history
+    assert h["stick_radius"][0] == pytest.approx(c, rel=1e-4)
+    # the first cycle (wear is 1e-9 of the depth here) keeps it
+    assert h["stick_radius"][1] == pytest.approx(c, rel=1e-4)
+    # Q* on the virgin curve; 1e-4: the force quadrature of the kinked q_x at c
+    Qs = float(rf.tangential_force(frac * u_star, MU, FORCE, u_star))
+    assert h["tangential_force_amplitude"][0] == pytest.approx(Qs, rel=1e-4)
+
+
+@pytest.mark.parametrize("q", [0.3, 0.7])
+def test_force_control_stick_radius_and_displacement(q):
+    # c/a = (1 - Q/μF)^(1/3), u0 = u* [1 - (1 - Q/μF)^(2/3)]
+    case, a, u_star = make(force_amplitude=q, cycles=1)
+    h = mdr.solve(case).history
+    assert h["tangential_force_amplitude"][1] == pytest.approx(q * MU * FORCE, rel=1e-12)
+    assert h["stick_radius"][1] == pytest.approx(
+        rf.stick_radius_from_force(a, q * MU * FORCE, MU, FORCE), rel=1e-4)
+    assert h["displacement_amplitude"][1] == pytest.approx(
+        float(rf.tangential_displacement(q * MU * FORCE, MU, FORCE, u_star)), rel=1e-4)
+
+
+def test_loop_is_mindlin_deresiewicz():
+    # the stored loop Q(u_x) of cycle 1 on the two closed-form branches, to 1e-3 μF
+    # (the kink of q_x at the stick edge between nodes, N = 200)
+    case, a, u_star = make(amplitude=0.6, cycles=1, increments=80)
+    res = mdr.solve(case)
+    u = res.fields["loop_displacement"][0]
+    Q = res.fields["loop_tangential_force"][0]
+    u0 = 0.6 * u_star
+    half = len(u) // 2
+    unl = rf.loop_force(u[:half + 1], u0, MU, FORCE, u_star, "unloading")
+    rel = rf.loop_force(u[half:], u0, MU, FORCE, u_star, "reloading")
+    err = np.max(np.abs(np.r_[Q[:half + 1] - unl, Q[half:] - rel])) / (MU * FORCE)
+    assert err < 1e-3
+
+
+def test_energy_per_cycle_converges_to_mindlin_deresiewicz():
+    # energy per cycle (∫|τ||Δslip| dA) against the closed form; error falls
+    # with the grid at a measured rate (polyfit on log-log)
+    errs, Ns = [], [100, 200, 400, 800]
+    for N in Ns:
+        case, a, u_star = make(N=N, amplitude=0.5, cycles=1, k=1e-12)
+        h = mdr.solve(case).history
+        W = rf.energy_per_cycle_displacement(0.5 * u_star, MU, FORCE, u_star)
+        errs.append(abs(h["energy_per_cycle"][1] / W - 1))
+    rate = -np.polyfit(np.log(Ns), np.log(errs), 1)[0]
+    # measured: 0.0105 at N = 100 falling to 6.7e-4 at N = 800, rate about 1.3
+    assert errs[-1] < 1e-3
+    assert rate > 1.0
+
+
+def test_energy_wear_identity_every_cycle_with_jumps():
+    # V = (k/σ0) W: the worn volume and the dissipated energy, cycle jumps included
+    case, a, u_star = make(amplitude=0.5, cycles=3000, jump_tolerance=0.02)
+    res = mdr.solve(case)
+    h = res.history
+    assert res.info["jumps"] > 10
+    V = h["wear_volume"]
+    assert V[-1] > 0
+    np.testing.assert_allclose(V, K / H * h["dissipated_energy"], rtol=1e-9,
+                               atol=1e-12 * V[-1])
+    # the springs' own (1D) dissipation: equal in the continuum (MDR), O(1/N) apart here
+    assert h["dissipated_energy_1d"][-1] == pytest.approx(h["dissipated_energy"][-1], rel=5e-3)
+
+
+def test_normal_problem_unchanged_and_no_wear_in_the_stick_zone():
+    case, a, u_star = make(amplitude=0.5, cycles=1000, jump_tolerance=0.02,
+                           stage_cycles=[0, 1000])
+    res = mdr.solve(case)
+    c = rf.stick_radius(a, R, case.E_star, case.G_star, MU, 0.5 * u_star)
+    w = res.f[-1] - res.f[0]
+    inside = res.r < 0.99 * c
+    # nothing slides there: the wear is exactly zero
+    assert np.all(w[inside] == 0.0)
+    assert np.max(w) > 0.0
+    # force control holds the force
+    assert np.allclose(res.history["force"], FORCE, rtol=1e-12)
+
+
+def _limit_run(N, control):
+    # k = 0.1 (1000 times the paper's) reaches the limiting state within 10^3 cycles
+    case, a, u_star = make(N=N, amplitude=0.5, cycles=800, k=0.1, jump_tolerance=0.02,
+                           stage_cycles=[0, 800], control=control, increments=20)
+    res = mdr.solve(case)
+    c0 = rf.stick_radius(a, R, case.E_star, case.G_star, MU, 0.5 * u_star)
+    return case, res, c0
+
+
+def test_depth_control_converges_to_popovs_limiting_profile():
+    # Popov: the stick radius keeps its initial value, the slip annulus ends up
+    # without pressure; at fixed depth d, g∞ = x²/R inside c, d beyond, and the
+    # force F∞ = 2E* c (d - c²/(3R)) (paper Eq. 12 on g∞)
+    Ns, force_err, profile_err = [50, 100, 200], [], []
+    for N in Ns:
+        case, res, c0 = _limit_run(N, "depth")
+        d = case.loading.depth
+        h = res.history
+        # nothing outside the stick zone of the unworn contact stops slipping: c = c0
+        np.testing.assert_allclose(h["stick_radius"], c0, rtol=1e-4)
+        b = math.sqrt(R * d)
+        annulus = (res.r > 1.02 * c0) & (res.r < b)
+        # measured 2e-8 p0 after 800 cycles: the annulus is unloaded
+        assert np.max(res.p[-1][annulus]) < 1e-5 * np.max(res.p[0])
+        F_inf = 2 * case.E_star * c0 * (d - c0**2 / (3 * R))
+        force_err.append(abs(h["force"][-1] / F_inf - 1))
+        f_inf = rf.limiting_profile_3d(res.r, R, c0, d)
+        profile_err.append(np.max(np.abs(res.f[-1] - f_inf)[res.r <= b]) / d)
+    force_rate = -np.polyfit(np.log(Ns), np.log(force_err), 1)[0]
+    profile_rate = -np.polyfit(np.log(Ns), np.log(profile_err), 1)[0]
+    # measured: force error 1.8 %, 0.9 %, 0.5 % (rate 1.0, the edge c between
+    # nodes); profile error 2.6 %, 1.8 %, 1.2 % of d (rate 0.5: f∞ has a
+    # square-root rise at c, which a grid resolves to O(Δr^1/2))
+    assert force_rate > 0.9
+    assert profile_rate > 0.4
+    assert profile_err[-1] < 0.015
+
+
+def test_force_control_reaches_a_limiting_profile_with_its_stick_radius():
+    # constant F: the annulus is unloaded in the end and the profile is Popov's
+    # g∞ with the stick radius c the run ends with and d∞ = F/(2E*c) + c²/(3R).
+    # Under force control c grows slightly during the transient (the depth
+    # rises as the annulus wears, so springs at the stick edge stop slipping
+    # before they are worn): measured c/c0 = 1.010, 1.005, 1.017, 1.016 at
+    # N = 50, 100, 200, 400 (k = 0.1; 1.017 also at k = 0.01, N = 200), and
+    # depth/d∞(c) = 0.989, 0.994, 0.997, 0.999 (rate 1 in N).
+    case, res, c0 = _limit_run(100, "force")
+    h = res.history
+    c = h["stick_radius"][-1]
+    assert 1.0 <= c / c0 < 1.03
+    d_inf = rf.limiting_depth(FORCE, case.E_star, c, R)
+    b = math.sqrt(R * d_inf)
+    annulus = (res.r > 1.02 * c) & (res.r < b)
+    # measured 1.3e-4 p0 after 800 cycles (1.7e-5 after 1000): unloading
+    assert np.max(res.p[-1][annulus]) < 1e-3 * np.max(res.p[0])
+    # the depth to 0.6 % (the grid's error of the stick edge, as at fixed depth)
+    assert h["depth"][-1] == pytest.approx(d_inf, rel=1e-2)
+    f_inf = rf.limiting_profile_3d(res.r, R, c, d_inf)
+    assert np.max(np.abs(res.f[-1] - f_inf)[res.r <= b]) / d_inf < 0.02
+
+
+def test_large_amplitude_is_the_gross_slip_solver():
+    # u0 >> u*: the springs slide all the time but for the reversals; the wear
+    # tends to the gross-slip solver's at s = the sliding distance, the
+    # difference falling like u*/u0 (the slip each reversal loses)
+    diffs, amps = [], [20.0, 80.0]
+    for amp in amps:
+        cycles = int(round(400 / amp))
+        case, a, u_star = make(N=100, amplitude=amp, cycles=cycles, control="depth",
+                               stage_cycles=[0, cycles])
+        fr = mdr.solve(case)
+        s_end = fr.history["s"][-1]
+        gross = cases.from_dict(dict(
+            indenter=dict(profile="paraboloid", radius=R, youngs_modulus=210e9,
+                          poisson_ratio=0.3),
+            loading=dict(control="depth", depth=case.loading.depth),
+            wear=dict(k=K, mu=MU, hardness=H),
+            sliding=dict(until="distance", distance=s_end, scheme="bdf2", step_hat=0.01),
+            stages=dict(s_hat=[0.0, s_end * ref.scales(case)["s_hat_per_m"]]),
+            mdr=dict(elements=100)))
+        gs = mdr.solve(gross)
+        # (the fretting run's stage 0 is after its first quarter cycle, already worn)
+        w_fr, w_gs = fr.f[-1] - fr.r**2 / (2 * R), gs.f[-1] - gs.f[0]
+        diffs.append(np.max(np.abs(w_fr - w_gs)) / np.max(w_gs))
+    rate = -np.polyfit(np.log(amps), np.log(diffs), 1)[0]
+    # measured: 0.049 at 20 u*, 0.0121 at 80 u* (≈ u*/u0: the centre's spring
+    # sticks over 2u* = 2L(0) of each 2u0 stroke), rate 1.01
+    assert diffs[-1] < 0.015
+    assert 0.7 < rate < 1.3
