@@ -12,7 +12,6 @@ BEM measures small: 0.2 % in the energy per cycle on the unworn sphere
 import math
 
 import numpy as np
-import pytest
 
 from wearcheck.cases import load, shipped
 from wearcheck.comparisons import fretting3d
