@@ -18,9 +18,12 @@ from .operator import HalfSpace
 #: implicit Euler on the paper case, 0.02 Δŝ² for BDF2)
 IMPLICIT_STEP_HAT = 0.1
 BDF2_STEP_HAT = 0.1
-#: runaway guards, as the other solvers
+#: runaway guards, as the other solvers: fixed steps (ŝ, steps); adaptive
+#: runs take far fewer steps per ŝ as wear slows, so they are capped in steps
 MAX_S_HAT = 1.0e4
 MAX_STEPS = 2_000_000
+ADAPTIVE_MAX_S_HAT = 1.0e9
+ADAPTIVE_MAX_STEPS = 100_000
 #: fewest pixels across the unworn contact radius
 MIN_PIXELS_IN_CONTACT = 4
 
@@ -107,14 +110,19 @@ def ring_average(values: np.ndarray, ring: np.ndarray, rings: int) -> np.ndarray
 
 
 def supports(case) -> str | None:
-    """None: the BEM solves every profile, axisymmetric or the ellipsoid, either counterface.
+    """None when the BEM can run ``case``, else why not.
 
-    Not a fretting run: its tangential contact (:mod:`bem.tangential`) checks
-    the MDR's mapping (comparisons.fretting3d) but does not wear.
+    It solves every profile (axisymmetric or the ellipsoid) against either
+    counterface, in gross slip with the Reye–Archard law; not fretting
+    (partial slip) and not a pressure exponent other than 1.
     """
     if getattr(case, "fretting", None) is not None:
-        return ("bem: fretting (partial-slip) wear is not implemented in the BEM; use the MDR "
-                "(benchmarks/bench_fretting_3d.py compares its tangential contact with the BEM's)")
+        return ("fretting (partial slip) needs the tangential contact problem, which the BEM "
+                "does not solve (normal contact, gross slip only); use the MDR")
+    n = getattr(case.wear, "pressure_exponent", 1.0)
+    if n != 1.0:
+        return (f"key 'wear.pressure_exponent' = {n!r}: the BEM implements the Reye–Archard "
+                "law (exponent 1) only; use the MDR")
     return None
 
 
@@ -147,6 +155,7 @@ def solve(case, progress=None) -> RunResult:
                 tangential_correction=("not modelled: wear.tangential_correction = "
                                        f"{str(case.wear.tangential_correction).lower()} ignored")
                 if case.wear.tangential_correction else "off")
+    adaptive = sl.scheme == "adaptive"
     if sl.scheme == "explicit":
         step_hat = 0.5 * limit_hat if sl.step_hat == "auto" else float(sl.step_hat)
         if step_hat > limit_hat:
@@ -155,37 +164,50 @@ def solve(case, progress=None) -> RunResult:
                 f"explicit Euler on this grid; the largest stable step is {limit_hat:.4g} "
                 f"(pixel {dx:.3g} m, bem.grid = {n}); use a smaller step or "
                 "sliding.scheme = \"implicit\"")
+    elif adaptive:
+        step_hat = math.inf if sl.step_hat == "auto" else float(sl.step_hat)
+        info["tolerance"] = sl.tolerance
     else:
         auto = IMPLICIT_STEP_HAT if sl.scheme == "implicit" else BDF2_STEP_HAT
         step_hat = auto if sl.step_hat == "auto" else float(sl.step_hat)
-    info["step_hat"] = float(step_hat)
-    if sl.until == "distance":
-        s_end = sl.distance
-        if s_end * per_m > MAX_S_HAT:
-            raise CaseError(f"key 'sliding.distance' = {s_end!r}: ŝ = {s_end * per_m:.4g} "
-                            f"exceeds the solver's cap of {MAX_S_HAT:g}")
+    info["step_hat"] = float(step_hat) if math.isfinite(step_hat) else "unlimited"
+    s_cap = ADAPTIVE_MAX_S_HAT if adaptive else MAX_S_HAT
+    s_end = case.end_distance
+    if s_end is not None:
+        key = "sliding.distance" if sl.until == "distance" else "sliding.cycles"
+        if s_end * per_m > s_cap:
+            raise CaseError(f"key '{key}' = {getattr(sl, key.split('.')[1])!r}: ŝ = "
+                            f"{s_end * per_m:.4g} exceeds the solver's cap of {s_cap:g}"
+                            + ("" if adaptive else " for fixed steps (use sliding.scheme = "
+                               "\"adaptive\")"))
         if s_end * per_m / step_hat > MAX_STEPS:
             raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: the run would take "
                             f"{s_end * per_m / step_hat:.3g} steps (cap {MAX_STEPS}); raise "
-                            "the step")
+                            "the step or use sliding.scheme = \"adaptive\"")
     else:
-        s_end = MAX_S_HAT / per_m
+        s_end = s_cap / per_m
     stage_s = [sh / per_m for sh in case.stages.s_hat]
-    if sl.until == "distance":
+    if case.end_distance is not None:
         stage_s = [s for s in stage_s if s <= s_end * (1 + 1e-12)]
-    out = wear.run(model, sl.scheme, step_hat / per_m, stage_s, sl.until, s_end,
-                   sl.force_fraction, progress)
-    if sl.until == "force_fraction" and out["history"]["s"][-1] >= s_end * (1 - 1e-12):
-        raise SolverError(f"the force did not fall below {sl.force_fraction} F0 within "
-                          f"ŝ = {MAX_S_HAT:g}")
-    hist = out["history"]
-    hist["s_hat"] = hist["s"] * per_m
-
-    # stages: azimuthal averages on rings one pixel wide, the full fields, anisotropy
+    until = "force_fraction" if sl.until == "force_fraction" else "distance"
     rho = np.hypot(X, Y)
     ring = np.rint(rho / dx).astype(np.int64)
     rings = n // 2                      # whole rings inside the box
     r = np.arange(rings) * dx
+    out = wear.run(model, sl.scheme, step_hat / per_m, stage_s, until, s_end,
+                   sl.force_fraction, progress, tolerance=sl.tolerance, scales=sc,
+                   ring=(ring, rings, r),
+                   max_steps=ADAPTIVE_MAX_STEPS if adaptive else MAX_STEPS)
+    if until == "force_fraction" and out["history"]["s"][-1] >= s_end * (1 - 1e-12):
+        raise SolverError(f"the force did not fall below {sl.force_fraction} F0 within "
+                          f"ŝ = {s_cap:g}")
+    hist = out["history"]
+    hist["s_hat"] = hist["s"] * per_m
+    # cycles: NaN without a stroke (one set of columns for every case)
+    cpm = case.cycles_per_metre
+    hist["cycles"] = hist["s"] * (cpm if cpm is not None else math.nan)
+
+    # stages: azimuthal averages on rings one pixel wide, the full fields, anisotropy
     K = len(out["stages"])
     f_avg, p_avg = np.zeros((K, rings)), np.zeros((K, rings))
     fields = {k: np.zeros((K, n, n)) for k in ("profile", "wear_depth", "pressure", "gap")}
@@ -215,6 +237,12 @@ def solve(case, progress=None) -> RunResult:
                     "over p0 (pressure_interior: on the rings wholly in contact), wear depth "
                     "over d (d0 under force control)")
     counters = out["counters"]
+    if adaptive:
+        info["time_error"] = dict(
+            estimate=counters["time_error"], rejected_steps=counters["rejected_steps"],
+            largest_step_hat=counters["largest_step_hat"],
+            meaning="largest step-doubling estimate of a step's local error (force /F0, depth "
+                    "and central wear /max(d0, value)), as the MDR's")
     info.update(steps=counters["steps"], cg_iterations=counters["cg_iterations"],
                 operator_applications=op.applications,
                 max_complementarity_residual=float(np.max(hist["complementarity_residual"])))

@@ -12,6 +12,13 @@ Archard wear, the same law as the MDR and FEM solvers).
 - BDF2 (variable step): the same problem on a f_n + b f_{n-1} with wear
   compliance c h K (:func:`bdf2_coefficients`), started by a short backward
   Euler step and a doubling ramp as in the MDR.
+- adaptive (as the MDR's): backward Euler with step doubling. Each step is
+  solved once whole and as two halves; their difference (force /F0, depth
+  and central wear /max(d0, value)) is the local error estimate; a step
+  above ``tolerance`` is halved and retried, one below 0.2·tolerance lets
+  the next step double (steps on the ladder 2^k ŝ from 2^-7). The two-half
+  state is kept and Richardson's correction (two − whole) is carried into
+  the next step's start profile ("deferred" correction).
 """
 
 from __future__ import annotations
@@ -22,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wearcheck.cases import SolverError
+from wearcheck.cases.result import scar_radius
 
 from . import contact
 from .operator import HalfSpace
@@ -30,6 +38,11 @@ from .operator import HalfSpace
 BDF2_MAX_RATIO = 2.0
 #: BDF2: first (backward Euler) step as a fraction of the step (as the MDR)
 BDF2_FIRST_STEP = 1.0 / 16.0
+#: adaptive scheme (as the MDR's): first step in ŝ, the ladder 2^k ŝ it climbs,
+#: and the fraction of the tolerance below which the step doubles (the
+#: estimate grows as h², fourfold per doubling)
+ADAPTIVE_FIRST_STEP_HAT = 2.0 ** -7
+ADAPTIVE_GROW_BELOW = 0.2
 
 
 @dataclass
@@ -111,10 +124,16 @@ def contact_state(model: Model, base: np.ndarray, sigma: float = 0.0,
 
 
 def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
-        force_fraction: float, progress=None) -> dict:
+        force_fraction: float, progress=None, *, tolerance: float | None = None,
+        scales: dict | None = None, ring: tuple | None = None,
+        max_steps: int = 2_000_000) -> dict:
     """Step the wear from the unworn state (h, stage_s, s_end in metres of sliding).
 
-    Returns the history, the stages reached (s, f, p, gap, depth) and counters.
+    Adaptive: h is the largest step (inf for none), ``tolerance`` and
+    ``scales`` (F0, d0, s_hat_per_m) set the error control. ``ring`` =
+    (ring index per pixel, number of rings, radii) adds the ``scar_radius``
+    column (from the ring-averaged wear). Returns the history, the stages
+    reached (s, f, p, gap, depth) and counters.
     """
     K = model.wear_rate
     area = model.op.spacing**2
@@ -125,7 +144,7 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
         raise SolverError("the unworn indenter carries no load")
     hist = {k: [] for k in ("s", "force", "depth", "contact_radius", "wear_center",
                             "wear_volume", "max_pressure", "cg_iterations",
-                            "complementarity_residual")}
+                            "complementarity_residual", "scar_radius")}
     stages = []
     stage_s = list(stage_s)
     counters = {"steps": 0, "cg_iterations": state.iterations}
@@ -142,6 +161,14 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
         hist["max_pressure"].append(float(np.max(st.p)))
         hist["cg_iterations"].append(st.iterations)
         hist["complementarity_residual"].append(st.residual)
+        if ring is not None:
+            index, rings, radii = ring
+            inside = index < rings
+            total = np.bincount(index[inside], w[inside], minlength=rings)
+            count = np.maximum(np.bincount(index[inside], minlength=rings), 1)
+            hist["scar_radius"].append(scar_radius(radii, total / count))
+        else:
+            hist["scar_radius"].append(math.nan)
         while stage_s and stage_s[0] <= s * (1 + 1e-12) + 1e-300:
             stages.append((s, st.f.copy(), st.p.copy(), st.gap.copy(), st.depth))
             stage_s.pop(0)
@@ -151,6 +178,25 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
         ramp = [BDF2_FIRST_STEP * h]
         while sum(ramp) < h * (1 - 1e-9):
             ramp.append(sum(ramp))
+    adaptive = scheme == "adaptive"
+    corr = None              # adaptive: Richardson's correction for the next start
+    if adaptive:
+        per_m = scales["s_hat_per_m"]
+        F0, d0 = scales["F0"], scales["d0"]
+        h_cur = min(ADAPTIVE_FIRST_STEP_HAT / per_m, h)
+        time_error = 0.0
+        counters.update(rejected_steps=0, largest_step_hat=0.0)
+
+    def backward_euler(start_f, p_guess, hn):
+        return contact_state(model, start_f, hn * K, p_guess)
+
+    def error_of(a, b):
+        """Local error estimate between two solutions of one step."""
+        wa = a.f[i0, j0] - model.f0[i0, j0]
+        return max(abs(a.force - b.force) / F0,
+                   abs(a.depth - b.depth) / max(d0, abs(a.depth)),
+                   abs(a.f[i0, j0] - b.f[i0, j0]) / max(d0, abs(wa)))
+
     previous = None          # BDF2: (f_{n-1}, h_{n-1})
     last = None              # (p_{n-1}, h_{n-1}) for the warm start's extrapolation
     s = 0.0
@@ -164,12 +210,13 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
         target = s_end
         if stage_s:
             target = min(target, stage_s[0])
-        if target - s <= h * (1 + 1e-9):
+        hstep = h_cur if adaptive else h
+        if target - s <= hstep * (1 + 1e-9):
             hn = target - s
-        elif scheme == "bdf2" and target - s < 2.0 * h:
+        elif (scheme == "bdf2" or adaptive) and target - s < 2.0 * hstep:
             hn = 0.5 * (target - s)
         else:
-            hn = h
+            hn = hstep
         if scheme == "bdf2":
             cap = math.inf if previous is None else BDF2_MAX_RATIO * previous[1]
             if ramp:
@@ -183,6 +230,27 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
                 guess = state.p
         if scheme == "explicit":
             new = contact_state(model, state.f + hn * K * state.p, 0.0, guess)
+        elif adaptive:
+            on_ladder = hn == h_cur
+            start = state.f if corr is None else state.f + corr
+            full = backward_euler(start, guess, hn)
+            half = backward_euler(start, guess, 0.5 * hn)
+            two = backward_euler(half.f, half.p, 0.5 * hn)
+            counters["cg_iterations"] += full.iterations + half.iterations
+            err = error_of(two, full)
+            if err > tolerance and hn > 1e-12 * max(s, hn):
+                counters["rejected_steps"] += 1
+                counters["cg_iterations"] += two.iterations
+                h_cur = 0.5 * hn if on_ladder else min(
+                    h_cur, 2.0 ** math.floor(math.log2(0.5 * hn * per_m)) / per_m)
+                continue
+            # keep the backward-Euler state (monotone at the edge) and carry
+            # Richardson's correction into the next step's start profile
+            new, corr = two, two.f - full.f
+            time_error = max(time_error, err)
+            counters["largest_step_hat"] = max(counters["largest_step_hat"], hn * per_m)
+            if on_ladder and err < ADAPTIVE_GROW_BELOW * tolerance and 2.0 * hn <= h:
+                h_cur = 2.0 * hn
         else:
             if scheme == "bdf2" and previous is not None:
                 a, b, c = bdf2_coefficients(hn, previous[1])
@@ -200,6 +268,9 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
         counters["steps"] += 1
         counters["cg_iterations"] += state.iterations
         record(state, s)
+        if counters["steps"] >= max_steps:
+            raise SolverError(f"the wear run took more than {max_steps} steps; raise "
+                              "sliding.step_hat or sliding.tolerance")
         if progress is not None:
             frac = s / s_end if until == "distance" else \
                 (1.0 - state.force / F_start) / (1.0 - force_fraction)
@@ -207,5 +278,7 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
                 last_report = frac
                 progress(min(max(frac, 0.0), 1.0), f"F/F0 = {state.force / F_start:.3g}")
     counters["F_start"] = F_start
+    if adaptive:
+        counters["time_error"] = time_error
     return dict(history={k: np.asarray(v) for k, v in hist.items()}, stages=stages,
                 counters=counters)

@@ -8,11 +8,10 @@
    target is at most 10 s including cycle jumping.
 2. Accuracy of cycle jumping: runs with several jump tolerances against
    the same case with every cycle simulated (jump_tolerance = 0), over
-   --reference-cycles (a run without jumps costs about 10^5 increments per
-   10^4 cycles... at N = 800 minutes for 10^5 cycles, hence the shorter
-   reference; --reference-cycles 100000 runs the full one). Errors: max
-   |Δw|/max w of the final wear profile, relative worn volume, relative
-   depth.
+   --reference-cycles (default 10^4: without jumps 10^5 cycles at N = 800
+   take about 340 s CPU; --reference-cycles 100000 runs the full one).
+   Errors: max |Δw|/max w of the final wear profile, relative worn volume,
+   relative depth.
 
 Each run is timed as process CPU time in this process and as wall time. The
 machine these numbers were taken on is shared (2 cores, several users): wall

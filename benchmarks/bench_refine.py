@@ -13,8 +13,8 @@ import argparse
 import tempfile
 import time
 
-from wearcheck.comparisons.distributed import Task, run_cases
-from wearcheck.comparisons.refine import levels
+from wearcheck.comparisons.studies.distributed import Task, run_cases
+from wearcheck.comparisons.analysis.convergence import levels
 
 
 def study(solver, lvls, scheduler, out):

@@ -7,12 +7,13 @@ beside this file; :func:`shipped` returns the path of one.
 
 from pathlib import Path
 
-from .case import Case, effective_moduli, dundurs_beta, from_dict, key_reference, load, to_toml
+from .case import (Case, dundurs_beta, effective_moduli, from_dict, key_reference, load, to_dict,
+                   to_toml)
 from .errors import CaseError, SolverError, WearcheckError
 from .result import HISTORY_COLUMNS, RunResult
 
 __all__ = ["Case", "CaseError", "SolverError", "WearcheckError", "RunResult",
-           "HISTORY_COLUMNS", "load", "from_dict", "to_toml", "key_reference",
+           "HISTORY_COLUMNS", "load", "from_dict", "to_dict", "to_toml", "key_reference",
            "effective_moduli", "dundurs_beta", "shipped"]
 
 

@@ -12,9 +12,10 @@ from typing import Any
 import numpy as np
 
 from .errors import CaseError
-from .schema import (OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS,
-                     SECTIONS, BEMSettings, CompareSettings, Counterface, FEMSettings, Fretting,
-                     Indenter, Loading,
+from .schema import (BEMSettings, OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED,
+                     REQUIRED_SECTIONS,
+                     SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
+                     Loading,
                      MDRSettings, Sliding, Stages, Wear, _fmt, build_section,
                      section_fields)
 
@@ -57,8 +58,77 @@ class Case:
         """k_wear μ / σ0 [1/Pa]: wear depth per unit pressure and sliding distance."""
         return self.wear.k * self.wear.mu / self.wear.hardness
 
+    @property
+    def end_distance(self) -> float | None:
+        """Sliding distance [m] at which the run stops; None: when the force has fallen."""
+        sl = self.sliding
+        if sl.until == "distance":
+            return sl.distance
+        if sl.until == "cycles":
+            return 2.0 * sl.stroke * sl.cycles
+        return None
+
+    @property
+    def cycles_per_metre(self) -> float | None:
+        """Cycles per metre of sliding, 1/(2·stroke); None without a stroke."""
+        return None if self.sliding.stroke is None else 0.5 / self.sliding.stroke
+
     def replace(self, **sections) -> "Case":
-        return replace(self, **sections)
+        """A copy with whole sections replaced, validated like a case file.
+
+        ``case.replace(wear=dataclasses.replace(case.wear, mu=0.5))``; for single
+        keys :meth:`derive` is shorter.
+        """
+        unknown = sorted(set(sections) - set(SECTIONS))
+        if unknown:
+            raise CaseError(f"unknown section '{unknown[0]}'; allowed: " + ", ".join(SECTIONS))
+        raw = to_dict(self)
+        for name, obj in sections.items():
+            raw[name] = _section_dict(obj)
+        return from_dict(raw, source=self.source)
+
+    def derive(self, changes=None, /, **keys) -> "Case":
+        """A copy with some keys changed, validated like a case file.
+
+        Parameters
+        ----------
+        changes : mapping of dotted keys to values, ``{"wear.mu": 0.5}``, or a
+            list of ``"section.key=value"`` strings as on the command line.
+        **keys : the same with ``__`` for the dot: ``case.derive(wear__mu=0.5)``;
+            they win over ``changes``. numpy numbers and arrays are taken as
+            Python numbers and lists. A relative ``indenter.file`` given here is
+            relative to the working directory.
+
+        Raises
+        ------
+        CaseError
+            naming the key, the value and what is allowed, as for a case file.
+        """
+        items = {}
+        if isinstance(changes, dict):
+            items.update(changes)
+        elif changes is not None:
+            for text in [changes] if isinstance(changes, str) else list(changes):
+                section, key, value = parse_override(text)
+                items[f"{section}.{key}"] = value
+        items.update({k.replace("__", "."): v for k, v in keys.items()})
+        raw = to_dict(self)
+        for name, value in items.items():
+            if not isinstance(name, str) or name.count(".") != 1 or not all(name.split(".")):
+                raise CaseError(f"key '{name}': must be section.key, e.g. wear.mu")
+            if isinstance(value, np.generic):
+                value = value.item()
+            elif isinstance(value, (np.ndarray, tuple)):
+                value = np.asarray(value).tolist() if isinstance(value, np.ndarray) \
+                    else list(value)
+            if name == "indenter.file" and isinstance(value, str) \
+                    and not Path(value).is_absolute():
+                value = str(Path.cwd() / value)
+            section, key = name.split(".")
+            if section in raw and not isinstance(raw[section], dict):
+                raise CaseError(f"'{section}' must be a table [{section}]")
+            raw.setdefault(section, {})[key] = value
+        return from_dict(raw, source=self.source)
 
 
 def _compliance(rigid: bool, E, nu):
@@ -134,20 +204,31 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     unknown = sorted(set(raw) - set(SECTIONS))
     if unknown:
         raise CaseError(f"unknown section [{unknown[0]}]; allowed: " + ", ".join(SECTIONS))
+    overridden = set()
     for text in overrides:
         section, k, value = parse_override(text)
         raw.setdefault(section, {})
         if not isinstance(raw[section], dict):
             raise CaseError(f"'{section}' must be a table [{section}]")
         raw[section][k] = value
+        overridden.add((section, k))
+        # stages given one way by an override replace the file's other way
+        other = {"s_hat": "cycles", "cycles": "s_hat"}.get(k) if section == "stages" else None
+        if other and ("stages", other) not in overridden:
+            raw[section].pop(other, None)
     for section in REQUIRED_SECTIONS:
         if section not in raw:
             raise CaseError(f"missing section [{section}]")
+    st = raw.get("stages", {})
+    if isinstance(st, dict) and "s_hat" in st and "cycles" in st:
+        raise CaseError(f"keys 'stages.s_hat' = {_fmt(st['s_hat'])} and 'stages.cycles' = "
+                        f"{_fmt(st['cycles'])} both given; give the stages one way only")
     built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS
              if name not in OPTIONAL_SECTIONS or name in raw}
     if "fretting" in raw:
         for section in ("sliding", "stages"):
-            if raw.get(section):
+            # (a case derived from a gross-slip one carries their defaults: harmless)
+            if raw.get(section) and built[section] != SECTIONS[section]():
                 raise CaseError(f"section [{section}] given with [fretting]; a fretting run "
                                 "lasts fretting.cycles and keeps fretting.stage_cycles — "
                                 f"remove [{section}]")
@@ -157,6 +238,12 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     _check_programme(built)
     case = Case(**built, source=str(source), table=table)
     _check_scales(case)
+    if case.stages.cycles is not None:
+        # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
+        from . import reference
+        per_m = reference.scales(case)["s_hat_per_m"]
+        s_hat = tuple(c * 2.0 * case.sliding.stroke * per_m for c in case.stages.cycles)
+        case = replace(case, stages=replace(case.stages, s_hat=s_hat))
     if case.fretting is not None:
         _check_fretting(case)
     return replace(case, warnings=_warnings(case))
@@ -283,8 +370,27 @@ def _check_programme(built):
                         "set sliding.until = \"distance\" to stop at a distance")
     if sl.until == "force_fraction" and ld.control == "force":
         raise CaseError("sliding.until = \"force_fraction\" cannot end a force-controlled run "
-                        "(the force does not fall); use sliding.until = \"distance\"")
-    s = built["stages"].s_hat
+                        "(the force does not fall); use sliding.until = \"distance\" or "
+                        "\"cycles\"")
+    if sl.until == "cycles":
+        for name in ("stroke", "cycles"):
+            if getattr(sl, name) is None:
+                raise CaseError(f"missing key 'sliding.{name}', required by sliding.until = "
+                                "\"cycles\"")
+        if sl.distance is not None:
+            raise CaseError(f"key 'sliding.distance' = {sl.distance!r} given but sliding.until = "
+                            "\"cycles\" (the distance is 2·stroke·cycles); remove one")
+    elif sl.cycles is not None:
+        raise CaseError(f"key 'sliding.cycles' = {sl.cycles!r} given but sliding.until = "
+                        f"\"{sl.until}\"; set sliding.until = \"cycles\" to stop after cycles")
+    st = built["stages"]
+    if st.cycles is not None:
+        if sl.stroke is None:
+            raise CaseError(f"key 'stages.cycles' = {list(st.cycles)} needs 'sliding.stroke' "
+                            "(one cycle slides 2·stroke)")
+        if any(b <= a for a, b in zip(st.cycles, st.cycles[1:])):
+            raise CaseError(f"key 'stages.cycles' = {list(st.cycles)}: must increase strictly")
+    s = st.s_hat
     if any(b <= a for a, b in zip(s, s[1:])):
         raise CaseError(f"key 'stages.s_hat' = {list(s)}: must increase strictly")
 
@@ -353,6 +459,8 @@ def to_toml(case: Case) -> str:
             value = getattr(obj, name)
             if value is None:
                 continue
+            if section == "stages" and name == "s_hat" and case.stages.cycles is not None:
+                continue  # derived from stages.cycles (giving both is an error)
             if isinstance(value, tuple):
                 text = "[" + ", ".join(repr(v) for v in value) + "]"
             else:
@@ -381,3 +489,25 @@ def key_reference() -> str:
                 doc += " (" + " \\| ".join(f"`{c}`" for c in meta["choices"]) + ")"
             rows.append(f"| `{section}.{name}` | {meta['unit'] or ''} | {default} | {doc} |")
     return "\n".join(rows)
+
+
+def _section_dict(obj) -> dict:
+    """One section as TOML would read it (keys left at None omitted)."""
+    out = {}
+    for f in fields(obj):
+        value = getattr(obj, f.name)
+        if value is not None:
+            out[f.name] = list(value) if isinstance(value, tuple) else value
+    return out
+
+
+def to_dict(case: Case) -> dict:
+    """The case as nested dicts, as a TOML file of it would read (``from_dict`` inverts it)."""
+    out = {name: _section_dict(getattr(case, name)) for name in SECTIONS
+           if getattr(case, name) is not None}
+    if case.fretting is not None:  # a fretting run has no [sliding] or [stages]
+        out.pop("sliding", None)
+        out.pop("stages", None)
+    elif case.stages.cycles is not None:  # s_hat is derived from the cycles
+        out["stages"].pop("s_hat", None)
+    return out

@@ -273,3 +273,52 @@ def scales(case) -> dict:
 def complete_wear_profile(r, R, depth):
     """Fixed-depth limit of a worn paraboloid: max(r²/2R, d) (physics.md §5)."""
     return np.maximum(np.asarray(r, dtype=float) ** 2 / (2.0 * R), depth)
+
+
+# -- long runs under constant force (issue 11) -------------------------------
+
+def worn_sphere_asymptote(R, F, s, wear_coefficient, *, exponent=1.0, hardness=1.0):
+    """Long-run scar of a sphere worn under a constant force F (rigid-flat limit).
+
+    The worn cap becomes a flat of radius b under a nearly uniform pressure
+    F/(π b²); wearing it at its centre, d(b²/2R)/ds = K_n (F/(π b²))^n with
+    K_n = wear_coefficient · hardness^(1−n) (= kμ σ0^(−n); ``wear_coefficient``
+    is K = kμ/σ0), gives b^(2(n+1)) = 2(n+1) R K_n (F/π)^n s; n = 1:
+    b = (4 R K F s/π)^(1/4). Returns scar_radius b [m], wear_center b²/2R [m]
+    (√(K F s/(π R)) for n = 1) and wear_volume π b⁴/(4R) [m³] (the cap).
+    """
+    n = float(exponent)
+    Kn = wear_coefficient * hardness ** (1.0 - n)
+    b = (2.0 * (n + 1.0) * R * Kn * (F / math.pi) ** n * np.asarray(s, dtype=float)) \
+        ** (1.0 / (2.0 * (n + 1.0)))
+    return dict(scar_radius=b, wear_center=b**2 / (2.0 * R), wear_volume=math.pi * b**4 / (4.0 * R))
+
+
+def predicted_scar_radius(case, s) -> float:
+    """Radius the contact or scar can reach by sliding s [m], for sizing meshes.
+
+    Depth control: √2·a0 (complete wear, physics.md §5). Force control: the
+    long-run asymptote started from the unworn radius,
+    (a0^(2(n+1)) + 2(n+1) R K_n (F/π)^n s)^(1/(2(n+1))), which bounds the scar
+    from above at every s (the cap's elastic part only lowers it).
+    """
+    a0 = scales(case)["a0"]
+    if case.loading.control == "depth":
+        return math.sqrt(2.0) * a0
+    n = case.wear.pressure_exponent
+    b = worn_sphere_asymptote(case.indenter.radius, case.loading.force, s, case.wear_rate,
+                              exponent=n, hardness=case.wear.hardness)["scar_radius"]
+    p = 2.0 * (n + 1.0)
+    return float((a0**p + float(b) ** p) ** (1.0 / p))
+
+
+def worn_crown(F, b, E_star):
+    """Centre-to-edge height difference of a flat pressed by a uniform pressure.
+
+    A uniform pressure q = F/(π b²) on a circle of radius b displaces the
+    half-space surface by u(0) = 2 q b/E* at the centre and u(b) = 4 q b/(π E*)
+    at the rim (Johnson, Contact Mechanics, §3.2), so u(0) − u(b) =
+    2F(1 − 2/π)/(π b E*). Worn flat under load, the unloaded profile keeps
+    this crown.
+    """
+    return 2.0 * F * (1.0 - 2.0 / math.pi) / (math.pi * b * E_star)

@@ -120,29 +120,49 @@ class Wear:
     tangential_correction: bool = key(False,
                                       doc="subtract the elastic tangential displacement of the "
                                           "surface from the slip (paper Eqs. 15-16)")
+    pressure_exponent: float = key(1.0, minimum=1.0, maximum=4.0,
+                                   doc="exponent n of the wear law dw/ds = (k μ/σ0)·σ0·(p/σ0)^n "
+                                       "(1: Reye–Archard, the paper); in [1, 4] (below 1 the "
+                                       "rate's derivative is infinite where p -> 0)")
 
 
 @dataclass(frozen=True)
 class Sliding:
-    until: str = key("force_fraction", choices=("force_fraction", "distance"),
+    until: str = key("force_fraction", choices=("force_fraction", "distance", "cycles"),
                      doc="stop when the force has fallen below a fraction of its start, "
-                         "or after a total sliding distance")
+                         "after a total sliding distance, or after a number of reciprocating "
+                         "cycles (s = 2·stroke·cycles, gross slip)")
     force_fraction: float = key(0.01, minimum=0.0, maximum=1.0, open_minimum=True,
                                 open_maximum=True,
                                 doc="until = force_fraction: stop once F < force_fraction * F(0)")
     distance: float | None = key(None, unit="m", minimum=0.0,
                                  doc="until = distance: total sliding distance s (0: no sliding, "
                                      "the unworn contact only)")
-    scheme: str = key("implicit", choices=("implicit", "bdf2", "explicit"),
-                      doc="time scheme: implicit (backward) Euler, unconditionally stable, "
-                          "first order; bdf2, the variable-step second-order backward "
-                          "differentiation formula, L-stable; or explicit (forward) Euler as "
-                          "in the paper, stable below a step limit")
+    stroke: float | None = key(None, unit="m", positive=True,
+                               doc="reciprocating stroke (one way); one cycle slides 2·stroke. "
+                                   "Required by until = cycles and stages.cycles; without it "
+                                   "history.csv's column `cycles` is NaN")
+    cycles: float | None = key(None, minimum=0.0,
+                               doc="until = cycles: number of cycles to run (0: the unworn "
+                                   "contact only)")
+    scheme: str = key("adaptive", choices=("adaptive", "implicit", "bdf2", "explicit"),
+                      doc="time scheme: adaptive, backward Euler with step doubling and "
+                          "Richardson extrapolation, the step controlled by "
+                          "sliding.tolerance; implicit (backward) Euler at a fixed step, "
+                          "unconditionally stable, first order; bdf2, the variable-step "
+                          "second-order backward differentiation formula, L-stable; or "
+                          "explicit (forward) Euler as in the paper, stable below a step limit")
+    tolerance: float = key(1e-4, minimum=0.0, maximum=0.1, open_minimum=True,
+                           doc="scheme = adaptive: local error allowed per step, estimated "
+                               "by step doubling (force /F0; depth and central wear /max(d0, "
+                               "value)); the global time error of the history comes out about "
+                               "this size and is recorded in meta.json info.time_error")
     step_hat: float | str = key("auto", positive=True,
                                 doc="sliding step in units of the dimensionless sliding "
                                     "ŝ = k μ E* s / (σ0 a0), or \"auto\": the solver's "
                                     "default (explicit: half its stability limit; implicit "
-                                    "and bdf2: MDR 0.1, FEM 0.02 and 0.01), recorded in "
+                                    "and bdf2: MDR 0.1, FEM 0.02 and 0.01; adaptive: the "
+                                    "largest step allowed, auto = no limit), recorded in "
                                     "meta.json info.step_hat")
 
 
@@ -152,15 +172,20 @@ class Stages:
                                    doc="dimensionless sliding distances ŝ at which profiles "
                                        "and pressures are kept (increasing); stages after "
                                        "the end of the run are not reached")
+    cycles: tuple[float, ...] | None = key(None, minimum=0.0,
+                                           doc="the stages as numbers of cycles instead "
+                                               "(needs sliding.stroke; not together with "
+                                               "s_hat, which is then derived from them)")
 
 
 @dataclass(frozen=True)
 class MDRSettings:
     elements: int = key(800, minimum=2, doc="number N of 1D springs (elements) on 0 <= x <= domain")
     domain_factor: float = key(1.25, minimum=1.0, open_minimum=True,
-                               doc="radius of the simulated domain as a multiple of √2·a0, "
-                                   "the contact radius reached at complete wear under "
-                                   "depth control")
+                               doc="radius of the initial simulated domain as a multiple of "
+                                   "√2·a0, the contact radius reached at complete wear under "
+                                   "depth control; the domain grows (the grid is remapped) "
+                                   "when a worn contact nears its edge")
 
 
 @dataclass(frozen=True)
@@ -168,7 +193,10 @@ class FEMSettings:
     contact_nodes: int = key(250, minimum=2,
                              doc="number of nodes on the candidate contact arc")
     contact_factor: float = key(1.25, minimum=0.0, open_minimum=True,
-                                doc="extent of the candidate contact arc as a multiple of √2·a0")
+                                doc="extent of the candidate contact arc as a multiple of the "
+                                    "predicted final contact radius (√2·a0 under depth "
+                                    "control; under force control the long-run scar radius "
+                                    "(4 R K F s/π)^(1/4) at the end of the run, at least a0)")
     element_order: int = key(2, minimum=1, maximum=2, doc="1: linear, 2: quadratic triangles")
     pressure_recovery: str = key("lumped", choices=("lumped", "consistent"),
                                  doc="nodal pressure = nodal force / lumped 2πr-weighted area, "

@@ -8,9 +8,10 @@ spacing in metres, x along the first array axis; cell data ``profile``,
 ``wear_depth``, ``pressure``, ``gap`` [m, m, Pa, m] (and ``p_over_p0`` when
 p0 is given); field data ``s``, ``stage`` (and ``s_hat``).
 
-``export_run(run_dir)`` writes ``RUN_DIR/vtk/`` for a BEM run directory
-atomically: the ring-averaged series of :mod:`comparisons.vtk` (``profile``,
-``pressure``, ``surface``) plus the ``surface_fields`` image series.
+``write_bem_fields(directory, run, revolve=0)`` is the BEM's registry
+``export_vtk``: ``wearcheck run --solver bem --vtk`` (and ``wearcheck
+export``) write the ring-averaged series of :mod:`comparisons.present.vtk`
+(``profile``, ``pressure``, ``surface``) and this ``surface_fields`` series.
 """
 
 from __future__ import annotations
@@ -21,8 +22,8 @@ import numpy as np
 
 from wearcheck.cases import WearcheckError
 
-from .runio import Run, atomic_directory
-from .vtk import pvd_text, write_vtk_files
+from .present.vtk import pvd_text
+from .rundir import Run
 
 #: the per-stage surface fields of a BEM run (``RunResult.fields``)
 IMAGE_FIELDS = ("profile", "wear_depth", "pressure", "gap")
@@ -87,22 +88,14 @@ def write_image_series(directory, fields, stage_s, *, s_hat_per_m: float | None 
     return pvd
 
 
-def export_run(run_dir) -> Path:
-    """Write ``RUN_DIR/vtk/`` for a BEM run directory, atomically; returns its path."""
-    run = Run(run_dir)
-    if run.fields is None:
-        raise WearcheckError(f"{run.path}: no fields.npz (run the BEM to have surface fields)")
+def write_bem_fields(directory, run: Run, revolve: int = 0) -> list[Path]:
+    """The BEM's own series (registry ``export_vtk``): ``surface_fields``; its .pvd path.
+
+    ``revolve`` is ignored: the surface is already three-dimensional.
+    """
     fields, stage_s = run.fields, run.stages["s"]
     check_image_fields(fields, len(stage_s))
-    target = run.path / "vtk"
-    with atomic_directory(target) as tmp:
-        # the ring averages as the axisymmetric solvers' series (no FEM mesh)
-        run.fields = None
-        try:
-            write_vtk_files(tmp, run)
-        finally:
-            run.fields = fields
-        if len(stage_s):
-            write_image_series(tmp, fields, stage_s, s_hat_per_m=run.scales["s_hat_per_m"],
-                               p0=run.scales["p0"])
-    return target
+    if not len(stage_s):
+        return []
+    return [write_image_series(directory, fields, stage_s,
+                               s_hat_per_m=run.scales["s_hat_per_m"], p0=run.scales["p0"])]

@@ -33,8 +33,11 @@ p(0) = 0, and a bump of ~0.25 % d grows there under wear: measured, not used.)
 consistent 2πr-weighted boundary mass instead; it ripples odd-even (0.7 % p0
 unworn, up to 7 % p0 and negative values near a worn edge) and does not
 drive the wear, which always uses the lumped p.
-Wear dw_i/ds = (k μ/σ0) p_i by explicit or implicit Euler or variable-step
-BDF2 (:mod:`fem.wear`);
+Wear dw_i/ds = (k μ/σ0) σ0 (p_i/σ0)^n by the adaptive scheme (default; step
+doubling with a deferred Richardson correction), explicit or implicit Euler
+or variable-step BDF2 (:mod:`fem.wear`); the candidate contact arc is sized
+for the predicted final contact radius (√2·a0 under depth control, the
+long-run scar radius under force control);
 the contact radius is interpolated between the last loaded and the first
 free node from the free nodes' gaps (gap^{2/3} linear near a smooth edge).
 Not modelled: wear.tangential_correction (frictionless normal FEM).
@@ -48,25 +51,6 @@ in the plane's frame (the top face has u_z = −d); ``stress`` (K, Np, 4) σ_rr,
 ``contact_pressure`` and ``wear_depth`` (K, Nc).
 """
 
-from wearcheck.cases import CaseError
-
-from .solver import solve as _solve
-from .solver import supports as _supports
+from .solver import solve, supports
 
 __all__ = ["solve", "supports"]
-
-
-def solve(case, progress=None):
-    """Run the FEM wear simulation of ``case``; a case it cannot run is a CaseError."""
-    reason = supports(case)
-    if reason is not None:
-        raise CaseError(reason)
-    return _solve(case, progress=progress)
-
-
-def supports(case) -> str | None:
-    """None when the FEM can run ``case``, else one line saying why not."""
-    if getattr(case, "fretting", None) is not None:
-        return ("fem: fretting (partial slip) needs a one-directional tangential load, "
-                "which the axisymmetric FEM cannot carry; use the MDR")
-    return _supports(case)

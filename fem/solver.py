@@ -37,44 +37,51 @@ BDF2_AUTO_STEP_HAT = 0.01
 MIN_NODES_IN_CONTACT = 5
 
 
-#: runaway guards: longest run in ŝ and most steps
+#: runaway guards: longest run in ŝ and most steps (fixed steps; adaptive
+#: steps grow as wear slows, so those runs are capped in steps, ŝ < 1e9)
 MAX_S_HAT = 1.0e4
 MAX_STEPS = 2_000_000
+ADAPTIVE_MAX_S_HAT = 1.0e9
+ADAPTIVE_MAX_STEPS = 100_000
+#: the adaptive scheme's first step in ŝ (the ladder of steps 2^k ŝ it climbs)
+ADAPTIVE_FIRST_STEP_HAT = 2.0 ** -7
 #: largest Poisson ratio before volumetric locking shows (see check_case)
 MAX_POISSON_RATIO = 0.495
 
 
-def check_case(case) -> None:
-    """Reject, with a CaseError, what this FEM model cannot represent."""
+def supports(case) -> str | None:
+    """None when this FEM model can represent ``case``, else the reason it cannot."""
+    if getattr(case, "fretting", None) is not None:
+        return ("fretting (partial slip) needs a one-directional tangential load, which the "
+                "axisymmetric FEM cannot carry; use the MDR solver")
     ind, cf = case.indenter, case.counterface
     if ind.profile == "ellipsoid":
-        raise CaseError("indenter.profile = \"ellipsoid\": the FEM is axisymmetric and cannot "
-                        "represent an ellipsoid; use the BEM (or the MDR, approximately)")
+        return ("indenter.profile = \"ellipsoid\": the FEM is axisymmetric and cannot "
+                "represent an ellipsoid; use the BEM (or the MDR, approximately)")
     if ind.radius is None:
-        raise CaseError(f"the FEM needs 'indenter.radius' (the radius of the FEM sphere) for "
-                        f"profile \"{ind.profile}\"; it is not given")
+        return (f"the FEM needs 'indenter.radius' (the radius of the FEM sphere) for "
+                f"profile \"{ind.profile}\"; it is not given")
     if not cf.rigid:
-        raise CaseError("counterface.rigid = false: the FEM models an elastic sphere against a "
-                        "rigid plane (node-to-node contact with the plane); set "
-                        "counterface.rigid = true or use the MDR solver")
+        return ("counterface.rigid = false: the FEM models an elastic sphere against a "
+                "rigid plane (node-to-node contact with the plane); set "
+                "counterface.rigid = true or use the MDR solver")
     if ind.rigid:
-        raise CaseError("indenter.rigid = true: the FEM body is the elastic sphere; a rigid "
-                        "indenter has nothing to deform (use the MDR solver)")
+        return ("indenter.rigid = true: the FEM body is the elastic sphere; a rigid "
+                "indenter has nothing to deform (use the MDR solver)")
     if ind.poisson_ratio > MAX_POISSON_RATIO:
         # displacement elements lock volumetrically as ν → 0.5 (measured on hertz.toml:
         # F/F0 = 1.0078 at ν = 0.45, 1.0081 at 0.495, 1.037 at 0.49999; 0.5 divides by 0)
-        raise CaseError(f"key 'indenter.poisson_ratio' = {ind.poisson_ratio!r}: the FEM "
-                        f"(displacement elements) accepts ν <= {MAX_POISSON_RATIO}; nearly "
-                        "incompressible material locks (use the MDR solver)")
-
-
-def supports(case) -> str | None:
-    """None when the FEM can run ``case``, else one line saying why not."""
-    try:
-        check_case(case)
-    except CaseError as exc:
-        return str(exc)
+        return (f"key 'indenter.poisson_ratio' = {ind.poisson_ratio!r}: the FEM "
+                f"(displacement elements) accepts ν <= {MAX_POISSON_RATIO}; nearly "
+                "incompressible material locks (use the MDR solver)")
     return None
+
+
+def check_case(case) -> None:
+    """Reject, with a CaseError, what this FEM model cannot represent."""
+    reason = supports(case)
+    if reason is not None:
+        raise CaseError(reason)
 
 
 def mesh_parameters(case) -> meshes.SphereMeshParameters:
@@ -82,12 +89,16 @@ def mesh_parameters(case) -> meshes.SphereMeshParameters:
     check_case(case)
     fem, order, R = case.fem, case.fem.element_order, case.indenter.radius
     a0 = reference.scales(case)["a0"]
-    rc = fem.contact_factor * math.sqrt(2.0) * a0
+    # the arc is sized for the contact's final radius: √2·a0 under depth control,
+    # the long-run scar radius at the end of the run under force control
+    s_end = case.end_distance or 0.0
+    predicted = reference.predicted_scar_radius(case, s_end)
+    rc = fem.contact_factor * predicted
     if rc <= a0:
         raise CaseError(f"key 'fem.contact_factor' = {fem.contact_factor!r}: the candidate "
                         f"contact arc ends at r = {rc:.4g} m, inside the unworn contact radius "
-                        f"a0 = {a0:.4g} m; must be > {1 / math.sqrt(2):.4f} (≥ 1 to reach the "
-                        "complete-wear radius √2·a0)")
+                        f"a0 = {a0:.4g} m; must be > {a0 / predicted:.4f} (≥ 1 to reach the "
+                        f"predicted final contact radius {predicted:.4g} m)")
     edges = meshes.contact_edges_for(fem.contact_nodes, order)
     spacing = rc / (edges * order)
     inside = int(a0 / spacing) + 1
@@ -98,7 +109,9 @@ def mesh_parameters(case) -> meshes.SphereMeshParameters:
                         f"{MIN_NODES_IN_CONTACT} are needed, i.e. fem.contact_nodes >= {need}")
     if rc >= R:
         raise CaseError(f"key 'fem.contact_factor' = {fem.contact_factor!r}: the candidate "
-                        f"arc would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m")
+                        f"arc would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m"
+                        + (f" (predicted final scar radius {predicted:.4g} m: shorten the run "
+                           "or lower the load)" if case.loading.control == "force" else ""))
     return meshes.SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges,
                                        growth=GROWTH[order])
 
@@ -156,8 +169,15 @@ def _solve(case, progress=None) -> RunResult:
         center[0] = 1.0
 
     limit = wear.explicit_limit(C, area, rate)
+    n_exp = case.wear.pressure_exponent
+    if n_exp != 1.0:
+        # the rate's derivative n (p/σ0)^(n-1) scales the stiffness; bound p by 1.5 p0
+        limit /= n_exp * (1.5 * p0 / case.wear.hardness) ** (n_exp - 1.0)
     limit_hat = limit * per_m
-    if sl.step_hat == "auto":
+    adaptive = sl.scheme == "adaptive"
+    if adaptive:
+        step_hat = math.inf if sl.step_hat == "auto" else float(sl.step_hat)
+    elif sl.step_hat == "auto":
         step_hat = {"explicit": 0.5 * limit_hat, "implicit": IMPLICIT_AUTO_STEP_HAT,
                     "bdf2": BDF2_AUTO_STEP_HAT}[sl.scheme]
     else:
@@ -168,18 +188,22 @@ def _solve(case, progress=None) -> RunResult:
                             f"{model.stats()['contact_spacing']:.3g} m); use a step <= "
                             f"{limit_hat:.4g} or sliding.scheme = \"implicit\"")
     step = step_hat / per_m
-    if sl.until == "distance":
+    s_end = case.end_distance
+    if s_end is not None:
         # refuse a run that cannot end in reasonable time before starting it
-        if sl.distance * per_m > MAX_S_HAT:
-            raise CaseError(f"key 'sliding.distance' = {sl.distance!r}: ŝ = "
-                            f"{sl.distance * per_m:.4g} exceeds the FEM's cap of {MAX_S_HAT:g}")
-        if sl.distance / step > MAX_STEPS:
+        key = "sliding.distance" if sl.until == "distance" else "sliding.cycles"
+        cap = ADAPTIVE_MAX_S_HAT if adaptive else MAX_S_HAT
+        if s_end * per_m > cap:
+            raise CaseError(f"key '{key}' = {getattr(sl, key.split('.')[1])!r}: ŝ = "
+                            f"{s_end * per_m:.4g} exceeds the FEM's cap of {cap:g}")
+        if s_end / step > MAX_STEPS:
             raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: the run would take "
-                            f"{sl.distance / step:.3g} steps (cap {MAX_STEPS}); raise the step")
+                            f"{s_end / step:.3g} steps (cap {MAX_STEPS}); raise the step or "
+                            "use sliding.scheme = \"adaptive\"")
     control = case.loading.control
     value = getattr(case.loading, control)
     stage_s = [sh / per_m for sh in case.stages.s_hat]
-    distance = sl.distance if sl.until == "distance" else None
+    distance = s_end
     if distance is not None:
         stage_s = [s for s in stage_s if s <= distance * (1 + 1e-12)]
 
@@ -189,10 +213,13 @@ def _solve(case, progress=None) -> RunResult:
 
     t0 = time.perf_counter()
     out = wear.run(C, z, r, area, rate, control=control, value=value, step=step,
-                   scheme=sl.scheme, stage_s=stage_s, until=sl.until, distance=distance,
-                   force_fraction=sl.force_fraction, gap_scale=d0, force_scale=F0,
-                   pressure_scale=p0, center=center, progress=loop_progress,
-                   max_steps=MAX_STEPS)
+                   scheme=sl.scheme, stage_s=stage_s,
+                   until="force_fraction" if sl.until == "force_fraction" else "distance",
+                   distance=distance, force_fraction=sl.force_fraction, gap_scale=d0,
+                   force_scale=F0, pressure_scale=p0, center=center, progress=loop_progress,
+                   max_steps=ADAPTIVE_MAX_STEPS if adaptive else MAX_STEPS,
+                   tolerance=sl.tolerance, depth_scale=d0, exponent=n_exp,
+                   hardness=case.wear.hardness, first_step=ADAPTIVE_FIRST_STEP_HAT / per_m)
     t_loop = time.perf_counter() - t0
 
     # stages: full arc values (with the axis node for P2)
@@ -221,10 +248,17 @@ def _solve(case, progress=None) -> RunResult:
 
     history = dict(s=np.array(out.s), force=np.array(out.force), depth=np.array(out.depth),
                    contact_radius=np.array(out.contact_radius),
-                   wear_center=np.array(out.wear_center), wear_volume=np.array(out.wear_volume))
+                   wear_center=np.array(out.wear_center), wear_volume=np.array(out.wear_volume),
+                   scar_radius=np.array(out.scar_radius))
     history["s_hat"] = history["s"] * per_m
+    # cycles: NaN without a stroke (one set of columns for every case)
+    cpm = case.cycles_per_metre
+    history["cycles"] = history["s"] * (cpm if cpm is not None else math.nan)
     info = dict(
-        solver="fem", scheme=sl.scheme, step_hat=step_hat, step=step,
+        solver="fem", scheme=sl.scheme,
+        step_hat=step_hat if math.isfinite(step_hat) else "unlimited",
+        step=step if math.isfinite(step) else "unlimited",
+        pressure_exponent=n_exp,
         explicit_limit_step_hat=float(limit_hat), steps=out.steps,
         lcp_iterations=out.lcp_iterations, lcp_tolerance=wear.LCP_TOL,
         max_complementarity_residual=out.max_residual,
@@ -245,6 +279,14 @@ def _solve(case, progress=None) -> RunResult:
         body=("elastic sphere of radius indenter.radius clamped on its flat top face, against "
               "a rigid plane; the initial gap is the case's profile f(r_i)"),
     )
+    if adaptive:
+        info.update(tolerance=sl.tolerance, rejected_steps=out.rejected_steps,
+                    largest_step_hat=out.largest_step * per_m,
+                    time_error=dict(estimate=out.time_error, meaning=(
+                        "largest step-doubling estimate of a step's local error (force /F0, "
+                        "depth and central wear /max(d0, value)); the recorded states are "
+                        "backward-Euler states one step off the Richardson-corrected solution")))
+    info["predicted_scar_radius"] = reference.predicted_scar_radius(case, s_end or 0.0)
     if progress:
         progress(1.0, "done")
     return RunResult(history=history, stage_s=np.array([st[0] for st in out.stages]),

@@ -6,10 +6,13 @@ paraboloid of the equivalent radius √(R1 R2), its result marked
 ``solve(case, progress=None) -> cases.RunResult`` runs a case: N springs on
 0 <= x <= L = domain_factor·√2·a0, nodes uniform in t = x² (the 3D radii r
 share them), paper Eqs. 2, 3, 12, 13 integrated exactly over each segment,
-wear Δf = (k μ/σ0) p · slip (physics.md §3) by explicit Euler (the paper's;
-stable below a step limit it estimates and enforces), implicit Euler
-(unconditionally stable, first order) or the variable-step BDF2 (L-stable,
-second order; the implicit step from a two-step history). BLAS runs
+wear Δf = (k μ/σ0) σ0 (p/σ0)^n · slip (physics.md §3) by the adaptive scheme
+(default: backward Euler with step doubling, error-controlled, Richardson's
+correction carried into the next step; docs/time-stepping.md), explicit
+Euler (the paper's; stable below a step limit it estimates and enforces),
+implicit Euler (unconditionally stable, first order) or the variable-step
+BDF2 (L-stable, second order). The domain grows with the contact (t = r²
+doubled, every other node kept). BLAS runs
 single-threaded during a solve.
 
 Modules: :mod:`mdr.transforms` (the MDR transforms, pure functions),
@@ -21,6 +24,13 @@ A case with a [fretting] section is a partial-slip run: :mod:`mdr.fretting`
 jumping).
 """
 
-from .solver import solve, supports
+from .solver import solve
 
 __all__ = ["solve", "supports"]
+
+
+def supports(case) -> str | None:
+    """None: the MDR runs every axisymmetric case the schema accepts (fretting too),
+    and the ellipsoid approximately (as the paraboloid of radius √(R1 R2), its
+    result marked by the reason in ``info["approximate"]``)."""
+    return None

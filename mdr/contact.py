@@ -17,6 +17,10 @@ from wearcheck.cases import SolverError
 from . import transforms
 
 
+class DomainOutgrown(SolverError):
+    """The contact reached the edge of the MDR grid; the solver grows the domain and retries."""
+
+
 def line_load(g: np.ndarray, depth: float, E_star: float) -> np.ndarray:
     """Paper Eq. 10: q = E* (d - g) where positive, else 0 (nodal)."""
     return E_star * np.maximum(depth - g, 0.0)
@@ -27,7 +31,7 @@ def last_loaded(q: np.ndarray) -> int:
     loaded = np.flatnonzero(q > 0.0)
     m = int(loaded[-1]) if loaded.size else -1
     if m >= len(q) - 2:
-        raise SolverError(
+        raise DomainOutgrown(
             "the contact has reached the edge of the MDR domain (contact radius ≈ domain "
             "radius); raise mdr.domain_factor")
     return m

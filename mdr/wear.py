@@ -46,6 +46,8 @@ class Model:
     depth: float | None     # depth control
     force: float | None     # force control
     tangential: float = 0.0  # μ/G* with the tangential correction, else 0
+    exponent: float = 1.0    # n of the wear law dw/ds = K σ0 (p/σ0)^n
+    hardness: float = 1.0    # σ0 [Pa]; enters only when exponent != 1
 
     def __post_init__(self):
         self.t = self.x**2                              # nodes in t = r²
@@ -65,6 +67,20 @@ class State:
     m: int
     slip: np.ndarray | None = None     # slip factor S for the next step
     stats: dict = field(default_factory=dict)
+
+
+def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
+    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard)."""
+    if model.exponent == 1.0:
+        return model.wear_rate * p
+    return model.wear_rate * p * (np.maximum(p, 0.0) / model.hardness) ** (model.exponent - 1.0)
+
+
+def wear_speed_slope(model: Model, p: np.ndarray) -> np.ndarray:
+    """d(dw/ds)/dp = n K (p/σ0)^(n-1), divided by K (the implicit step's factor on h K)."""
+    if model.exponent == 1.0:
+        return np.ones_like(p)
+    return model.exponent * (np.maximum(p, 0.0) / model.hardness) ** (model.exponent - 1.0)
 
 
 def contact_state(model: Model, f: np.ndarray) -> State:
@@ -89,7 +105,7 @@ def _slip(model: Model, old: State, new: State, h: float) -> np.ndarray | None:
 def explicit_step(model: Model, state: State, h: float) -> State:
     """Forward Euler: wear by the pressure at the start of the step."""
     S = 1.0 if state.slip is None else state.slip
-    f = state.f + h * model.wear_rate * S * state.p
+    f = state.f + h * S * wear_speed(model, state.p)
     new = contact_state(model, f)
     new.slip = _slip(model, state, new, h)
     return new
@@ -117,6 +133,24 @@ LOOSE_RTOL = 1e-5
 COARSE_NODES = 256
 
 
+_UNIT_COMPLIANCE: dict = {}
+
+
+def compliance_block(model: Model, n: int) -> np.ndarray:
+    """A fresh copy of the leading n×n block of the model's compliance matrix.
+
+    The matrix is sqrt(Δt)/E* times one of the grid size alone, so that one
+    is built once (the largest block asked for so far, grown by half on
+    demand) and shared by every grid a growing domain passes through and every
+    step size of an adaptive run: building it costs as much as factorising.
+    """
+    unit = _UNIT_COMPLIANCE.get("C")
+    if unit is None or len(unit) < n:
+        size = max(n, int(1.5 * len(unit)) if unit is not None else n)
+        unit = _UNIT_COMPLIANCE["C"] = transforms.compliance_matrix(size, 1.0, 1.0)
+    return unit[:n, :n] * (math.sqrt(model.dt) / model.E_star)
+
+
 class ImplicitSystem:
     """(T⁻¹ P⁻¹/E* + σ) p = r on the contact nodes, σ = h K S, for any contact set.
 
@@ -136,6 +170,7 @@ class ImplicitSystem:
         self.dt, self.E = model.dt, model.E_star
         self.nested = N <= DENSE_MAX
         self.N = N
+        self.model = model
         self.lu = None
         if self.nested:
             # factorise only the contact sets the run is likely to need; grow on demand
@@ -146,7 +181,7 @@ class ImplicitSystem:
 
     def _factor(self, n: int) -> None:
         n = min(n, self.N + 1)
-        A = transforms.compliance_matrix(n, self.dt, self.E)
+        A = compliance_block(self.model, n)
         A[np.diag_indices(n)] += self.sigma
         self.lu = linalg.NestedLU(A)
 
@@ -187,6 +222,27 @@ class ImplicitSystem:
         ec = lu_solve(self._coarse_lu(n, sigma), rc, check_finite=False)
         return prolong(ec) + (r - prolong(rc)) / sigma
 
+    def unit_response(self, n, sigma, stats, rtol):
+        """The solution p1 for a unit right-hand side on nodes 0..n-1 and its force F1.
+
+        Force control: the same for every step with this system's own σ,
+        cached per contact set.
+        """
+        def response():
+            p1 = self.solve(np.ones(n), sigma, None, stats, rtol)
+            w = transforms.force_weights(self.N, self.dt)[:n]
+            return p1, float(w @ transforms.line_load(p1, self.dt))
+
+        if not self.exact(sigma):
+            return response()
+        cache = self.__dict__.setdefault("_unit", {})
+        out = cache.get(n)
+        if out is None:
+            if len(cache) > 64:
+                cache.clear()
+            out = cache[n] = response()
+        return out
+
     def exact(self, sigma) -> bool:
         """Whether :meth:`solve` with this sigma is a direct solve (no GMRES)."""
         return self.nested and bool(np.all(sigma == self.sigma))
@@ -222,12 +278,15 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
     is the lagged first-order one of either scheme. ``system`` must be built
     for c h when it is to be used for the regular step directly.
 
+    With a pressure exponent n != 1 the wear speed K σ0 (p/σ0)^n is
+    linearised about the last iterate (Newton): wear compliance c h K S n
+    (p_k/σ0)^(n-1) and a shifted base, repeated until p settles.
+
     The contact set (nodes 0..m) is found by iterating: solve on a guess,
     grow it where the new 1D profile dips below the depth, shrink it where
     the line load turns negative.
     """
     N = len(model.x) - 1
-    E, K = model.E_star, model.wear_rate
     S = np.ones(N + 1) if state.slip is None else state.slip
     if previous is None:
         base, hc = state.f, h
@@ -236,6 +295,61 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
         base, hc = a * state.f + b * previous[0], c * h
     system = system or ImplicitSystem(model, hc)
     m = max(state.m if m_guess is None else m_guess, 0)
+    if model.exponent == 1.0:
+        new = _implicit_solve(model, state, base, hc, S, system, m, state.p)
+    else:
+        p_k, total = state.p, {"gmres_iterations": 0, "contact_iterations": 0}
+        ms = []
+        for it in range(NEWTON_MAX):
+            # the slope at p -> 0 vanishes (n > 1): an edge node would then enter
+            # the contact unworn and leave it worn, iterate after iterate. Any slope
+            # leaves the fixed point p = p_k unchanged, so floor the pressure it is
+            # taken at
+            slope = wear_speed_slope(model, np.maximum(p_k, NEWTON_FLOOR * np.max(p_k)))
+            shift = hc * S * (wear_speed(model, p_k) - model.wear_rate * slope * p_k)
+            new = _implicit_solve(model, state, base + shift, hc, S * slope, system, m, p_k)
+            for k in total:
+                total[k] += new.stats[k]
+            # converged on the nodes both iterates hold in contact: the outermost
+            # node may toggle in and out (no nodal contact set satisfies the
+            # conditions exactly there, as for the marginal node of the linear step)
+            inner = min(m, new.m)
+            change = np.max(np.abs(new.p[:inner] - p_k[:inner])) if inner > 0 else 0.0
+            if change <= NEWTON_TOL * np.max(new.p):
+                break
+            ms.append(new.m)
+            if len(ms) >= 6 and len(set(ms[-6:])) == 2 and max(ms[-6:]) - min(ms[-6:]) == 1 \
+                    and new.m == max(ms[-6:]) and change <= NEWTON_MARGINAL * np.max(new.p):
+                # a settled two-cycle over the outermost node (the marginal node of
+                # the linear step): keep it in contact; the iterates differ by less
+                # than the grid's own error at the edge
+                break
+            # the contact set can flip between iterates at the edge: damp after a few
+            p_k = new.p if it < NEWTON_UNDAMPED else 0.5 * (p_k + new.p)
+            m = new.m
+        else:
+            raise SolverError(f"implicit wear step: the Newton iteration of the pressure "
+                              f"exponent did not converge in {NEWTON_MAX} iterations "
+                              f"(last change {change / np.max(new.p):.2e} of max p)")
+        # the converged profile by the wear law itself (not its linearisation)
+        new.f = base + hc * S * wear_speed(model, new.p)
+        new.stats = total
+    new.slip = _slip(model, state, new, h)
+    return new
+
+
+#: Newton iteration of the pressure exponent: relative change of p that ends it
+NEWTON_TOL = 1e-7
+NEWTON_MAX = 60
+NEWTON_UNDAMPED = 8
+NEWTON_FLOOR = 0.05
+NEWTON_MARGINAL = 1e-3
+
+
+def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
+    """The linear complementarity problem of one implicit step, contact set included."""
+    N = len(model.x) - 1
+    E, K = model.E_star, model.wear_rate
     stats = {"gmres_iterations": 0, "contact_iterations": 0}
     seen = set()
     tried = []
@@ -244,16 +358,16 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
     # accurately (warm-started) from the set found on, checking it again
     accurate = False
     marginal = None
-    x0 = state.p[:m + 1]
+    x0 = p_guess[:m + 1]
     while True:
         stats["contact_iterations"] += 1
         if m >= N - 1:
-            raise SolverError("the contact has reached the edge of the MDR domain during "
-                              "wear; raise mdr.domain_factor")
+            raise contact.DomainOutgrown("the contact has reached the edge of the MDR domain "
+                                         "during wear")
         n = m + 1
         sigma = hc * K * S[:n]
         if len(x0) != n:
-            x0 = np.r_[state.p[:n], np.zeros(max(n - len(state.p[:n]), 0))][:n]
+            x0 = np.r_[p_guess[:n], np.zeros(max(n - len(p_guess[:n]), 0))][:n]
         # the nested LU of the regular step is exact: no loose pass to redo
         accurate = accurate or system.exact(sigma)
         rtol = 1e-9 if accurate else LOOSE_RTOL
@@ -262,10 +376,9 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
             p = system.solve(d - base[:n], sigma, x0, stats, rtol)
         else:
             # p = d p1 + p2 is linear in the unknown depth; the force fixes d
-            p1 = system.solve(np.ones(n), sigma, None, stats, rtol)
+            p1, F1 = system.unit_response(n, sigma, stats, rtol)
             p2 = system.solve(-base[:n], sigma, x0 - state.depth * p1, stats, rtol)
             w = transforms.force_weights(N, model.dt)[:n]
-            F1 = w @ transforms.line_load(p1, model.dt)
             F2 = w @ transforms.line_load(p2, model.dt)
             d = (model.force - F2) / F1
             p = d * p1 + p2
@@ -322,10 +435,8 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
     qq[:n] = np.maximum(q, 0.0)
     pp = np.zeros(N + 1)
     pp[:n] = p
-    new = State(f=f, depth=float(d), q=qq, p=pp, force=transforms.force(qq, model.dt),
-                contact_radius=contact.contact_radius(g, d, model.t, m), m=m, stats=stats)
-    new.slip = _slip(model, state, new, h)
-    return new
+    return State(f=f, depth=float(d), q=qq, p=pp, force=transforms.force(qq, model.dt),
+                 contact_radius=contact.contact_radius(g, d, model.t, m), m=m, stats=stats)
 
 
 # -- explicit Euler: stability ----------------------------------------------

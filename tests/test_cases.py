@@ -187,3 +187,51 @@ def test_case_file_with_byte_order_mark_and_a_directory(tmp_path):
     assert cases.load(path).loading.depth == 1e-6
     with pytest.raises(CaseError, match="is a directory"):
         cases.load(tmp_path)
+
+
+# Every class of bad input the file loader rejects, as one changed key of BASE.
+# (Missing keys and sections cannot be made by changing a complete case.)
+BAD_CHANGES = [
+    ("loading.dept", 1e-6), ("lodaing.depth", 1e-6), ("depth", 1e-6),
+    ("loading.depth", "deep"), ("mdr.elements", 800.5), ("wear.tangential_correction", 1),
+    ("loading.depth", float("nan")), ("wear.k", 10**400), ("mdr.elements", 10**400),
+    ("loading.depth", 1e-300), ("wear.hardness", float("inf")),
+    ("indenter.youngs_modulus", 0.0), ("indenter.radius", -0.01), ("loading.depth", -1e-6),
+    ("wear.hardness", 0), ("wear.k", -1e-4), ("indenter.poisson_ratio", 0.6),
+    ("indenter.poisson_ratio", -1.0), ("loading.control", "speed"),
+    ("indenter.flat_radius", 1e-5), ("indenter.profile", "cone"), ("loading.force", 3.0),
+    ("counterface.rigid", False), ("indenter.rigid", True),
+    ("stages.s_hat", [0.0, 2.0, 1.0]), ("sliding.step_hat", "fast"),
+    ("sliding.until", "distance"),
+]
+
+
+@pytest.mark.parametrize("key, value", BAD_CHANGES, ids=[f"{k}={v!r}"[:40] for k, v in BAD_CHANGES])
+def test_derived_case_is_rejected_exactly_as_the_file(key, value):
+    """``Case.derive`` (the Python way to change a case) says what the loader says."""
+    case = cases.from_dict(BASE)
+    section, _, name = key.rpartition(".")
+    raw = {s: dict(v) for s, v in BASE.items()}
+    if section:
+        raw.setdefault(section, {})[name] = value
+        with pytest.raises(CaseError) as from_file:
+            cases.from_dict(raw)
+    with pytest.raises(CaseError) as derived:
+        case.derive({key: value})
+    if section:
+        assert str(derived.value) == str(from_file.value)
+    else:
+        assert "section.key" in str(derived.value)
+    # the same through the keyword spelling and the command-line spelling
+    if section:
+        with pytest.raises(CaseError) as keyword:
+            case.derive(**{f"{section}__{name}": value})
+        assert str(keyword.value) == str(derived.value)
+
+
+def test_replace_validates_whole_sections():
+    import dataclasses
+    case = cases.from_dict(BASE)
+    with pytest.raises(CaseError, match=r"wear\.k.*> 0"):
+        case.replace(wear=dataclasses.replace(case.wear, k=-1e-4))
+    assert case.replace(wear=dataclasses.replace(case.wear, k=2e-4)).wear.k == 2e-4

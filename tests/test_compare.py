@@ -11,8 +11,8 @@ import pytest
 
 from wearcheck import cases
 from wearcheck.cases import RunResult, profiles, reference
-from wearcheck.comparisons import compare as compare_mod
-from wearcheck.comparisons import runio
+from wearcheck.comparisons.studies import compare as compare_mod
+from wearcheck.comparisons import rundir as runio
 from wearcheck.comparisons.cli import main as cli_main
 
 HERTZ = str(cases.shipped("hertz"))
@@ -103,7 +103,7 @@ def test_failing_comparison_exits_1_and_still_writes_the_verdict(tmp_path, monke
     assert "FAILED" in capsys.readouterr().err
     m = json.loads((out / "metrics.json").read_text())
     assert not m["passed"]
-    for st in m["stages"]:
+    for st in m["pairs"]["fem"]["stages"]:
         assert st["pressure_interior_max"] == pytest.approx(0.05, abs=1e-3)
         assert not st["checks"]["pressure_interior_max"]["passed"]
         assert st["checks"]["force"]["passed"]
@@ -155,7 +155,7 @@ def test_real_solvers_agree_on_a_small_paper_case(tmp_path):
     assert m["stages_compared"] == 3
     # at this resolution the two independent solvers must still agree within the
     # case's default tolerances (1 % d, 1 % F0, 2 % p0 interior, 2 % a0)
-    assert code == 0 and m["passed"], [st["checks"] for st in m["stages"]]
+    assert code == 0 and m["passed"], [st["checks"] for st in m["pairs"]["fem"]["stages"]]
     # the worn profiles genuinely changed between stages: the test compares wear, not
     # three copies of the unworn contact (wear at r = 0 is > 10 % of d by ŝ = 1)
     run = runio.Run(out / "mdr")
@@ -174,7 +174,7 @@ def test_real_solvers_made_to_disagree_fail_with_exit_code_1(tmp_path, capsys):
     assert "FAILED" in capsys.readouterr().err
     m = json.loads((out / "metrics.json").read_text())
     assert not m["passed"]
-    assert not m["stages"][0]["checks"]["pressure_interior_max"]["passed"]
+    assert not m["pairs"]["fem"]["stages"][0]["checks"]["pressure_interior_max"]["passed"]
     assert "**FAIL**" in (out / "report.md").read_text()
 
 
@@ -186,7 +186,8 @@ def test_real_solvers_match_the_flattened_sphere_reference(tmp_path):
                      "--set", "fem.contact_nodes=80", "--no-render", "--quiet"])
     m = json.loads((out / "metrics.json").read_text())
     tr = m["truncated_reference"]
-    assert set(tr["solvers"]) == {"mdr", "fem"}
+    # every registered solver that supports the case (the BEM too, at its default grid)
+    assert set(tr["solvers"]) == {"mdr", "fem", "bem"}
     for name, v in tr["solvers"].items():
         assert v["pressure_interior_max"] < 0.02, name
         assert v["force"] < 0.01, name

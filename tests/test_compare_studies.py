@@ -6,7 +6,8 @@ import pytest
 
 from wearcheck import cases
 from wearcheck.cases import RunResult, profiles, reference
-from wearcheck.comparisons import compare as compare_mod
+from wearcheck.comparisons.studies import compare as compare_mod
+from wearcheck.comparisons.studies import sphere_sweep as sphere_mod
 
 PAPER = cases.shipped("paper")
 
@@ -63,7 +64,7 @@ def test_edge_study_runs_the_levels_it_names(tmp_path):
 
 def test_sphere_sweep_recovers_a_known_finite_size_error(tmp_path):
     case = cases.load(PAPER, ["mdr.elements=50", "fem.contact_nodes=20"])
-    sw = compare_mod.sphere_sweep(case, (0.005, 0.01, 0.02, 0.05), solve=stand_in(0.6))
+    sw = sphere_mod.sphere_sweep(case, (0.005, 0.01, 0.02, 0.05), solve=stand_in(0.6))
     rows = sw["rows"]
     # the stand-in errs by exactly 0.6 a0/R (a0 = the half-space contact radius of the
     # swept depth, which sphere_case must reproduce: 0.6·a0/R recovered means a0 = ratio·R)
@@ -80,4 +81,4 @@ def test_sphere_sweep_refuses_profiles_without_a_radius():
     case = cases.load(PAPER, ["indenter.profile=\"cone\"", "indenter.slope_angle=0.1",
                               "indenter.radius=0.01"])
     with pytest.raises(cases.CaseError, match="sphere-sweep"):
-        compare_mod.sphere_sweep(case, (0.01,), solve=stand_in())
+        sphere_mod.sphere_sweep(case, (0.01,), solve=stand_in())

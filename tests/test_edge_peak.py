@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from wearcheck.cases import reference
-from wearcheck.comparisons import edge_peak
+from wearcheck.comparisons.analysis import edge_peak
 
 E_STAR = 2.308e11
 

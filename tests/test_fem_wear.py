@@ -179,7 +179,7 @@ def test_contact_outgrowing_the_arc_is_an_error():
 
 def test_run_command_writes_fem_run(tmp_path):
     from wearcheck.comparisons.cli import main as cli
-    from wearcheck.comparisons.runio import Run
+    from wearcheck.comparisons.rundir import Run
 
     out = tmp_path / "run"
     assert cli(["run", str(cases.shipped("hertz")), "--solver", "fem", "--quiet",

@@ -10,7 +10,7 @@ import pytest
 from wearcheck import cases, fem, mdr
 from wearcheck.cases import reference
 from wearcheck.cases import reference_fretting as rf
-from wearcheck.comparisons.runio import Run, write_run
+from wearcheck.comparisons.rundir import Run, write_run
 
 
 def raw(**fretting):
@@ -48,7 +48,7 @@ def test_shipped_case_reads():
     (dict(cycles=10, amplitude=1e-7, bogus=1), {}, "unknown key 'fretting.bogus'"),
     (dict(cycles=10, amplitude=1e-7), dict(sliding=dict(until="distance", distance=1.0)),
      "section [sliding] given with [fretting]"),
-    (dict(cycles=10, amplitude=1e-7), dict(stages=dict(s_hat=[0.0])),
+    (dict(cycles=10, amplitude=1e-7), dict(stages=dict(s_hat=[0.0, 1.0])),
      "section [stages] given with [fretting]"),
 ])
 def test_bad_fretting_input_is_one_clear_case_error(fretting, extra, needle):
@@ -154,10 +154,21 @@ def test_fretting_map_regimes_follow_cattaneo_mindlin(cluster, tmp_path):
 
 def test_vtk_export_of_a_fretting_run_carries_the_shear_traction(tmp_path):
     import pyvista as pv
-    from wearcheck.comparisons.vtk import export_run
+    from wearcheck.comparisons.present.vtk import export_run
     case = cases.from_dict(raw(cycles=2, amplitude=1e-7, stage_cycles=[0, 2]))
     res = mdr.solve(case)
     write_run(tmp_path / "run", case, res, "mdr")
     vtk = export_run(tmp_path / "run")
     mesh = pv.read(vtk / "profile_001.vtu")
     np.testing.assert_array_equal(mesh.point_data["shear_traction"], res.stage_extra["tau"][1])
+
+
+def test_api_derives_and_round_trips_a_fretting_case():
+    import wearcheck
+    case = wearcheck.load_case("fretting", {"fretting.cycles": 3, "mdr.elements": 60})
+    assert case.fretting.cycles == 3
+    again = cases.from_dict(cases.to_dict(case))
+    assert again.fretting == case.fretting and again.loading == case.loading
+    # a gross-slip case whose [sliding] is not the default cannot become a fretting one
+    with pytest.raises(cases.CaseError, match=r"\[(sliding|stages)\] given with \[fretting\]"):
+        wearcheck.load_case("paper", {"fretting.amplitude": 1e-7, "fretting.cycles": 3})

@@ -16,7 +16,11 @@ D = 1e-6
 
 def make(N=200, s_hat=None, stages=(0.0,), domain_factor=1.3, control="depth",
          **sliding):
-    """A paraboloid case; s_hat: slide to that ŝ (else until the force fraction)."""
+    """A paraboloid case; s_hat: slide to that ŝ (else until the force fraction).
+
+    Fixed-step implicit Euler unless ``scheme`` is given (these tests are about it).
+    """
+    sliding.setdefault("scheme", "implicit")
     loading = dict(control="depth", depth=D) if control == "depth" else \
         dict(control="force", force=20.0)
     raw = dict(indenter=dict(profile="paraboloid", radius=R, youngs_modulus=210e9,

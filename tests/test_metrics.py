@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from wearcheck.cases import RunResult, reference
-from wearcheck.comparisons import metrics
+from wearcheck.comparisons.analysis import metrics
 
 TOL = dict(profile_tolerance=0.01, force_tolerance=0.01, pressure_tolerance=0.02,
            contact_radius_tolerance=0.02, edge_band=0.1)
@@ -99,7 +99,7 @@ def test_compare_results_recovers_constructed_differences(hertz_scales):
     m = metrics.compare_results(mdr, fem, s_hat_per_m=sc["s_hat_per_m"], a0=a0, F0=sc["F0"],
                                 p0=sc["p0"], depth=1e-6, tolerances=TOL, edge_band=0.1)
     assert m["stages_compared"] == 3
-    assert m["stages_reached"] == dict(mdr=4, fem=3)
+    assert m["stages_reached"] == dict(reference=4, solver=3)
     for st in m["stages"]:
         assert st["force"] == pytest.approx(0.004, rel=1e-9)
         assert st["contact_radius"] == pytest.approx(0.015, rel=1e-9)

@@ -14,8 +14,8 @@ import pytest
 
 from wearcheck import cases
 from wearcheck.cases import reference
-from wearcheck.comparisons import refine as rf
-from wearcheck.comparisons.runio import Run
+from wearcheck.comparisons.analysis import convergence as rf
+from wearcheck.comparisons.rundir import Run
 
 # the stand-in solvers below travel to the Dask workers by value, so the
 # workers need not import this test module
@@ -154,12 +154,12 @@ def cluster():
 
 @pytest.fixture(scope="module")
 def fake_study(cluster, tmp_path_factory):
-    from wearcheck.comparisons.cli.refine import refine
+    from wearcheck.comparisons.studies.refine import refine
     out = tmp_path_factory.mktemp("study")
     case = cases.shipped("paper")
-    # level 1 is rejected by the case (mdr.elements >= 2); 24 fails in the solver
+    # 24 fails in the solver (a level the case rejects is refused up front, below)
     summary = refine(case, ["stages.s_hat=[0.0, 0.5, 1.0]"], "mdr", out,
-                     levels=[1, 8, 16, 24, 32, 64, 128], scheduler=cluster, quiet=True,
+                     levels=[8, 16, 24, 32, 64, 128], scheduler=cluster, quiet=True,
                      solve=fake_solve)
     return out, summary
 
@@ -169,8 +169,7 @@ def test_study_reports_failed_levels_and_writes_the_others(fake_study):
     with open(out / "refinement-mdr.csv", newline="") as fh:
         rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
     status = {r["level"]: r["status"] for r in rows}
-    assert len(rows) == 7
-    assert "mdr.elements" in status["mdr-elements-1"]
+    assert len(rows) == 6
     assert "injected failure at 24" in status["mdr-elements-24"]
     for n in (8, 16, 32, 64, 128):
         assert status[f"mdr-elements-{n}"] == "ok"
@@ -199,8 +198,8 @@ def test_study_recovers_the_known_order(fake_study):
 
 
 def test_second_solver_joins_the_same_directory(fake_study, cluster):
-    from wearcheck.comparisons.cli.refine import refine
-    from wearcheck.comparisons.study_figures import FIGURES, studies
+    from wearcheck.comparisons.studies.refine import refine
+    from wearcheck.comparisons.present.study_figures import FIGURES, studies
     out, _ = fake_study
     refine(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"], "fem", out,
            levels=[10, 20, 40], scheduler=cluster, quiet=True, solve=fake_solve)
@@ -230,14 +229,16 @@ def test_second_solver_joins_the_same_directory(fake_study, cluster):
 def test_mdr_study_through_the_command_line(cluster, tmp_path):
     from wearcheck.comparisons.cli import main
     out = tmp_path / "mdr"
-    # a short run (until F < 0.3 F0, stages ŝ = 0, 1, 2); level 1 is rejected by the case
-    code = main(["refine", str(cases.shipped("paper")), "--solver", "mdr", "--out", str(out),
-                 "--levels", "1,25,50,100,200", "--set", "sliding.force_fraction=0.3",
-                 "--set", "stages.s_hat=[0.0, 1.0, 2.0]", "--scheduler", cluster, "--quiet"])
-    assert code == 1  # one level failed; the study is written all the same
+    # a level the case rejects (mdr.elements >= 2) refuses the study before it starts
+    args = ["refine", str(cases.shipped("paper")), "--solver", "mdr", "--out", str(out),
+            "--set", "sliding.force_fraction=0.3", "--set", "stages.s_hat=[0.0, 1.0, 2.0]",
+            "--scheduler", cluster, "--quiet"]
+    assert main(args + ["--levels", "1,25,50"]) == 2 and not out.exists()
+    # a short run (until F < 0.3 F0, stages ŝ = 0, 1, 2)
+    code = main(args + ["--levels", "25,50,100,200"])
+    assert code == 0
     summary = json.loads((out / "refinement-mdr.json").read_text())
     rows = {r["resolution"]: r for r in summary["levels"]}
-    assert "mdr.elements" in rows[1]["status"]
     ok = [25, 50, 100, 200]
     assert all(rows[n]["status"] == "ok" for n in ok)
     # the unworn contact (ŝ = 0) against the exact sphere solution (F0 by
@@ -264,7 +265,7 @@ def crashing_solve(case, solver, progress=None):
 
 
 def test_a_dead_worker_fails_only_its_level(tmp_path):
-    from wearcheck.comparisons.distributed import Task, run_cases
+    from wearcheck.comparisons.studies.distributed import Task, run_cases
     # the embedded cluster (no scheduler given): loopback, one task per worker
     tasks = [Task(f"mdr-elements-{n}", "mdr", (f"mdr.elements={n}",)) for n in (8, 16, 32, 64)]
     outcomes = run_cases(cases.shipped("paper"), [], tasks, tmp_path, workers=2, quiet=True,
@@ -277,7 +278,7 @@ def test_a_dead_worker_fails_only_its_level(tmp_path):
 
 
 def test_mdr_step_refinement_shows_backward_euler_first_order(cluster, tmp_path):
-    from wearcheck.comparisons.cli.refine import refine
+    from wearcheck.comparisons.studies.refine import refine
     # implicit (backward) Euler in ŝ has a global error Δŝ e1(ŝ) + O(Δŝ²): order
     # 1. With Δŝ <= 0.2 the O(Δŝ²) part moves the fitted slope by O(0.1)
     summary = refine(cases.shipped("paper"), ["sliding.force_fraction=0.3",
@@ -293,7 +294,7 @@ def test_mdr_step_refinement_shows_backward_euler_first_order(cluster, tmp_path)
 
 def test_a_failed_level_removes_an_earlier_run_of_that_level(cluster, tmp_path):
     import shutil
-    from wearcheck.comparisons.cli.refine import refine
+    from wearcheck.comparisons.studies.refine import refine
     out = tmp_path / "study"
     refine(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"], "mdr", out,
            levels=[8, 16], scheduler=cluster, quiet=True, solve=fake_solve)

@@ -10,12 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from wearcheck.comparisons.runio import OUTPUT_MARKER
+from wearcheck.comparisons.rundir import OUTPUT_MARKER
 
 from wearcheck import cases
 from wearcheck.cases import WearcheckError
-from wearcheck.comparisons import render
-from wearcheck.comparisons.runio import Run, write_run
+from wearcheck.comparisons.present import render
+from wearcheck.comparisons.rundir import Run, write_run
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_vtk_export import cylinder_run  # noqa: E402
@@ -81,7 +81,7 @@ def test_failed_render_keeps_the_previous_pictures(tmp_path):
 
 def test_render_fem_run_colours_the_hertz_field(tmp_path):
     """A real FEM run: the picture spans the colour map, brightest below the pole."""
-    fem = pytest.importorskip("fem")
+    from wearcheck import fem
     case = cases.load(cases.shipped("hertz"), ["fem.contact_nodes=30"])
     path = write_run(tmp_path / "run", case, fem.solve(case), "fem", argv=["test"])
     paths = render.render_run(path)

@@ -10,9 +10,9 @@ import pytest
 
 from wearcheck import cases
 from wearcheck.cases import reference
-from wearcheck.comparisons import runio
+from wearcheck.comparisons import rundir as runio
 from wearcheck.comparisons.cli import main as cli_main
-from wearcheck.comparisons.progress import ProgressBar
+from wearcheck.comparisons.present.progress import ProgressBar
 
 SMALL = ["--set", "mdr.elements=100", "--set", "sliding.until=distance",
          "--set", "sliding.scheme=implicit",

@@ -12,8 +12,8 @@ import pytest
 
 from wearcheck import cases
 from wearcheck.cases import reference
-from wearcheck.comparisons.cli.sweep import parse_vary, split_values, sweep
-from wearcheck.comparisons.runio import Run
+from wearcheck.comparisons.studies.sweep import parse_vary, split_values, sweep
+from wearcheck.comparisons.rundir import Run
 
 # the stand-in solvers below travel to the Dask workers by value, so the
 # workers need not import this test module

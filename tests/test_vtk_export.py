@@ -18,12 +18,12 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from wearcheck.comparisons.runio import OUTPUT_MARKER
+from wearcheck.comparisons.rundir import OUTPUT_MARKER
 
 from wearcheck import cases
 from wearcheck.cases import RunResult, WearcheckError
-from wearcheck.comparisons import vtk
-from wearcheck.comparisons.runio import Run, write_run
+from wearcheck.comparisons.present import vtk
+from wearcheck.comparisons.rundir import Run, write_run
 
 SEGMENTS = 12
 
@@ -290,7 +290,7 @@ def test_revolve_vectors_rotates_about_the_axis():
 
 # -- export of a synthetic FEM run ---------------------------------------------
 
-SECTION_FIELDS = {"displacement", "sigma_rr", "sigma_zz", "sigma_tt", "sigma_rz", "von_mises",
+SECTION_FIELDS = {"displacement", "sigma_rr", "sigma_zz", "sigma_tt", "sigma_rz", "von_mises", "stress",
                   "contact_pressure", "wear_depth", "contact_node"}
 SERIES_FIELDS = dict(profile={"f", "wear_depth", "pressure"},
                      pressure={"pressure", "p_over_p0", "r"},
@@ -335,7 +335,8 @@ def test_every_vtu_reads_back_with_meshio_and_pyvista(exported):
             assert set(m.point_data) == names == set(g.point_data)
             assert len(m.points) == g.n_points
             for key in names:
-                want = (g.n_points, 3) if key == "displacement" else (g.n_points,)
+                want = {"displacement": (g.n_points, 3), "stress": (g.n_points, 9)}.get(
+                    key, (g.n_points,))
                 assert m.point_data[key].shape == want == g.point_data[key].shape
             for data in (m.field_data, g.field_data):
                 assert float(np.ravel(data["s"])[0]) == run.stages["s"][k]
@@ -517,7 +518,7 @@ def test_export_command(tmp_path, capsys):
 
 
 def test_run_that_stored_no_stage_exports_nothing(tmp_path):
-    from wearcheck.comparisons.render import render_run
+    from wearcheck.comparisons.present.render import render_run
     run, _ = cylinder_run(tmp_path / "run", s_hat=(0.0,))
     F = run.fields
     empty = RunResult(history=run.history, stage_s=np.zeros(0), r=run.stages["r"],

@@ -1,5 +1,35 @@
-"""wearcheck: verification suite for Reye–Archard wear of contacts."""
+"""wearcheck: a verification suite for Reye–Archard wear of contacts.
+
+Solvers (MDR, an axisymmetric FEM, ...) read one case definition and return
+the same result; comparisons run them against each other and against closed
+forms. The Python API in a few lines::
+
+    import wearcheck
+    case = wearcheck.load_case("paper", {"wear.mu": 0.5})   # shipped name or a path
+    result = wearcheck.solve(case, "mdr", progress=True)
+    F = result.history["force"] / result.scales["F0"]
+    result.write("runs/mu-0.5")                              # a run directory
+    wearcheck.compare(case, "runs/compare-mu-0.5")           # every solver, report
+
+Public names: :func:`load_case`, :func:`shipped_cases`, :func:`solvers`,
+:func:`solve`, :class:`Result`, :func:`read_run`, :func:`compare`,
+:func:`refine`, :func:`sweep`, :func:`export_vtk`, :class:`Case`,
+:class:`CaseError`, :class:`SolverError`, and the solver registry
+:mod:`wearcheck.registry` (``register``, ``Solver``). Everything else
+(``wearcheck.mdr``, ``wearcheck.comparisons``, ...) is internal.
+"""
 
 from wearcheck.cases import Case, CaseError, RunResult, SolverError, WearcheckError
+from wearcheck import registry
+from wearcheck.api import (Result, compare, export_vtk, load_case, read_run, refine,
+                           shipped_cases, solve, solvers, sweep)
 
-__all__ = ["Case", "CaseError", "RunResult", "SolverError", "WearcheckError"]
+try:
+    from importlib.metadata import PackageNotFoundError, version
+    __version__ = version("wearcheck")
+except PackageNotFoundError:  # running from a checkout that was not installed
+    __version__ = "unknown"
+
+__all__ = ["Case", "CaseError", "SolverError", "WearcheckError", "RunResult", "Result",
+           "load_case", "shipped_cases", "solvers", "solve", "read_run", "compare", "refine",
+           "sweep", "export_vtk", "registry", "__version__"]

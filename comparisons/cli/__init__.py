@@ -42,7 +42,7 @@ def main(argv=None) -> int:
     parser = build_parser()
     argv = sys.argv[1:] if argv is None else list(argv)
     args = parser.parse_args(argv)
-    from ..runio import set_command
+    from wearcheck.comparisons.rundir import set_command
     set_command(["wearcheck", *argv])
     try:
         return int(args._main(args) or 0)

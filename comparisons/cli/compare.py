@@ -1,4 +1,5 @@
-"""``wearcheck compare CASE.toml [--out DIR]``: MDR against FEM, figures, metrics, report.
+"""``wearcheck compare CASE [--out DIR]``: every solver that supports the case against a
+reference solver (default MDR), with figures, metrics and a report.
 
 Exit code 0 when every check is within the case's [compare] tolerances, 1 when
 the comparison fails (DIR is still written, with the failing verdict).
@@ -10,7 +11,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..compare import SPHERE_RATIOS, compare, print_summary
+from wearcheck.comparisons import registry
+from wearcheck.comparisons.present.compare_report import print_summary
+from wearcheck.comparisons.studies.compare import compare
+from wearcheck.comparisons.studies.sphere_sweep import SPHERE_RATIOS
 from ._common import add_case_arguments, load_case
 
 
@@ -25,10 +29,19 @@ def _ratios(text):
     return values
 
 
+def _names(text):
+    return [n.strip() for n in text.split(",") if n.strip()]
+
+
 def add_parser(sub):
-    p = sub.add_parser("compare", help="run MDR and FEM on a case and compare them",
+    p = sub.add_parser("compare", help="run every solver that supports a case and compare them",
                        description=__doc__)
     add_case_arguments(p)
+    p.add_argument("--solvers", type=_names, default=None, metavar="NAME,NAME,...",
+                   help="the solvers to compare (default: every one that supports the case; "
+                        "registered: " + ", ".join(registry.names()) + ")")
+    p.add_argument("--reference", default=None, metavar="NAME",
+                   help="the solver the others are compared with (default: mdr)")
     p.add_argument("--out", type=Path, default=None,
                    help="output directory (default: runs/<case name>)")
     p.add_argument("--edge-study", action="store_true",
@@ -41,14 +54,15 @@ def add_parser(sub):
                    help="a0/R of the sphere sweep (default: "
                         + ",".join(f"{v:g}" for v in SPHERE_RATIOS) + ")")
     p.add_argument("--no-render", action="store_true",
-                   help="do not call comparisons.render on the run directories")
+                   help="do not render pictures of the run directories")
     return p
 
 
 def main(args) -> int:
     case = load_case(args)
     out = args.out or Path("runs") / args.case.stem
-    m = compare(case, out, edge=args.edge_study, sphere=args.sphere_sweep,
+    m = compare(case, out, solvers=args.solvers, reference_solver=args.reference,
+                edge=args.edge_study, sphere=args.sphere_sweep,
                 sphere_ratios=args.sphere_ratios, quiet=args.quiet,
                 render=not args.no_render)
     if not args.quiet:

@@ -17,7 +17,7 @@ def add_parser(sub):
 
 
 def main(args) -> int:
-    from ..vtk import export_run
+    from wearcheck.comparisons.present.vtk import export_run
     out = export_run(args.run_dir, revolve=args.revolve)
     if not any(out.glob("*.pvd")):
         print("export: note: the run stored no stage; nothing to export", file=sys.stderr)

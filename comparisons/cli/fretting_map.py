@@ -11,11 +11,12 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ..distributed import fmt
-from ..fretting_map import fretting_map
+from wearcheck.comparisons.studies.distributed import fmt
+from wearcheck.comparisons.studies.fretting_map import fretting_map
+from wearcheck.comparisons.studies.sweep import parse_vary
+
 from ._common import add_case_arguments, load_case
 from .refine import add_cluster_arguments
-from .sweep import parse_vary
 
 
 def add_parser(sub):

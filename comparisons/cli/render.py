@@ -15,7 +15,7 @@ def add_parser(sub):
 
 
 def main(args) -> int:
-    from ..render import render_run
+    from wearcheck.comparisons.present.render import render_run
     paths = render_run(args.run_dir)
     if not paths:
         print("render: note: the run stored no stage; nothing to draw", file=sys.stderr)

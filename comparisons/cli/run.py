@@ -1,4 +1,4 @@
-"""``wearcheck run CASE.toml --solver mdr|fem --out DIR``: one solver, one run directory."""
+"""``wearcheck run CASE --solver NAME --out DIR``: one solver, one run directory."""
 
 from __future__ import annotations
 
@@ -7,9 +7,9 @@ from pathlib import Path
 
 from wearcheck.cases import CaseError
 
-from ..progress import ProgressBar
-from ..runio import atomic_directory, write_run_files
-from ..solvers import SOLVERS, solve
+from wearcheck.comparisons.present.progress import ProgressBar
+from wearcheck.comparisons.rundir import atomic_directory, write_run_files
+from wearcheck.comparisons import registry
 from ._common import add_case_arguments, load_case
 
 
@@ -17,7 +17,8 @@ def add_parser(sub):
     p = sub.add_parser("run", help="run one solver on a case and write a run directory",
                        description=__doc__)
     add_case_arguments(p)
-    p.add_argument("--solver", choices=SOLVERS, default="mdr", help="which solver (default: mdr)")
+    p.add_argument("--solver", default="mdr", metavar="SOLVER",
+                   help="which solver: " + ", ".join(registry.names()) + " (default: mdr)")
     p.add_argument("--out", type=Path, default=None,
                    help="output directory (default: runs/<case name>-<solver>)")
     p.add_argument("--vtk", action="store_true", help="also write ParaView files into DIR/vtk")
@@ -35,13 +36,13 @@ def main(args) -> int:
     out = args.out or Path("runs") / f"{args.case.stem}-{args.solver}"
     bar = ProgressBar(f"{args.solver}", quiet=args.quiet)
     try:
-        result = solve(case, args.solver, progress=bar)
+        result = registry.solve(case, args.solver, progress=bar)
     finally:
         bar.close()
     with atomic_directory(out) as tmp:
         write_run_files(tmp, case, result, args.solver)
         if args.vtk:
-            from ..vtk import export_run
+            from wearcheck.comparisons.present.vtk import export_run
             export_run(tmp, revolve=args.revolve)
     if not args.quiet:
         print(f"{args.solver}: {len(result.history['s']) - 1} steps, "

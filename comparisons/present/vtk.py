@@ -23,11 +23,13 @@ Series (FEM runs, from ``fields.npz``):
 ``section``   the r–z mesh (triangles or quadratic triangles as in the FEM),
               undeformed; point data ``displacement`` (u_r, u_z, 0),
               ``sigma_rr``, ``sigma_zz``, ``sigma_tt`` (hoop, σ_θθ),
-              ``sigma_rz``, ``von_mises``, ``contact_pressure`` and
+              ``sigma_rz``, ``von_mises``, ``stress`` (the full symmetric tensor,
+              9 components row by row, in the section's x, y, z frame), ``contact_pressure`` and
               ``wear_depth`` (zero off the contact nodes) and ``contact_node``
               (1 on the candidate contact nodes).
 ``solid``     (``revolve=N``) the same fields on the section revolved in N
-              segments into a closed solid; ``displacement`` is Cartesian.
+              segments into a closed solid; ``displacement`` and ``stress`` are
+              Cartesian (ParaView's tensor filters apply).
               Quadratic triangles are revolved as their four linear
               sub-triangles; cells are linear wedges, collapsing to pyramids
               (one node on the axis) and tetrahedra (an edge on the axis).
@@ -42,7 +44,7 @@ import numpy as np
 from wearcheck.cases import CaseError, WearcheckError
 from wearcheck.cases.profiles import height
 
-from .runio import Run, atomic_directory
+from wearcheck.comparisons.rundir import Run, atomic_directory
 
 FIELD_KEYS = ("points", "cells", "displacement", "stress", "contact_nodes",
               "contact_pressure", "wear_depth")
@@ -195,6 +197,26 @@ def revolve_vectors(v_rz, theta):
     return np.column_stack([v_rz[:, 0] * np.cos(theta), v_rz[:, 1], -v_rz[:, 0] * np.sin(theta)])
 
 
+def revolve_stress(stress, theta):
+    """Axisymmetric stress (σ_rr, σ_zz, σ_θθ, σ_rz) at angles θ as Cartesian 3×3 tensors.
+
+    With a point at (r cos θ, z, -r sin θ): e_r = (cos θ, 0, -sin θ), e_z = (0, 1, 0),
+    e_θ = (-sin θ, 0, -cos θ), and σ = σ_rr e_r e_r + σ_zz e_z e_z + σ_θθ e_θ e_θ
+    + σ_rz (e_r e_z + e_z e_r). At θ = 0 this is the section's own frame.
+    """
+    stress = np.asarray(stress, dtype=float)
+    c, s = np.cos(theta), np.sin(theta)
+    srr, szz, stt, srz = stress.T
+    out = np.zeros((len(stress), 3, 3))
+    out[:, 0, 0] = srr * c * c + stt * s * s
+    out[:, 1, 1] = szz
+    out[:, 2, 2] = srr * s * s + stt * c * c
+    out[:, 0, 1] = out[:, 1, 0] = srz * c
+    out[:, 1, 2] = out[:, 2, 1] = -srz * s
+    out[:, 0, 2] = out[:, 2, 0] = -c * s * (srr - stt)
+    return out.reshape(len(stress), 9)
+
+
 def polyline(r, y):
     """Points (r, y, 0) and the line segments joining them in order."""
     r = np.asarray(r, dtype=float)
@@ -265,7 +287,8 @@ def section_data(fields, k):
     u = np.asarray(fields["displacement"][k], dtype=float)
     data = dict(displacement=np.column_stack([u, np.zeros(Np)]),
                 sigma_rr=stress[:, 0], sigma_zz=stress[:, 1], sigma_tt=stress[:, 2],
-                sigma_rz=stress[:, 3], von_mises=von_mises(stress))
+                sigma_rz=stress[:, 3], von_mises=von_mises(stress),
+                stress=revolve_stress(stress, np.zeros(Np)))
     for key in ("contact_pressure", "wear_depth"):
         full = np.zeros(Np)
         full[nodes] = fields[key][k]
@@ -330,10 +353,6 @@ def write_vtk_files(directory, run: Run, revolve: int = 0) -> list[Path]:
     """Write every series of ``run`` into ``directory``; returns the .pvd paths."""
     directory = Path(directory)
     st = run.stages
-    # an MDR fretting run's fields.npz holds its loops Q(u_x), not a mesh
-    fields = run.fields if run.fields is not None and "loop_cycles" not in run.fields else None
-    if fields is not None:
-        check_fields(fields, len(st["s"]))
     if not len(st["s"]):
         return []  # an empty collection would be a time series without times
     r, f, p = st["r"], st["f"], st["p"]
@@ -371,8 +390,32 @@ def write_vtk_files(directory, run: Run, revolve: int = 0) -> list[Path]:
 
     out.append(_series(directory, "surface", mesh, run, surface))
 
-    if fields is None:
-        return out
+    export = _solver_export(run.solver)
+    if export is not None and run.fields is not None:
+        out += export(directory, run, revolve=revolve)
+    return out
+
+
+def _solver_export(name: str):
+    """The registry's VTK writer for a solver's own fields (None: none)."""
+    import importlib
+
+    from wearcheck.comparisons import registry
+    try:
+        target = registry.get(name).export_vtk
+    except CaseError:
+        return None
+    if target is None:
+        return None
+    module, _, function = target.partition(":")
+    return getattr(importlib.import_module(module), function)
+
+
+def write_fem_fields(directory, run: Run, revolve: int = 0) -> list[Path]:
+    """The FEM's own series: ``section`` (and ``solid`` with ``revolve``); .pvd paths."""
+    fields = run.fields
+    check_fields(fields, len(run.stages["s"]))
+    out = []
     points = np.asarray(fields["points"], dtype=float)
     cells = orient_triangles(points, fields["cells"])
     kind = VTK_TRIANGLE if cells.shape[1] == 3 else VTK_QUADRATIC_TRIANGLE
@@ -385,6 +428,7 @@ def write_vtk_files(directory, run: Run, revolve: int = 0) -> list[Path]:
         def solid(k):
             data = {name: v[source] for name, v in section_data(fields, k).items()}
             data["displacement"] = revolve_vectors(fields["displacement"][k][source], theta)
+            data["stress"] = revolve_stress(fields["stress"][k][source], theta)
             return data
 
         out.append(_series(directory, "solid", mesh, run, solid))

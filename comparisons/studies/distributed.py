@@ -30,12 +30,12 @@ import tomllib
 import traceback
 import uuid
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 from wearcheck import cases
-from .progress import ProgressBar
-from .runio import _jsonable, write_run, write_text_atomic
+from wearcheck.comparisons.present.progress import ProgressBar
+from wearcheck.comparisons.rundir import jsonable, write_run, write_text_atomic
 
 #: seconds between two samples of a task's resident set size
 RSS_INTERVAL = 0.01
@@ -131,9 +131,10 @@ def execute(raw: dict, source: str, overrides: tuple[str, ...], solver: str, nam
     ``solve(case, solver, progress)`` defaults to ``comparisons.solvers.solve``.
     """
     if solve is None:
-        from .solvers import solve
+        from wearcheck.comparisons import registry
+        from wearcheck.comparisons.registry import solve
         try:  # a worker's first import of the solver is not part of its cost
-            importlib.import_module(f"wearcheck.{solver}")
+            importlib.import_module(registry.get(solver).module)
         except Exception:
             pass  # solve() meets the same failure below and reports it
     out = dict(ok=False, message="", case=None, result=None, traceback="")
@@ -236,20 +237,24 @@ class _Reporter:
         self.bar.close()
 
 
-def run_cases(source: str | Path, base_overrides, tasks: list[Task], out: str | Path, *,
+def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Task], out: str | Path, *,
               scheduler: str | None = None, workers: int | None = None, quiet: bool = False,
               solve=None, extra_meta: dict | None = None) -> list[Outcome]:
     """Run every task on Dask; write each successful one to ``out/<task.name>``.
 
-    ``base_overrides`` apply to every task before its own. Returns the outcomes
+    ``source`` is a case file or a :class:`cases.Case`; ``base_overrides`` apply
+    to every task before its own. Returns the outcomes
     in the order of ``tasks``; each run directory is written (atomically, by
     ``runio.write_run``) as soon as its result arrives, so an interrupted study
     keeps the levels already done.
     """
     from distributed import KilledWorker, as_completed
 
-    source = str(Path(source).absolute())
-    raw = tomllib.loads(Path(source).read_text(encoding="utf-8"))
+    if isinstance(source, cases.Case):  # a case built or derived in Python
+        raw, source = cases.to_dict(source), source.source
+    else:
+        source = str(Path(source).absolute())
+        raw = tomllib.loads(Path(source).read_text(encoding="utf-8"))
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     names = [t.name for t in tasks]
@@ -333,7 +338,7 @@ def record_study(out: Path, study: str, case, overrides, prov) -> None:
     meta.setdefault("studies", {})[study] = dict(
         prov, case_file=str(getattr(case, "source", "")), overrides=list(overrides),
         resolved_case=cases.to_toml(case))
-    write_text_atomic(path, json.dumps(_jsonable(meta), indent=2) + "\n")
+    write_text_atomic(path, json.dumps(jsonable(meta), indent=2) + "\n")
 
 
 def fmt(v, spec=".4g"):

@@ -1,7 +1,8 @@
 """Run directories: atomic writing, provenance, and reading back.
 
-A run directory holds ``case.toml``, ``history.csv``, ``stages.npz`` and
-``meta.json`` (and ``fields.npz`` when the solver provides fields). It is
+A run directory holds the files of ``layout.RUN_FILES``: ``case.toml``,
+``history.csv``, ``stages.npz`` and ``meta.json`` (and ``fields.npz`` when the
+solver provides fields); ``layout`` gives every column and array its unit. It is
 built in a hidden sibling directory and renamed into place only when complete,
 so an interrupted or failed run leaves nothing that looks complete and never
 damages an earlier complete run at the same path.
@@ -27,6 +28,7 @@ import numpy as np
 from wearcheck import cases
 from wearcheck.cases import reference
 from wearcheck.cases.result import HISTORY_COLUMNS, RunResult
+from wearcheck.comparisons import layout
 
 DEPENDENCIES = ("numpy", "scipy", "scikit-fem", "meshio", "gmsh", "pyvista", "matplotlib",
                 "dask", "distributed")
@@ -152,11 +154,12 @@ def provenance(argv=None) -> dict:
     )
 
 
-def _jsonable(obj):
+def jsonable(obj):
+    """``obj`` with numpy arrays and scalars as lists and Python numbers, for json.dumps."""
     if isinstance(obj, dict):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
+        return {str(k): jsonable(v) for k, v in obj.items()}
     if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
+        return [jsonable(v) for v in obj]
     if isinstance(obj, np.ndarray):
         return obj.tolist()
     if isinstance(obj, np.generic):
@@ -165,7 +168,7 @@ def _jsonable(obj):
 
 
 def write_json(path: Path, data: dict) -> None:
-    Path(path).write_text(json.dumps(_jsonable(data), indent=2, allow_nan=True) + "\n",
+    Path(path).write_text(json.dumps(jsonable(data), indent=2, allow_nan=True) + "\n",
                           encoding="utf-8")
 
 
@@ -198,7 +201,18 @@ def write_run_files(directory: Path, case: cases.Case, result: RunResult, solver
     meta.update(provenance(argv))
     if extra_meta:
         meta.update(extra_meta)
+    meta["data_dictionary"] = layout.run_dictionary(_registered(solver), list(result.history),
+                                                    list(result.fields or {}),
+                                                    list(result.stage_extra or {}))
     write_json(directory / "meta.json", meta)
+
+
+def _registered(solver: str):
+    from wearcheck.comparisons import registry
+    try:
+        return registry.get(solver)
+    except cases.CaseError:  # e.g. a stand-in solver of a test
+        return None
 
 
 def write_run(out: str | Path, case: cases.Case, result: RunResult, solver: str,

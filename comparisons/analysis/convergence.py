@@ -1,7 +1,8 @@
 """Refinement studies, the pure part: levels, differences to the finest level,
 observed order of convergence, Richardson's estimate, coarsest converged level.
 
-Arrays in, arrays out: no I/O, no Dask. Solutions enter in the natural scales
+Arrays in, arrays out: no I/O, no Dask (resolution keys and default levels come
+from each solver's registry entry). Solutions enter in the natural scales
 of the case (r/a0, f/d0, p/p0, F/F0, ŝ) so that errors read as fractions.
 """
 
@@ -14,11 +15,8 @@ import numpy as np
 from scipy import optimize
 
 from wearcheck.cases import CaseError
+from wearcheck.comparisons import registry
 
-#: the case key each solver's resolution is set by
-RESOLUTION_KEY = {"mdr": "mdr.elements", "fem": "fem.contact_nodes"}
-#: default resolutions, coarsest first (MDR: paper Fig. 4 spans N = 100 ... 3200)
-DEFAULT_LEVELS = {"mdr": (100, 200, 400, 800, 1600, 3200), "fem": (60, 125, 250, 500, 1000)}
 #: the error measures of a level, in the order tables show them
 MEASURES = ("profile", "pressure", "pressure_interior", "force")
 
@@ -33,7 +31,7 @@ class Level:
 
     @property
     def key(self) -> str:
-        return RESOLUTION_KEY[self.solver]
+        return registry.get(self.solver).resolution_key
 
     @property
     def name(self) -> str:
@@ -55,9 +53,10 @@ def levels(solver: str, resolutions=None, steps=None) -> list[Level]:
     Resolutions and steps pair up one to one; a single value of either applies
     to every level, so ``steps`` alone refines the step at one resolution.
     """
-    if solver not in RESOLUTION_KEY:
-        raise CaseError(f"solver '{solver}': must be one of " + ", ".join(RESOLUTION_KEY))
-    res = tuple(resolutions) if resolutions else DEFAULT_LEVELS[solver]
+    entry = registry.get(solver)
+    if entry.resolution_key is None:
+        raise CaseError(f"solver '{solver}' declares no resolution key to refine")
+    res = tuple(resolutions) if resolutions else entry.default_levels
     st = tuple(steps) if steps else (None,)
     if len(st) == 1:
         st = st * len(res)
@@ -66,7 +65,13 @@ def levels(solver: str, resolutions=None, steps=None) -> list[Level]:
     elif len(st) != len(res):
         raise CaseError(f"--levels has {len(res)} values and --steps {len(st)}: give one step, "
                         "one level, or as many steps as levels (they pair up)")
+    bad = [n for n in res if isinstance(n, bool) or not float(n).is_integer()]
+    if bad:
+        raise CaseError(f"levels: {bad[0]!r} is not a whole number of {entry.resolution_key}")
     out = [Level(solver, int(n), None if s is None else float(s)) for n, s in zip(res, st)]
+    if len(out) < 2:
+        raise CaseError(f"levels: a refinement study needs at least two levels, got "
+                        f"{[lv.resolution for lv in out]} (three for an observed order)")
     if len({lv.name for lv in out}) != len(out):
         raise CaseError("the levels repeat: " + ", ".join(lv.name for lv in out))
     varied = refined_parameter(out)

@@ -15,8 +15,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .refine import MEASURES
-from .runio import Run, provenance
+from wearcheck.comparisons.analysis.convergence import MEASURES
+from wearcheck.cases import CaseError
+from wearcheck.comparisons import registry
+from wearcheck.comparisons.rundir import Run, provenance
 
 FIGURES = ("fig4_profiles.png", "fig4_force.png", "convergence.png", "cost.png")
 LABELS = {"profile": "profile / d0", "pressure": "pressure / p0",
@@ -28,7 +30,8 @@ def studies(out: Path) -> list[dict]:
     found = []
     for path in sorted(Path(out).glob("refinement-*.json")):
         found.append(json.loads(path.read_text(encoding="utf-8")))
-    return sorted(found, key=lambda s: s["solver"] != "mdr")
+    order = {n: i for i, n in enumerate(registry.names())}
+    return sorted(found, key=lambda s: order.get(s["solver"], len(order)))
 
 
 def _save(fig, path: Path) -> None:
@@ -45,7 +48,10 @@ def _save(fig, path: Path) -> None:
 
 
 def _level_label(study, row):
-    n = "N" if study["solver"] == "mdr" else "nodes"
+    try:
+        n = registry.get(study["solver"]).resolution_label
+    except CaseError:
+        n = "resolution"
     label = f"{n} = {row['resolution']}"
     return label + (f", Δŝ = {row['step_hat']:g}" if row["step_hat"] is not None else "")
 

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .runio import Run, atomic_directory
-from .vtk import (SURFACE_SEGMENTS, VTK_QUADRATIC_TRIANGLE, VTK_TRIANGLE, check_fields, grid,
+from wearcheck.comparisons.rundir import Run, atomic_directory
+from wearcheck.comparisons.present.vtk import (SURFACE_SEGMENTS, VTK_QUADRATIC_TRIANGLE, VTK_TRIANGLE, check_fields, grid,
                   orient_triangles, revolve_curve, section_data, unworn_profile)
 
 #: size (width, height) of every picture, pixels
@@ -152,8 +152,7 @@ def render_run(run_dir) -> list[Path]:
         return []
     names = []
     with atomic_directory(target) as tmp:
-        # an MDR fretting run's fields.npz holds its loops Q(u_x), not a mesh
-        if run.fields is not None and "loop_cycles" not in run.fields:
+        if run.fields is not None and "cells" in run.fields:  # a section mesh (FEM)
             fields = run.fields
             K = len(run.stages["s"])
             check_fields(fields, K)

@@ -1,8 +1,9 @@
-"""Differences between the MDR and the FEM result of one case (pure: arrays in, numbers out).
+"""Differences between a solver's result and a reference solver's result of one case
+(pure: arrays in, numbers out).
 
-The two solvers store their stages on different radii (MDR: its uniform grid;
-FEM: the contact-node radii). Differences are taken on the FEM radii, with the
-MDR fields linearly interpolated onto them. Every difference is made
+Solvers store their stages on different radii (MDR: its uniform grid; FEM: the
+contact-node radii; BEM: rings one pixel wide). Differences are taken on the
+compared solver's radii, with the reference's fields linearly interpolated onto them. Every difference is made
 dimensionless with the case's natural scales: profiles by the depth d,
 pressures by p0, forces by F0, contact radii by a0.
 """
@@ -101,9 +102,9 @@ def verdict(stage: dict, tolerances: dict) -> dict:
     return out
 
 
-def compare_results(mdr, fem, *, s_hat_per_m, a0, F0, p0, depth, tolerances, edge_band,
+def compare_results(ref, other, *, s_hat_per_m, a0, F0, p0, depth, tolerances, edge_band,
                     exclude_radius=None, exclude_width=0.0) -> dict:
-    """Compare two results (``cases.RunResult``-like) stage by stage.
+    """Compare a result with the reference's (``cases.RunResult``-like) stage by stage.
 
     Stage k of one result is the k-th requested ŝ; the stages both reached are
     compared. Forces and contact radii at a stage are the history values read
@@ -111,7 +112,9 @@ def compare_results(mdr, fem, *, s_hat_per_m, a0, F0, p0, depth, tolerances, edg
 
     Parameters
     ----------
-    mdr, fem : objects with history (dict), stage_s, r, f, p.
+    ref, other : the reference's and the compared solver's results: objects with
+        history (dict), stage_s, r, f, p. Differences are other minus reference,
+        on other's radii.
     s_hat_per_m, a0, F0, p0 : scales (``cases.reference.scales``).
     depth : profile scale d (the held depth, or the unworn depth d0 under force control).
     tolerances : the ``[compare]`` tolerances as a dict.
@@ -124,35 +127,35 @@ def compare_results(mdr, fem, *, s_hat_per_m, a0, F0, p0, depth, tolerances, edg
     dict with ``stages`` (list of per-stage dicts), ``history`` (force and
     contact radius over the common sliding range) and ``passed``.
     """
-    K = min(len(mdr.stage_s), len(fem.stage_s))
-    a_m = at_stages(mdr.history["s"], mdr.history["contact_radius"], mdr.stage_s)
-    a_f = at_stages(fem.history["s"], fem.history["contact_radius"], fem.stage_s)
-    F_m = at_stages(mdr.history["s"], mdr.history["force"], mdr.stage_s)
-    F_f = at_stages(fem.history["s"], fem.history["force"], fem.stage_s)
-    r = np.asarray(fem.r, float)
+    K = min(len(ref.stage_s), len(other.stage_s))
+    a_m = at_stages(ref.history["s"], ref.history["contact_radius"], ref.stage_s)
+    a_f = at_stages(other.history["s"], other.history["contact_radius"], other.stage_s)
+    F_m = at_stages(ref.history["s"], ref.history["force"], ref.stage_s)
+    F_f = at_stages(other.history["s"], other.history["force"], other.stage_s)
+    r = np.asarray(other.r, float)
     stages = []
     for k in range(K):
-        f_m = to_grid(mdr.r, mdr.f[k], r)
-        p_m = to_grid(mdr.r, mdr.p[k], r)
+        f_m = to_grid(ref.r, ref.f[k], r)
+        p_m = to_grid(ref.r, ref.p[k], r)
         exclude = None
         if exclude_radius is not None:
             exclude = np.abs(r - exclude_radius) < exclude_width
         st = dict(index=k,
-                  s_hat_mdr=float(mdr.stage_s[k] * s_hat_per_m),
-                  s_hat_fem=float(fem.stage_s[k] * s_hat_per_m),
-                  force_mdr=float(F_m[k] / F0), force_fem=float(F_f[k] / F0),
-                  contact_radius_mdr=float(a_m[k] / a0),
-                  contact_radius_fem=float(a_f[k] / a0))
-        st["force"] = abs(st["force_mdr"] - st["force_fem"])
-        st["contact_radius"] = abs(st["contact_radius_mdr"] - st["contact_radius_fem"])
-        st.update(stage_differences(r, f_m, fem.f[k], p_m, fem.p[k], a_m[k], a_f[k],
+                  s_hat_reference=float(ref.stage_s[k] * s_hat_per_m),
+                  s_hat_solver=float(other.stage_s[k] * s_hat_per_m),
+                  force_reference=float(F_m[k] / F0), force_solver=float(F_f[k] / F0),
+                  contact_radius_reference=float(a_m[k] / a0),
+                  contact_radius_solver=float(a_f[k] / a0))
+        st["force"] = abs(st["force_reference"] - st["force_solver"])
+        st["contact_radius"] = abs(st["contact_radius_reference"] - st["contact_radius_solver"])
+        st.update(stage_differences(r, f_m, other.f[k], p_m, other.p[k], a_m[k], a_f[k],
                                     depth=depth, p0=p0, edge_band=edge_band, exclude=exclude))
         st["checks"] = verdict(st, tolerances)
         st["passed"] = all(c["passed"] for c in st["checks"].values())
         stages.append(st)
-    hist = history_differences(mdr.history, fem.history, F0=F0, a0=a0)
+    hist = history_differences(ref.history, other.history, F0=F0, a0=a0)
     return dict(stages=stages, stages_compared=K, worst=worst(stages),
-                stages_reached=dict(mdr=len(mdr.stage_s), fem=len(fem.stage_s)),
+                stages_reached=dict(reference=len(ref.stage_s), solver=len(other.stage_s)),
                 history=hist,
                 passed=bool(K > 0 and all(st["passed"] for st in stages)))
 

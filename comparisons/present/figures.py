@@ -1,7 +1,8 @@
 """The comparison's figures (matplotlib, Agg backend, imported only when drawing).
 
 Every function takes dimensionless arrays and writes the files it is given.
-MDR is drawn as lines, FEM as markers, the same colour per stage.
+Each solver is drawn in the style of its registry entry (MDR lines, FEM
+markers, ...), the same colour per stage.
 """
 
 from __future__ import annotations
@@ -40,43 +41,51 @@ def _colours(n):
     return [plt.get_cmap("viridis")(v) for v in np.linspace(0.0, 0.9, max(n, 1))]
 
 
+def _series_style(style: dict, colour) -> dict:
+    """Matplotlib arguments of one solver's curve from its registry style."""
+    st = dict(style)
+    st.setdefault("lw", 1.3)
+    st["color"] = colour
+    return st
+
+
 def stage_figure(stem, stages, *, ylabel, title="", reference=(), vlines=(), xlim=None,
                  ylim=None, formats=("png", "pdf")) -> list[Path]:
-    """Curves per stage: MDR as a line, FEM as markers (paper Fig. 2).
+    """Curves per stage, one colour per stage, one style per solver (paper Fig. 2).
 
     Parameters
     ----------
     stem : output path without suffix.
-    stages : list of dicts with ``label`` and optional ``mdr`` / ``fem`` = (x, y)
-        (and optional ``mdr_label`` / ``fem_label`` for the legend).
+    stages : list of dicts with ``label`` and ``series``: a list of dicts with
+        ``x``, ``y``, ``label`` and ``style`` (the solver's registry style; a
+        style with a marker is drawn as at most ``MAX_MARKERS`` markers).
     reference : list of dicts with ``label``, ``x``, ``y`` (a wide grey band beneath).
     vlines : list of (x, label) vertical markers (e.g. a singularity).
     """
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7.0, 4.6))
     for colour, st in zip(_colours(len(stages)), stages):
-        if st.get("mdr") is not None:
-            ax.plot(*st["mdr"], "-", color=colour, lw=1.3,
-                    label=st.get("mdr_label", f"MDR {st['label']}"))
-        if st.get("fem") is not None:
-            ax.plot(*_thin(*st["fem"]), "o", color=colour, ms=3.5, mfc="none", mew=0.9,
-                    label=st.get("fem_label", f"FEM {st['label']}"))
+        for series in st["series"]:
+            style = _series_style(series["style"], colour)
+            x, y = series["x"], series["y"]
+            if style.get("marker"):
+                x, y = _thin(x, y)
+            ax.plot(x, y, label=series["label"], **style)
     for ref in reference:
-        # a wide grey band beneath: visible even where a solver's line covers it
-        ax.plot(ref["x"], ref["y"], "-", color="0.75", lw=5, label=ref["label"], zorder=0)
+        ax.plot(ref["x"], ref["y"], "-", color="0.6", lw=4.0, alpha=0.45, zorder=0,
+                label=ref["label"])
     for x, label in vlines:
-        ax.axvline(x, color="0.5", lw=0.8, ls=":", label=label)
+        ax.axvline(x, color="0.4", ls=":", lw=1.0, label=label)
     ax.set_xlabel("r / a0")
     ax.set_ylabel(ylabel)
     if title:
-        ax.set_title(title)
+        ax.set_title(title, fontsize=10)
     if xlim is not None:
         ax.set_xlim(*xlim)
     if ylim is not None:
         ax.set_ylim(*ylim)
     ax.grid(alpha=0.3)
-    # outside the axes: with many stages a legend inside hides the curves
-    ax.legend(fontsize=7, ncol=1, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.legend(fontsize=6.5, ncol=2, loc="best")
     out = _save(fig, stem, formats)
     plt.close(fig)
     return out
@@ -85,15 +94,15 @@ def stage_figure(stem, stages, *, ylabel, title="", reference=(), vlines=(), xli
 def history_figure(stem, curves, *, stage_s_hat=(), formats=("png", "pdf")) -> list[Path]:
     """F/F0 and a/a0 against ŝ for each solver.
 
-    curves : dict solver -> (s_hat, F/F0, a/a0); stage_s_hat : stages to mark.
+    curves : dict title -> (s_hat, F/F0, a/a0); stage_s_hat : stages to mark.
     """
     plt = _pyplot()
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10.0, 4.0))
-    styles = {"mdr": dict(ls="-", color="C0", lw=1.4), "fem": dict(ls="--", color="C3", lw=1.4)}
-    for name, (s, F, a) in curves.items():
-        st = styles.get(name, dict(ls=":", lw=1.0))
-        ax1.plot(s, F, label=name.upper(), **st)
-        ax2.plot(s, a, label=name.upper(), **st)
+    dashes = ("-", "--", "-.", ":")
+    for i, (name, (s, F, a)) in enumerate(curves.items()):
+        st = dict(ls=dashes[i % len(dashes)], color=f"C{i}", lw=1.4)
+        ax1.plot(s, F, label=name, **st)
+        ax2.plot(s, a, label=name, **st)
     for s in stage_s_hat:
         for ax in (ax1, ax2):
             ax.axvline(s, color="0.8", lw=0.6, zorder=0)
@@ -112,8 +121,9 @@ def history_figure(stem, curves, *, stage_s_hat=(), formats=("png", "pdf")) -> l
 def edge_study_figure(stem, panels, formats=("png",)) -> list[Path]:
     """Pressure near the edge at several resolutions, one panel per stage.
 
-    panels : list of dicts with ``title`` and ``curves``: list of (label, r/a, p/p(0), solver);
-    MDR levels are drawn as blue lines, FEM levels as red markers, darker = finer/first.
+    panels : list of dicts with ``title`` and ``curves``: list of (label, r/a, p/p(0), style)
+    with the solver's registry style; each solver gets its own colour map, darker =
+    first level (the case's own resolution).
     """
     plt = _pyplot()
     n = len(panels)
@@ -121,16 +131,16 @@ def edge_study_figure(stem, panels, formats=("png",)) -> list[Path]:
     for ax, panel in zip(axes[0], panels):
         by_solver = {}
         for curve in panel["curves"]:
-            by_solver.setdefault(curve[3], []).append(curve)
-        for solver, curves in by_solver.items():
-            cmap = plt.get_cmap("Reds" if solver == "fem" else "Blues")
+            by_solver.setdefault(repr(sorted(curve[3].items())), []).append(curve)
+        maps = ("Blues", "Reds", "Greens", "Purples", "Oranges")
+        for i, curves in enumerate(by_solver.values()):
+            cmap = plt.get_cmap(maps[i % len(maps)])
             shades = np.linspace(0.95, 0.45, len(curves))
-            for shade, (label, x, y, _) in zip(shades, curves):
-                if solver == "fem":
-                    ax.plot(x, y, "o", ms=2.8, mfc="none", mew=0.8, color=cmap(shade),
-                            label=label)
-                else:
-                    ax.plot(x, y, "-", lw=1.1, color=cmap(shade), label=label)
+            for shade, (label, x, y, style) in zip(shades, curves):
+                st = dict(style, color=cmap(shade))
+                if st.get("marker"):
+                    st.update(ms=2.8, lw=0)
+                ax.plot(x, y, label=label, **st)
         ax.set_xlim(OUTER_PLOT, 1.03)
         ax.set_xlabel("r / a")
         ax.set_ylabel("p / p(0)")

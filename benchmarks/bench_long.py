@@ -1,0 +1,210 @@
+"""Long runs and the adaptive scheme (issue 11). Prints tables.
+
+    python benchmarks/bench_long.py [--quick] [--big 102400]
+
+1. Paper case, MDR N = 800: the adaptive scheme at several tolerances and
+   with each way of accepting a doubled step (deferred Richardson correction,
+   the default; plain backward Euler; Richardson's extrapolated profile),
+   against fixed-step implicit Euler and BDF2: solve time, steps, max |F/F0 −
+   reference| over the history, the estimate the run reports, and the largest
+   edge-peak prominence over the stages (comparisons/analysis/edge_peak.py).
+   Reference: BDF2 at Δŝ = 1/80 and 1/160, Richardson-extrapolated.
+2. Paper case, MDR at a large N (default 102400), adaptive at the default
+   tolerance, in a fresh process: solve time, peak RSS.
+3. Paper case, FEM (251 nodes): adaptive at 1e-3 and 1e-4 against bdf2 at
+   Δŝ = 0.0025: wall time of fem.solve, steps, error.
+4. cases/ball_on_flat.toml: MDR and FEM solve/wall time, steps, and what an
+   experimenter reads off (scar diameter, central wear, volume, lab formula)
+   against the asymptote.
+
+Timings are on whatever machine runs this; the table header says how loaded
+it was (load average) — the development machine was shared by ~6 people.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+from wearcheck import cases, fem, mdr
+from wearcheck.cases import profiles, reference
+from wearcheck.comparisons.analysis import scar
+from wearcheck.comparisons.analysis.edge_peak import find_edge_peak
+from wearcheck.mdr import linalg
+from wearcheck.mdr import solver as mdr_solver
+
+PAPER = cases.shipped("paper")
+BALL = cases.shipped("ball_on_flat")
+
+
+def max_peak(r, p, stage_s, history) -> float:
+    worst = 0.0
+    for k, s in enumerate(stage_s):
+        a = np.interp(s, history["s"], history["contact_radius"])
+        q = find_edge_peak(r, p[k], a)
+        if q["present"]:
+            worst = max(worst, q["prominence"])
+    return worst
+
+
+def reference_curve(N=800):
+    runs = []
+    for h in (0.0125, 0.00625):
+        c = cases.load(PAPER, [f"mdr.elements={N}", "sliding.scheme=bdf2",
+                               f"sliding.step_hat={h}", "stages.s_hat=[0.0]"])
+        runs.append(mdr.solve(c).history)
+
+    def F(s_hat):
+        c, f = (np.interp(s_hat, r["s_hat"], r["force"] / r["force"][0]) for r in runs)
+        return f + (f - c) / 3.0
+    return F, runs[1]["s_hat"][-1]
+
+
+def error(history, ref) -> float:
+    F, end = ref
+    m = history["s_hat"] <= end
+    return float(np.max(np.abs(history["force"][m] / history["force"][0]
+                               - F(history["s_hat"][m]))))
+
+
+def table_paper_mdr(tols, quick=False):
+    print("\n## 1. Paper case, MDR N = 800: time error and edge peak against scheme\n")
+    ref = reference_curve()
+    print("| scheme | accept | tolerance / step | solve s | steps | max |ΔF/F0| | reported "
+          "estimate | edge peak (max prominence /p(0)) |")
+    print("|---|---|---|---|---|---|---|---|")
+    case = cases.load(PAPER)
+    model0, sc = mdr_solver.build_model(case)
+    per = sc["s_hat_per_m"]
+    stage_s = [s / per for s in case.stages.s_hat]
+
+    def profile(x):
+        return profiles.height(case.indenter, x, case.table)
+
+    accepts = ("deferred",) if quick else ("deferred", "euler", "extrapolated")
+    for accept in accepts:
+        for tol in tols:
+            model, _ = mdr_solver.build_model(case)
+            t = time.perf_counter()
+            with linalg.single_threaded_blas():
+                out = mdr_solver.run(model, "adaptive", np.inf, stage_s, "force_fraction",
+                                     1e4 / per, 0.01, tolerance=tol, scales=sc,
+                                     profile=profile, accept=accept)
+            dt = time.perf_counter() - t
+            h = out["history"]
+            h["s_hat"] = h["s"] * per
+            c = out["counters"]
+            print(f"| adaptive | {accept} | {tol:g} | {dt:.3f} | {c['steps']} | "
+                  f"{error(h, ref):.2e} | {c['time_error']:.2e} | "
+                  f"{max_peak(out['r'], out['p'], out['stage_s'], h):.3g} |")
+    for scheme, steps in (("implicit", (0.1, 0.01)), ("bdf2", (0.1, 0.05))):
+        for st in steps:
+            res = mdr.solve(cases.load(PAPER, [f"sliding.scheme={scheme}",
+                                               f"sliding.step_hat={st}"]))
+            print(f"| {scheme} | — | Δŝ = {st:g} | {res.solve_seconds:.3f} | "
+                  f"{res.info['steps']} | {error(res.history, ref):.2e} | — | "
+                  f"{max_peak(res.r, res.p, res.stage_s, res.history):.3g} |")
+
+
+def child_big(N):
+    code = ("import json, resource, sys; from wearcheck import cases, mdr; "
+            f"c = cases.load(cases.shipped('paper'), ['mdr.elements={N}', 'stages.s_hat=[0.0]']); "
+            "r = mdr.solve(c); "
+            "print(json.dumps(dict(solve=r.solve_seconds, steps=r.info['steps'], "
+            "rss=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "
+            "gmres=r.info['gmres_iterations'], F=r.history['force'][-1] / r.history['force'][0])))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=3600)
+    if out.returncode:
+        return dict(error=out.stderr.strip().splitlines()[-1])
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def table_big(N):
+    print(f"\n## 2. Paper case, MDR N = {N}, adaptive (tolerance 1e-4), fresh process\n")
+    r = child_big(N)
+    if "error" in r:
+        print(f"failed: {r['error']}")
+        return
+    print("| N | solve s | steps | GMRES iterations | peak RSS MB | F/F0 at the end |")
+    print("|---|---|---|---|---|---|")
+    print(f"| {N} | {r['solve']:.2f} | {r['steps']} | {r['gmres']} | {r['rss']:.0f} | "
+          f"{r['F']:.5f} |")
+
+
+def table_fem():
+    print("\n## 3. Paper case, FEM (251 contact nodes), against bdf2 at Δŝ = 0.0025\n")
+    ref = fem.solve(cases.load(PAPER, ["sliding.scheme=bdf2", "sliding.step_hat=0.0025",
+                                       "stages.s_hat=[0.0]"])).history
+    print("| scheme | tolerance / step | fem.solve wall s | steps | max |ΔF/F0| | reported "
+          "estimate |")
+    print("|---|---|---|---|---|---|")
+    for over in (["sliding.tolerance=1e-3"], ["sliding.tolerance=1e-4"],
+                 ["sliding.scheme=implicit", "sliding.step_hat=0.02"],
+                 ["sliding.scheme=bdf2", "sliding.step_hat=0.01"]):
+        t = time.perf_counter()
+        res = fem.solve(cases.load(PAPER, over))
+        wall = time.perf_counter() - t
+        h = res.history
+        m = h["s"] <= ref["s"][-1]
+        e = np.max(np.abs(h["force"][m] - np.interp(h["s"][m], ref["s"], ref["force"]))) \
+            / h["force"][0]
+        est = res.info.get("time_error", {}).get("estimate", float("nan"))
+        print(f"| {res.info['scheme']} | {over[-1].split('=')[1]} | {wall:.2f} | "
+              f"{res.info['steps']} | {e:.2e} | {est:.2e} |")
+
+
+def table_ball():
+    print("\n## 4. cases/ball_on_flat.toml (10^6 cycles)\n")
+    case = cases.load(BALL)
+    sc = reference.scales(case)
+    rows = {}
+    print("| solver | solve s | wall s | steps | rejected | domain growths | time-error "
+          "estimate |")
+    print("|---|---|---|---|---|---|---|")
+    for name, solve in (("mdr", mdr.solve), ("fem", fem.solve)):
+        t = time.perf_counter()
+        res = solve(case)
+        wall = time.perf_counter() - t
+        rows[name] = scar.scar_table(res.history, case)
+        print(f"| {name} | {res.solve_seconds:.2f} | {wall:.2f} | {res.info['steps']} | "
+              f"{res.info.get('rejected_steps', 0)} | {res.info.get('domain_growths', '—')} | "
+              f"{res.info['time_error']['estimate']:.1e} |")
+    print(f"\nHertz: a_H = {sc['a0'] * 1e6:.1f} µm, d0 = {sc['d0'] * 1e6:.3f} µm\n")
+    print("| cycles | D MDR µm | D FEM µm | D asymptote µm | central wear MDR µm | "
+          "asymptote µm | V MDR / KFs − 1 | lab formula V_lab/V − 1 (MDR) |")
+    print("|---|---|---|---|---|---|---|---|")
+    m, f = rows["mdr"], rows["fem"]
+    for c in (10, 100, 1e3, 1e4, 1e5, 1e6):
+        i = min(np.searchsorted(m["cycles"], c), len(m["cycles"]) - 1)
+        j = min(np.searchsorted(f["cycles"], c), len(f["cycles"]) - 1)
+        print(f"| {m['cycles'][i]:.0e} | {m['scar_diameter'][i] * 1e6:.1f} | "
+              f"{f['scar_diameter'][j] * 1e6:.1f} | {m['asymptote_diameter'][i] * 1e6:.1f} | "
+              f"{m['wear_center'][i] * 1e6:.4f} | {m['asymptote_wear_center'][i] * 1e6:.4f} | "
+              f"{m['wear_volume'][i] / m['archard_volume'][i] - 1:.1e} | "
+              f"{m['lab_volume_deviation'][i]:+.3f} |")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="fewer rows, no large N")
+    ap.add_argument("--big", type=int, default=102400, help="N of table 2 (0: skip)")
+    args = ap.parse_args()
+    print(f"# bench_long ({time.strftime('%Y-%m-%d %H:%M')}, load average "
+          f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores: a shared machine)")
+    table_paper_mdr((1e-2, 1e-3, 1e-4) if args.quick else (3e-2, 1e-2, 1e-3, 1e-4, 1e-5),
+                    args.quick)
+    if args.big and not args.quick:
+        table_big(args.big)
+    table_fem()
+    table_ball()
+
+
+if __name__ == "__main__":
+    main()

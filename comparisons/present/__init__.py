@@ -1,0 +1,1 @@
+"""Presentation: figures, reports, progress bars, VTK files and renders."""

@@ -1,0 +1,289 @@
+"""``wearcheck compare``: every solver that supports a case, each against a reference.
+
+Everything is computed first; the output directory is then written in one
+piece with ``rundir.atomic_directory`` (the layout is ``rundir.COMPARISON``):
+
+    DIR/<solver>/               one run directory per solver (as ``wearcheck run`` writes)
+    DIR/fig2_profiles.png|pdf   f/d against r/a0 at the stages (paper Fig. 2a)
+    DIR/fig2_pressure.png|pdf   p/p0 against r/a0 (paper Fig. 2b; Fig. 3b for the
+                                truncated paraboloid, with the reference)
+    DIR/force_vs_sliding.png|pdf F/F0 and a/a0 against ŝ
+    DIR/metrics.json            per solver and stage: differences to the reference, verdict
+    DIR/report.md, report.html  the page a reviewer reads
+    DIR/edge_study/             (--edge-study) runs at other resolutions, edge_peak.png
+    DIR/finite_sphere.png       (--sphere-sweep) FEM force against half-space force
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from wearcheck import cases
+from wearcheck.cases import reference
+from wearcheck.comparisons import layout, registry, rundir
+from wearcheck.comparisons.analysis import edge_peak, metrics
+
+#: how a solver is run; tests replace it with analytic stand-ins
+solve_case = registry.solve
+#: the default reference solver (exact for axisymmetric half-space contact)
+DEFAULT_REFERENCE = "mdr"
+
+
+def _progress(label, quiet):
+    from wearcheck.comparisons.present.progress import ProgressBar
+    return ProgressBar(label, quiet=quiet)
+
+
+def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tuple[str, ...]]:
+    """The reference and the solvers of a comparison (reference first).
+
+    ``solvers`` None: every registered solver that supports the case. A named
+    solver that does not support it is refused with its reason.
+    """
+    if solvers:
+        chosen = tuple(dict.fromkeys(solvers))
+        for name in chosen:
+            reason = registry.get(name).supports(case)
+            if reason is not None:
+                raise cases.CaseError(f"solver '{name}' cannot run this case: {reason}")
+    else:
+        chosen = registry.supporting(case)
+    ref = reference_solver or (DEFAULT_REFERENCE if DEFAULT_REFERENCE in chosen else chosen[0]
+                               if chosen else DEFAULT_REFERENCE)
+    registry.get(ref)
+    if ref not in chosen:
+        raise cases.CaseError(f"reference solver '{ref}': not among the compared solvers "
+                              f"({', '.join(chosen) or 'none'})")
+    if len(chosen) < 2:
+        why = "; ".join(f"{n}: {registry.get(n).supports(case) or 'not selected'}"
+                        for n in registry.names() if n not in chosen)
+        raise cases.CaseError("a comparison needs two solvers that support the case; only "
+                              f"{', '.join(chosen) or 'none'} can ({why})")
+    return ref, (ref,) + tuple(n for n in chosen if n != ref)
+
+
+def run_solvers(case, names, *, solve=None, quiet=True, label="") -> dict:
+    """Run each named solver on ``case``: {name: RunResult}, in the order given."""
+    solve = solve or solve_case
+    out = {}
+    for name in names:
+        bar = _progress(f"{name}{label}", quiet)
+        try:
+            out[name] = solve(case, name, progress=bar)
+        finally:
+            bar.close()
+    return out
+
+
+def profile_scale(case, scales) -> float:
+    """The depth d that profiles are measured in: the held depth, or d0 under force control."""
+    if case.loading.control == "depth":
+        return case.loading.depth
+    return scales["d0"]
+
+
+def step_hat_used(result, s_hat_per_m) -> float:
+    """The median sliding step of a run, in ŝ (NaN when it did not slide)."""
+    ds = np.diff(np.asarray(result.history["s"], float))
+    ds = ds[ds > 0]
+    return float(np.median(ds) * s_hat_per_m) if ds.size else math.nan
+
+
+def grid_spacing(result, a0) -> float:
+    """Median spacing of a result's radii, relative to a0."""
+    return float(np.median(np.diff(np.asarray(result.r, float))) / a0)
+
+
+# -- analysis --------------------------------------------------------------
+
+def truncated_reference(case, results, scales) -> dict | None:
+    """Paper Fig. 3: each solver's unworn pressure against the quadrature reference.
+
+    Only for a truncated paraboloid at a stage with ŝ = 0. The pressure is
+    compared away from the edge (edge_band) and away from the singularity at
+    r = b (|r - b| < edge_band · a).
+    """
+    ind = case.indenter
+    if ind.profile != "truncated_paraboloid":
+        return None
+    E, R, b = case.E_star, ind.radius, ind.flat_radius
+    load = {case.loading.control: getattr(case.loading, case.loading.control)}
+    ref = reference.truncated_paraboloid(E, R, b, **load)
+    a = ref["contact_radius"]
+    cmp = case.compare
+    out = dict(flat_radius_over_a0=b / scales["a0"], contact_radius=a / scales["a0"],
+               force=ref["force"] / scales["F0"], solvers={})
+    for name, res in results.items():
+        if len(res.stage_s) == 0 or res.stage_s[0] != 0.0:
+            continue
+        r = np.asarray(res.r, float)
+        p_ref = reference.truncated_paraboloid_pressure(r, E, R, b, a)
+        a_run = float(metrics.at_stages(res.history["s"], res.history["contact_radius"],
+                                        res.stage_s[:1])[0])
+        F_run = float(metrics.at_stages(res.history["s"], res.history["force"],
+                                        res.stage_s[:1])[0])
+        interior, edge = metrics.edge_masks(r, a, a_run, cmp.edge_band)
+        near_b = np.abs(r - b) < cmp.edge_band * a
+        dp = (np.asarray(res.p[0], float) - p_ref) / scales["p0"]
+        row = dict(force=abs(F_run - ref["force"]) / scales["F0"],
+                   contact_radius=abs(a_run - a) / scales["a0"])
+        row["pressure_interior_max"], row["pressure_interior_rms"], _ = \
+            metrics.max_rms(dp[interior & ~near_b])
+        row["pressure_near_b_max"], _, _ = metrics.max_rms(dp[near_b])
+        row["pressure_edge_max"], _, _ = metrics.max_rms(dp[edge])
+        tol = metrics.verdict(dict(row, profile_max=0.0), dataclasses.asdict(cmp))
+        tol.pop("profile_max")
+        row["checks"] = tol
+        row["passed"] = all(c["passed"] for c in tol.values())
+        out["solvers"][name] = row
+    out["passed"] = bool(out["solvers"]) and all(v["passed"] for v in out["solvers"].values())
+    return out
+
+
+def pressure_exclusion(case, scales) -> dict:
+    """Where the pressure is infinite, a band left out of the interior pressure check."""
+    ind, cmp = case.indenter, case.compare
+    if ind.profile == "truncated_paraboloid":
+        # the solvers resolve the log singularity at r = b differently: leave it out
+        return dict(exclude_radius=ind.flat_radius, exclude_width=cmp.edge_band * scales["a0"])
+    if ind.profile == "cone" or (ind.profile == "power_law" and ind.exponent <= 1.0):
+        # p is infinite at a sharp tip (log for the cone): no grid value of it is comparable
+        return dict(exclude_radius=0.0, exclude_width=cmp.edge_band * scales["a0"])
+    return {}
+
+
+def analyse(case, results, reference_solver=None) -> dict:
+    """Every solver against the reference, as written to metrics.json.
+
+    ``results`` maps solver names to results; the reference is
+    ``reference_solver`` or the first key.
+    """
+    ref = reference_solver or next(iter(results))
+    sc = reference.scales(case)
+    depth = profile_scale(case, sc)
+    cmp = case.compare
+    exclude = pressure_exclusion(case, sc)
+    pairs = {}
+    for name, res in results.items():
+        if name == ref:
+            continue
+        pairs[name] = metrics.compare_results(
+            results[ref], res, s_hat_per_m=sc["s_hat_per_m"], a0=sc["a0"], F0=sc["F0"],
+            p0=sc["p0"], depth=depth, tolerances=dataclasses.asdict(cmp),
+            edge_band=cmp.edge_band, **exclude)
+    m = dict(reference=ref, solvers=list(results), pairs=pairs)
+    m["stages_compared"] = min((p["stages_compared"] for p in pairs.values()), default=0)
+    # a stage one solver reached and another did not is a disagreement, not a
+    # stage to skip: a solver that stops early must not pass on its first stages
+    reached = {k: len(v.stage_s) for k, v in results.items()}
+    for name, pair in pairs.items():
+        same = reached[name] == reached[ref]
+        pair["checks"] = dict(stages_reached=dict(value=reached[name], tolerance=reached[ref],
+                                                  passed=same))
+        pair["passed"] = bool(pair["passed"] and same)
+    m["passed"] = bool(pairs) and all(p["passed"] for p in pairs.values())
+    m["scales"] = sc
+    m["profile_scale_depth"] = depth
+    m["tolerances"] = dataclasses.asdict(cmp)
+    m["stages_requested_s_hat"] = list(case.stages.s_hat)
+    m["stages_reached"] = {k: len(v.stage_s) for k, v in results.items()}
+    m["solve_seconds"] = {k: float(v.solve_seconds) for k, v in results.items()}
+    m["grid_spacing_over_a0"] = {k: grid_spacing(v, sc["a0"]) for k, v in results.items()}
+    m["step_hat"] = {k: step_hat_used(v, sc["s_hat_per_m"]) for k, v in results.items()}
+    m["run_end"] = {k: dict(s_hat=float(v.history["s"][-1] * sc["s_hat_per_m"]),
+                            force=float(v.history["force"][-1] / sc["F0"]))
+                    for k, v in results.items()}
+    m["approximate"] = {k: v.info.get("approximate") for k, v in results.items()
+                        if v.info.get("approximate")}
+    tr = truncated_reference(case, results, sc)
+    if tr is not None:
+        m["truncated_reference"] = tr
+        m["passed"] = bool(m["passed"] and tr["passed"])
+    m["edge_peaks"] = {k: peaks_of(v, sc) for k, v in results.items()}
+    return m
+
+
+def peaks_of(result, sc) -> list[dict]:
+    """The edge peak of each stage of one run (contact radius from its history)."""
+    a = metrics.at_stages(result.history["s"], result.history["contact_radius"],
+                          result.stage_s)
+    peaks = edge_peak.stage_peaks(result.r, np.asarray(result.p), a)
+    for q, s in zip(peaks, result.stage_s):
+        q["s_hat"] = float(s * sc["s_hat_per_m"])
+    return peaks
+
+
+# -- the whole comparison ---------------------------------------------------
+
+def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=False,
+            sphere=False, sphere_ratios=None, solve=None, quiet=True, render=True) -> dict:
+    """Run the solvers on ``case`` and write the comparison directory ``out`` atomically.
+
+    Parameters
+    ----------
+    case : a loaded :class:`wearcheck.Case`.
+    out : the comparison directory (replaced only if it is a wearcheck output).
+    solvers : names of the solvers to compare (default: every registered solver
+        that supports the case); reference_solver : the one the others are
+        compared with (default "mdr").
+    edge, sphere : also run the edge-peak study and the finite-sphere sweep.
+
+    Returns the metrics (as in metrics.json); ``passed`` is the verdict.
+    """
+    from wearcheck.comparisons.present import compare_figures, compare_report, report
+    from wearcheck.comparisons.studies import edge_study as edge_mod
+    from wearcheck.comparisons.studies import sphere_sweep as sphere_mod
+    t0 = time.perf_counter()
+    solve = solve or solve_case
+    ref, names = choose_solvers(case, solvers, reference_solver)
+    results = run_solvers(case, names, solve=solve, quiet=quiet)
+    m = analyse(case, results, ref)
+    study = None
+    if edge:
+        study = edge_mod.edge_study(case, results, solve=solve, quiet=quiet)
+    sweep = None
+    if sphere:
+        sweep = sphere_mod.sphere_sweep(case, sphere_ratios or sphere_mod.SPHERE_RATIOS,
+                                        solve=solve, quiet=quiet)
+    prov = rundir.provenance(argv)
+    out = Path(out)
+    with rundir.atomic_directory(out) as tmp:
+        for name, res in results.items():
+            (tmp / name).mkdir()
+            rundir.write_run_files(tmp / name, case, res, name, argv)
+        figure_names = compare_figures.draw_figures(tmp, case, results, m)
+        if study is not None:
+            runs = study.pop("runs")
+            (tmp / "edge_study").mkdir()
+            for sub, (name, c, res) in runs.items():
+                (tmp / "edge_study" / sub).mkdir()
+                rundir.write_run_files(tmp / "edge_study" / sub, c,
+                                       dataclasses.replace(res, fields=None), name, argv)
+            curves = []
+            for n in study["solvers"]:
+                curves.append((f"{registry.get(n).title} case", n, results[n]))
+                curves += [(f"{registry.get(name).title} {sub.split('-', 1)[1]}", name, res)
+                           for sub, (name, c, res) in runs.items() if name == n]
+            study["figure"] = compare_figures.draw_edge_study(tmp, curves, m["scales"])
+            m["edge_study"] = study
+        if sweep is not None:
+            sweep["figure"] = compare_figures.draw_sphere_sweep(tmp, sweep)
+            m["sphere_sweep"] = sweep
+        notes = compare_figures.try_render([tmp / n for n in names])["notes"] if render else []
+        renders = compare_figures.find_renders(tmp, names)
+        m["renders"] = renders
+        m["render_notes"] = notes
+        m["provenance"] = prov
+        m["case_source"] = case.source
+        m["seconds_total"] = time.perf_counter() - t0
+        m["data_dictionary"] = layout.comparison_dictionary()
+        rundir.write_json(tmp / "metrics.json", m)
+        (tmp / "case.toml").write_text(cases.to_toml(case), encoding="utf-8")
+        blocks = compare_report.build_report(case, m, figure_names, renders, notes, prov)
+        report.write(tmp, blocks, f"wearcheck compare: {Path(case.source).name}")
+    return m

@@ -1,0 +1,117 @@
+"""Parameter sweeps on Dask (``wearcheck sweep``): one run per value of case keys.
+
+One run per value (the cartesian product of several ``--vary``), each in its
+own run directory in DIR, on the same Dask runner as ``wearcheck refine``;
+``sweep.csv`` summarises them. Values are written as for ``--set``; a value
+the case rejects, or a run that fails, is a row with its error.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+from pathlib import Path
+
+from wearcheck import cases
+from wearcheck.cases.case import parse_override
+from wearcheck.cases.reference import scales as case_scales
+from wearcheck.cases.schema import section_fields
+from wearcheck.comparisons.studies.distributed import Task, fmt, record_study, run_cases
+from wearcheck.comparisons.rundir import provenance, write_text_atomic
+
+
+def split_values(text: str) -> list[str]:
+    """Split at commas outside brackets and quotes: ``[0, 1],[2]`` is two values."""
+    values, depth, quote, cur = [], 0, None, ""
+    for ch in text:
+        if quote:
+            quote = None if ch == quote else quote
+        elif ch in "\"'":
+            quote = ch
+        elif ch == "[":
+            depth += 1
+        elif ch == "]":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            values.append(cur.strip())
+            cur = ""
+            continue
+        cur += ch
+    values.append(cur.strip())
+    return values
+
+
+def parse_vary(text: str) -> tuple[str, list[str]]:
+    """``section.key=v1,v2`` -> (``section.key``, [``v1``, ``v2``]), checked like ``--set``."""
+    if "=" not in text:
+        raise cases.CaseError(f"--vary '{text}': expected section.key=v1,v2,...")
+    name, _, rest = text.partition("=")
+    name = name.strip()
+    values = split_values(rest)
+    if not all(values):
+        raise cases.CaseError(f"--vary '{text}': an empty value")
+    for v in values:
+        section, key, _ = parse_override(f"{name}={v}")
+    if key not in {n for n, _ in section_fields(section)}:
+        raise cases.CaseError(f"--vary '{text}': unknown key '{name}'; allowed in [{section}]: "
+                              + ", ".join(n for n, _ in section_fields(section)))
+    return name, values
+
+
+def _dir_part(text: str) -> str:
+    return re.sub(r"[^A-Za-z0-9._+-]+", "_", text).strip("_") or "_"
+
+
+def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=None,
+          quiet=False, solve=None, case=None) -> list[dict]:
+    """Run every combination of the varied values into ``out``; return sweep.csv's rows."""
+    case = case or cases.load(case_path, overrides)
+    from wearcheck.comparisons import registry
+    registry.get(solver)  # an unknown solver is refused before the cluster starts
+    varied = [parse_vary(v) for v in vary]
+    names = [n for n, _ in varied]
+    if len(set(names)) != len(names):
+        raise cases.CaseError("--vary names a key twice: " + ", ".join(names))
+    both = set(names) & {o.partition("=")[0].strip() for o in overrides}
+    if both:
+        raise cases.CaseError(f"key {sorted(both)[0]} is both in --set and --vary")
+    tasks = []
+    for combo in itertools.product(*(vals for _, vals in varied)):
+        run = "-".join([solver] + [f"{n}-{_dir_part(v)}" for n, v in zip(names, combo)])
+        tasks.append(Task(run, solver, tuple(f"{n}={v}" for n, v in zip(names, combo))))
+    if len({t.name for t in tasks}) != len(tasks):
+        tasks = [Task(f"{t.name}-{i}", t.solver, t.overrides) for i, t in enumerate(tasks)]
+    prov = provenance()
+    out = Path(out)
+    outcomes = run_cases(case_path, overrides, tasks, out, scheduler=scheduler, workers=workers,
+                         quiet=quiet, solve=solve, extra_meta=dict(study=f"sweep-{solver}"))
+    rows = []
+    for t, o in zip(tasks, outcomes):
+        row = dict(run=t.name)
+        row.update({n: o.partition("=")[2] for n, o in zip(names, t.overrides)})
+        row.update(status=o.status, wall_seconds=o.wall_seconds, cpu_seconds=o.cpu_seconds,
+                   solve_seconds=o.result.solve_seconds if o.ok else math.nan,
+                   peak_rss_mb=o.peak_rss_mb)
+        final = dict(steps=None, final_s=math.nan, final_s_hat=math.nan, final_F_over_F0=math.nan,
+                     final_wear_center_over_d0=math.nan, final_contact_radius_over_a0=math.nan)
+        if o.ok:
+            h, sc = o.result.history, case_scales(o.case)
+            final.update(steps=len(h["s"]) - 1, final_s=float(h["s"][-1]),
+                         final_s_hat=float(h["s"][-1]) * sc["s_hat_per_m"],
+                         final_F_over_F0=float(h["force"][-1]) / sc["F0"],
+                         final_wear_center_over_d0=float(h["wear_center"][-1]) / sc["d0"],
+                         final_contact_radius_over_a0=float(h["contact_radius"][-1]) / sc["a0"])
+        row.update(final)
+        rows.append(row)
+    record_study(out, f"sweep-{solver}", case, overrides, prov)
+    head = [f"# wearcheck sweep, solver {solver}: {', '.join(names)}",
+            f"# command: {prov['command']}",
+            f"# git revision: {prov['git_revision']}; versions and resolved case: meta.json",
+            "# final_*: end of each run, in that run's own scales (d0, a0, F0 of its unworn "
+            "contact); peak_rss_mb: worker process RSS sampled every 10 ms during the task",
+            ",".join(rows[0])]
+    body = [",".join('"' + v.replace('"', "'") + '"' if isinstance(v, str) else fmt(v, ".10g")
+                     for v in r.values()) for r in rows]
+    write_text_atomic(out / "sweep.csv", "\n".join(head + body) + "\n")
+    return rows

@@ -1,0 +1,161 @@
+"""The Python API as a notebook uses it: what it accepts, what it refuses, and that it
+says so (found by a reviewer trying it as a new user)."""
+
+import numpy as np
+import pytest
+
+import wearcheck
+from wearcheck import cases
+import wearcheck.cases.schema  # noqa: F401
+from wearcheck.cases import RunResult
+from wearcheck.registry import Solver, register, unregister
+
+
+def test_progress_callable_receives_the_fraction():
+    seen = []
+    wearcheck.solve(wearcheck.load_case("hertz", {"mdr.elements": 100}), "mdr",
+                    progress=seen.append)
+    assert seen and seen[-1] == 1.0 and all(0.0 <= f <= 1.0 for f in seen)
+
+
+def test_numpy_values_are_taken_as_python_values():
+    case = wearcheck.load_case("paper", {"mdr.elements": np.int64(400),
+                                         "wear.mu": np.float32(0.25),
+                                         "stages.s_hat": np.array([0.0, 1.0])})
+    assert case.mdr.elements == 400 and case.stages.s_hat == (0.0, 1.0)
+    assert case.wear.mu == pytest.approx(0.25)
+
+
+def test_keyword_changes_win_over_a_mapping_and_a_list_alike():
+    case = wearcheck.load_case("paper")
+    assert case.derive({"wear.mu": 0.4}, wear__mu=0.6).wear.mu == 0.6
+    assert case.derive(["wear.mu=0.4"], wear__mu=0.6).wear.mu == 0.6
+
+
+def test_a_relative_table_file_is_relative_to_the_working_directory(tmp_path, monkeypatch):
+    r = np.linspace(0, 4e-4, 41)
+    (tmp_path / "prof.csv").write_text("\n".join(f"{a:.17g},{a * a / 0.02:.17g}" for a in r))
+    monkeypatch.chdir(tmp_path)
+    case = wearcheck.load_case("paper", {"indenter.profile": "table",
+                                         "indenter.file": "prof.csv"})
+    assert case.table is not None and len(case.table[0]) == 41
+
+
+def test_unreached_stages_are_said(recwarn):
+    case = wearcheck.load_case("hertz", {"mdr.elements": 100, "stages.s_hat": [0.0, 5.0]})
+    result = wearcheck.solve(case, "mdr")  # hertz.toml does not slide: ŝ = 5 is never reached
+    assert len(result.stages["s"]) == 1
+    assert any("ŝ = 5" in w for w in result.warnings)
+    assert any("ŝ = 5" in str(w.message) for w in recwarn)
+
+
+def test_result_repr_is_one_line():
+    text = repr(wearcheck.solve(wearcheck.load_case("hertz", {"mdr.elements": 100}), "mdr"))
+    assert "\n" not in text and len(text) < 200 and "solver='mdr'" in text
+
+
+def test_read_run_of_a_missing_directory(tmp_path):
+    with pytest.raises(cases.CaseError, match="does not exist"):
+        wearcheck.read_run(tmp_path / "nothing")
+
+
+def test_compare_names_solvers_as_a_string_or_list(tmp_path):
+    with pytest.raises(cases.CaseError, match="only fem can.*mdr: not selected"):
+        wearcheck.compare("hertz", tmp_path / "a", solvers="fem")
+    with pytest.raises(cases.CaseError, match="solvers = \\[\\]"):
+        wearcheck.compare("hertz", tmp_path / "b", solvers=[])
+    with pytest.raises(cases.CaseError, match="reference solver 'mdr': not among"):
+        wearcheck.compare("hertz", tmp_path / "c", solvers=["fem", "fem"],
+                          reference_solver="mdr")
+
+
+def _early(case, progress=None):
+    """A solver that stops after its first stage, whatever the case asks."""
+    real = wearcheck.registry.get("mdr").solve(case)
+    return RunResult(history={k: v[:1] for k, v in real.history.items()},
+                     stage_s=real.stage_s[:1], r=real.r, f=real.f[:1], p=real.p[:1],
+                     solve_seconds=0.0)
+
+
+def test_a_solver_that_stops_early_fails_the_comparison(tmp_path):
+    register(Solver(name="early", title="Early", solve_function=_early))
+    try:
+        case = wearcheck.load_case("paper", {"mdr.elements": 200,
+                                             "stages.s_hat": [0.0, 0.5, 1.0]})
+        m = wearcheck.compare(case, tmp_path / "cmp", solvers=["mdr", "early"], render=False)
+    finally:
+        unregister("early")
+    # its first stage is MDR's own, so every difference there is zero ...
+    assert m["pairs"]["early"]["stages"][0]["passed"]
+    # ... but it reached 1 of 3 stages: that alone fails
+    assert not m["passed"]
+    assert m["pairs"]["early"]["checks"]["stages_reached"] == dict(value=1, tolerance=3,
+                                                                    passed=False)
+    assert "reached 1 stage(s), MDR 3" in (tmp_path / "cmp" / "report.md").read_text()
+
+
+def test_plugins_are_checked():
+    with pytest.raises(ValueError, match="lower-case"):
+        register(Solver(name="bad name/with slash", title="x", solve_function=_early))
+    with pytest.raises(ValueError, match="not declared in cases/schema.py"):
+        register(Solver(name="sec", title="x", section="sec", solve_function=_early))
+    register(Solver(name="none", title="None", solve_function=lambda c, progress=None: None))
+    try:
+        with pytest.raises(TypeError, match="returned NoneType, not a wearcheck RunResult"):
+            wearcheck.solve("hertz", "none")
+    finally:
+        unregister("none")
+
+
+def test_undeclared_history_columns_are_listed_in_the_dictionary(tmp_path):
+    def extra(case, progress=None):
+        r = wearcheck.registry.get("mdr").solve(case)
+        r.history["my_extra"] = np.zeros_like(r.history["s"])
+        return r
+    register(Solver(name="extra", title="Extra", solve_function=extra))
+    try:
+        path = wearcheck.solve(wearcheck.load_case("hertz", {"mdr.elements": 100}),
+                               "extra").write(tmp_path / "run")
+    finally:
+        unregister("extra")
+    d = wearcheck.read_run(path).meta["data_dictionary"]["history_csv"]
+    assert "not declared" in d["my_extra"]["meaning"]
+
+
+def test_studies_refuse_bad_input_before_starting_dask(tmp_path, monkeypatch):
+    from wearcheck.comparisons.studies import distributed
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a Dask cluster was started")
+    monkeypatch.setattr(distributed, "_Client", no_cluster)
+    for kwargs, pattern in (
+            (dict(levels=[100.5, 200]), "100.5 is not a whole number"),
+            (dict(levels=[200]), "at least two levels"),
+            (dict(levels=[1, 200]), r"mdr\.elements.*= 1"),
+            (dict(levels=np.array([100, 200]), solver="nope"), "solver 'nope'")):
+        with pytest.raises(cases.CaseError, match=pattern):
+            wearcheck.refine("hertz", tmp_path / "r", **kwargs)
+    for vary, pattern in (({"wear.mu": -1.0}, r"wear\.mu.*> 0"),
+                          ({"sliding.scheme": "bdf3"}, r"sliding\.scheme.*\"bdf3\"")):
+        with pytest.raises(cases.CaseError, match=pattern):
+            wearcheck.sweep("hertz", vary, tmp_path / "s")
+    with pytest.raises(cases.CaseError, match="solver 'nope'"):
+        wearcheck.sweep("hertz", {"wear.mu": 0.3}, tmp_path / "s", solver="nope")
+    assert not (tmp_path / "r").exists() and not (tmp_path / "s").exists()
+
+
+def test_sweep_values_are_single_values_and_come_back_typed(tmp_path):
+    rows = wearcheck.sweep(wearcheck.load_case("hertz", {"mdr.elements": 100}),
+                           {"sliding.scheme": "bdf2", "wear.mu": 0.3}, tmp_path / "s",
+                           workers=1)
+    assert len(rows) == 1 and rows[0]["status"] == "ok"
+    assert rows[0]["sliding.scheme"] == "bdf2" and rows[0]["wear.mu"] == 0.3
+
+
+@pytest.mark.parametrize("name", sorted(wearcheck.shipped_cases()))
+def test_every_shipped_case_derives_to_itself(name):
+    """A derived case with nothing changed is the case (to_dict inverts from_dict)."""
+    case = wearcheck.load_case(name)
+    same = case.derive({"wear.mu": case.wear.mu})
+    for section in cases.schema.SECTIONS:
+        assert getattr(same, section) == getattr(case, section), section
