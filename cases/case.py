@@ -17,7 +17,7 @@ from .schema import (BEMSettings, OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUI
                      SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
                      Loading,
                      MDRSettings, Sliding, Stages, Wear, _fmt, build_section,
-                     section_fields)
+                     section_fields, toml_string)
 
 
 @dataclass(frozen=True)
@@ -180,8 +180,8 @@ def parse_override(text: str) -> tuple[str, str, Any]:
     return section, k, parsed
 
 
-def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Case:
-    """Read a case file, apply ``section.key=value`` overrides, validate."""
+def read_raw(path: str | Path) -> dict:
+    """The TOML tables of a case file, unvalidated; every failure a one-line CaseError."""
     path = Path(path)
     if path.is_dir():
         raise CaseError(f"case file '{path}' is a directory, not a TOML file")
@@ -189,12 +189,21 @@ def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Case:
         raise CaseError(f"case file '{path}' does not exist")
     try:
         # utf-8-sig: editors on some systems start the file with a byte-order mark
-        raw = tomllib.loads(path.read_text(encoding="utf-8-sig"))
+        return tomllib.loads(path.read_text(encoding="utf-8-sig"))
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"case file '{path}': TOML syntax error: {exc}") from None
     except UnicodeDecodeError as exc:
         raise CaseError(f"case file '{path}' is not UTF-8 text: {exc}") from None
-    return from_dict(raw, source=path, overrides=overrides)
+    except OSError as exc:
+        raise CaseError(f"case file '{path}' cannot be read: {exc.strerror or exc}") from None
+    except RecursionError:
+        raise CaseError(f"case file '{path}': nested too deeply to be a case") from None
+
+
+def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Case:
+    """Read a case file, apply ``section.key=value`` overrides, validate."""
+    path = Path(path)
+    return from_dict(read_raw(path), source=path, overrides=overrides)
 
 
 def from_dict(raw: dict, source: str | Path = "<dict>",
@@ -298,22 +307,30 @@ def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
     if not file.is_file():
         raise CaseError(f"key '{name}' = \"{file}\": file does not exist")
     rows = []
-    with open(file, newline="", encoding="utf-8") as fh:
-        for lineno, row in enumerate(csv.reader(fh), start=1):
-            row = [c.strip() for c in row if c.strip()]
-            if not row or row[0].startswith("#"):
-                continue
-            try:
-                values = [float(c) for c in row]
-            except ValueError:
-                if not rows and lineno == 1:
-                    continue  # header line
-                raise CaseError(f"key '{name}' = \"{file}\": line {lineno} is not two numbers: "
-                                f"{','.join(row)}") from None
-            if len(values) != 2:
-                raise CaseError(f"key '{name}' = \"{file}\": line {lineno} has {len(values)} "
-                                "columns; expected 2 (r, f)")
-            rows.append(values)
+    try:
+        # utf-8-sig: a byte-order mark would otherwise glue onto the first number
+        with open(file, newline="", encoding="utf-8-sig") as fh:
+            lines = list(csv.reader(fh))
+    except UnicodeDecodeError as exc:
+        raise CaseError(f"key '{name}' = {_fmt(str(file))}: not UTF-8 text ({exc.reason} at "
+                        f"byte {exc.start}); save the table as UTF-8") from None
+    except (OSError, csv.Error) as exc:
+        raise CaseError(f"key '{name}' = {_fmt(str(file))}: cannot be read: {exc}") from None
+    for lineno, row in enumerate(lines, start=1):
+        row = [c.strip() for c in row if c.strip()]
+        if not row or row[0].startswith("#"):
+            continue
+        try:
+            values = [float(c) for c in row]
+        except ValueError:
+            if not rows and lineno == 1:
+                continue  # header line
+            raise CaseError(f"key '{name}' = \"{file}\": line {lineno} is not two numbers: "
+                            f"{','.join(row)}") from None
+        if len(values) != 2:
+            raise CaseError(f"key '{name}' = \"{file}\": line {lineno} has {len(values)} "
+                            "columns; expected 2 (r, f)")
+        rows.append(values)
     if len(rows) < 3:
         raise CaseError(f"key '{name}' = \"{file}\": needs at least 3 rows (r, f), got {len(rows)}")
     data = np.array(rows)
@@ -321,14 +338,14 @@ def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
     if not np.all(np.isfinite(data)):
         raise CaseError(f"key '{name}' = \"{file}\": contains NaN or inf")
     if r[0] != 0.0:
-        raise CaseError(f"key '{name}' = \"{file}\": the first radius must be 0, got {r[0]!r}")
+        raise CaseError(f"key '{name}' = \"{file}\": the first radius must be 0, got {float(r[0])!r}")
     if np.any(np.diff(r) <= 0):
         i = int(np.argmax(np.diff(r) <= 0))
         raise CaseError(f"key '{name}' = \"{file}\": radii must increase strictly; "
-                        f"row {i + 2} has r = {r[i + 1]!r} after r = {r[i]!r}")
+                        f"row {i + 2} has r = {float(r[i + 1])!r} after r = {float(r[i])!r}")
     if f[0] != 0.0:
         raise CaseError(f"key '{name}' = \"{file}\": the profile must start at f(0) = 0 "
-                        f"(the unworn tip), got {f[0]!r}")
+                        f"(the unworn tip), got {float(f[0])!r}")
     if np.any(f[1:] <= 0):
         raise CaseError(f"key '{name}' = \"{file}\": f must be positive for r > 0 "
                         "(the tip at r = 0 touches first)")
@@ -447,7 +464,8 @@ def _warnings(case: Case) -> tuple[str, ...]:
 
 def to_toml(case: Case) -> str:
     """The resolved case, every default filled in, as TOML text."""
-    lines = [f"# resolved case, read from {case.source}"]
+    # the source in TOML string form: a newline in a file name must not end the comment
+    lines = [f"# resolved case, read from {toml_string(str(case.source))}"]
     for section in SECTIONS:
         obj = getattr(case, section)
         if obj is None:

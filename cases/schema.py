@@ -309,9 +309,34 @@ def _base_types(annotation) -> tuple:
     return (tp,)
 
 
+_TOML_ESCAPES = {'"': '\\"', "\\": "\\\\", "\b": "\\b", "\t": "\\t", "\n": "\\n",
+                 "\f": "\\f", "\r": "\\r"}
+
+
+def toml_string(text: str) -> str:
+    """``text`` as a TOML basic string: quoted, with every character TOML forbids escaped.
+
+    TOML basic strings may not hold ``"``, ``\\``, U+0000-U+001F or U+007F
+    unescaped. A lone surrogate (a file name that was not valid UTF-8) has no
+    TOML form and becomes U+FFFD.
+    """
+    out = []
+    for ch in text:
+        code = ord(ch)
+        if ch in _TOML_ESCAPES:
+            out.append(_TOML_ESCAPES[ch])
+        elif code < 0x20 or code == 0x7F:
+            out.append(f"\\u{code:04X}")
+        elif 0xD800 <= code <= 0xDFFF:
+            out.append("\ufffd")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
+
+
 def _fmt(value) -> str:
     if isinstance(value, str):
-        return f'"{value}"'
+        return toml_string(value)
     if isinstance(value, bool):
         return "true" if value else "false"
     return repr(value)

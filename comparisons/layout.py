@@ -36,7 +36,9 @@ RUN_FILES = (
     Item("meta.json", "", "scales, solver info, warnings, provenance and this data dictionary"),
     Item("fields.npz", "", "the solver's own arrays per stage, when it has any (its registry "
                            "entry's fields)"),
-    Item(".wearcheck-output", "", "marks a wearcheck output: only such a path is ever replaced"),
+    Item(".wearcheck-output", "", "ownership marker, JSON: kind (run, comparison, study, vtk, "
+                                  "render), complete, writer pid and host; only such a path is "
+                                  "ever replaced, and only by the same kind"),
 )
 
 #: history.csv columns every solver writes, in this order

@@ -34,60 +34,8 @@ DEPENDENCIES = ("numpy", "scipy", "scikit-fem", "meshio", "gmsh", "pyvista", "ma
                 "dask", "distributed")
 
 
-#: written into every directory ``atomic_directory`` creates: what may be replaced
-OUTPUT_MARKER = ".wearcheck-output"
-
-
-def _is_output(path: Path) -> bool:
-    # meta.json / metrics.json: run, study and comparison directories, also those
-    # written before the marker existed
-    return any((path / name).is_file() for name in (OUTPUT_MARKER, "meta.json", "metrics.json"))
-
-
-def _replaceable(path: Path) -> bool:
-    """An existing ``path`` may be replaced only if it is a wearcheck output, a part
-    of one (e.g. RUN_DIR/vtk), or empty."""
-    if not path.is_dir():
-        return False
-    return _is_output(path) or _is_output(path.parent) or not any(path.iterdir())
-
-
-@contextlib.contextmanager
-def atomic_directory(path: str | Path):
-    """Yield a fresh temporary directory that replaces ``path`` on success.
-
-    On an exception (or interrupt) the temporary directory is removed and
-    ``path`` is left as it was. An existing ``path`` that is not a wearcheck
-    output (a file, or a directory with other content) is refused, never deleted.
-    """
-    path = Path(path).absolute()
-    if path.exists() and not _replaceable(path):
-        raise cases.CaseError(f"output '{path}' exists and is not a wearcheck output; "
-                              "choose another output path or remove it yourself")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
-    os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; outputs are shared like any dir
-    try:
-        yield tmp
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    if not _is_output(path.parent):  # parts of an output need no marker of their own
-        (tmp / OUTPUT_MARKER).write_text("written by wearcheck; this directory may be "
-                                         "replaced by the next run with the same output path\n")
-    old = None
-    if path.exists():
-        old = Path(tempfile.mkdtemp(prefix=f".{path.name}.old-", dir=path.parent))
-        os.rename(path, old / path.name)
-    os.rename(tmp, path)
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
+# output safety lives in comparisons.outputs; these names are kept for their users
+from wearcheck.comparisons.outputs import OUTPUT_MARKER, _umask, atomic_directory  # noqa: E402,F401
 
 
 def write_text_atomic(path: str | Path, text: str) -> None:
@@ -218,7 +166,7 @@ def _registered(solver: str):
 def write_run(out: str | Path, case: cases.Case, result: RunResult, solver: str,
               argv=None, extra_meta: dict | None = None) -> Path:
     """Write a complete run directory at ``out`` atomically."""
-    with atomic_directory(out) as tmp:
+    with atomic_directory(out, "run") as tmp:
         write_run_files(tmp, case, result, solver, argv, extra_meta)
     return Path(out)
 
@@ -229,19 +177,28 @@ class Run:
     """A run directory read back: case, history, stages, meta."""
 
     def __init__(self, path: str | Path):
+        from wearcheck.comparisons.outputs import is_partial
         self.path = Path(path)
+        if is_partial(self.path):
+            raise cases.CaseError(f"'{self.path}' is an incomplete run directory (a .partial "
+                                  "directory of a wearcheck process that was stopped or is "
+                                  "still writing); use the complete run")
         meta = self.path / "meta.json"
         if not meta.is_file():
-            raise cases.WearcheckError(f"'{self.path}' is not a complete run directory "
-                                       "(no meta.json)")
-        self.meta = json.loads(meta.read_text(encoding="utf-8"))
+            raise cases.CaseError(f"'{self.path}' is not a complete run directory "
+                                  "(no meta.json)")
+        self.meta = _read(meta, lambda p: json.loads(p.read_text(encoding="utf-8")))
+        if not isinstance(self.meta, dict) or not isinstance(self.meta.get("scales"), dict):
+            raise cases.CaseError(f"run directory file '{meta}' is damaged (no scales)")
         self.case = cases.load(self.path / "case.toml")
-        data = np.genfromtxt(self.path / "history.csv", delimiter=",", names=True)
-        self.history = {n: np.atleast_1d(data[n]) for n in data.dtype.names}
-        with np.load(self.path / "stages.npz") as z:
-            self.stages = {k: z[k] for k in z.files}
+        self.history = _read(self.path / "history.csv", _read_history)
+        self.stages = _read(self.path / "stages.npz", _read_npz)
+        missing = {"s", "s_hat", "r", "f", "p"} - set(self.stages)
+        if missing:
+            raise cases.CaseError(f"run directory file '{self.path / 'stages.npz'}' is damaged: "
+                                  f"no {', '.join(sorted(missing))}")
         fields = self.path / "fields.npz"
-        self.fields = dict(np.load(fields)) if fields.is_file() else None
+        self.fields = _read(fields, _read_npz) if fields.is_file() else None
 
     @property
     def scales(self) -> dict:
@@ -250,3 +207,29 @@ class Run:
     @property
     def solver(self) -> str:
         return self.meta["solver"]
+
+
+def _read_history(path: Path) -> dict:
+    data = np.genfromtxt(path, delimiter=",", names=True)
+    if data.dtype.names is None or "s" not in data.dtype.names:
+        raise ValueError("no header with a column 's'")
+    return {n: np.atleast_1d(data[n]) for n in data.dtype.names}
+
+
+def _read_npz(path: Path) -> dict:
+    with np.load(path, allow_pickle=False) as z:
+        return {k: z[k] for k in z.files}
+
+
+def _read(path: Path, reader):
+    """``reader(path)``, any failure to read or parse it as one line naming the file."""
+    if not path.is_file():
+        raise cases.CaseError(f"run directory file '{path}' is missing")
+    try:
+        return reader(path)
+    except cases.WearcheckError:
+        raise
+    except Exception as exc:  # zipfile, numpy, json, OS: all mean a damaged file
+        text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise cases.CaseError(f"run directory file '{path}' is damaged or truncated "
+                              f"({text})") from None

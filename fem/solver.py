@@ -9,7 +9,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from wearcheck import meshes
-from wearcheck.cases import CaseError, RunResult, reference
+from wearcheck.cases import CaseError, SolverError, RunResult, reference
 from wearcheck.cases.profiles import height
 
 from . import wear
@@ -168,12 +168,20 @@ def _solve(case, progress=None) -> RunResult:
     else:
         center[0] = 1.0
 
-    limit = wear.explicit_limit(C, area, rate)
-    n_exp = case.wear.pressure_exponent
-    if n_exp != 1.0:
-        # the rate's derivative n (p/σ0)^(n-1) scales the stiffness; bound p by 1.5 p0
-        limit /= n_exp * (1.5 * p0 / case.wear.hardness) ** (n_exp - 1.0)
-    limit_hat = limit * per_m
+    with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+        limit = wear.explicit_limit(C, area, rate) if np.all(np.isfinite(C)) else math.nan
+        n_exp = case.wear.pressure_exponent
+        if n_exp != 1.0:
+            # the rate's derivative n (p/σ0)^(n-1) scales the stiffness; bound p by 1.5 p0
+            limit /= n_exp * (1.5 * p0 / case.wear.hardness) ** (n_exp - 1.0)
+        limit_hat = limit * per_m
+    if not (math.isfinite(limit_hat) and limit_hat > 0 and np.all(np.isfinite(C))):
+        # extreme moduli (e.g. E1 = 1e-300 Pa): the compliance or the wear rate
+        # leaves floating point, and every later step would be meaningless
+        raise SolverError(f"the contact compliance of this case is not representable in "
+                          f"floating point (indenter.youngs_modulus = "
+                          f"{case.indenter.youngs_modulus!r} Pa, stability limit "
+                          f"{float(limit_hat)!r} in ŝ); the FEM cannot run it")
     adaptive = sl.scheme == "adaptive"
     if adaptive:
         step_hat = math.inf if sl.step_hat == "auto" else float(sl.step_hat)

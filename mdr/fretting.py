@@ -36,6 +36,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from wearcheck.cases import CaseError, RunResult, SolverError, profiles, reference
+from wearcheck.cases.result import scar_radius
 
 from . import contact, linalg, tangential, transforms
 
@@ -220,8 +221,9 @@ def stick_radius(model: Model, st: State, acc: dict, ramp: bool) -> float:
 
 
 HISTORY_KEYS = ("cycles", "s", "force", "depth", "contact_radius", "wear_center", "wear_volume",
-                "tangential_force_amplitude", "displacement_amplitude", "stick_radius",
-                "dissipated_energy", "dissipated_energy_1d", "energy_per_cycle", "max_pressure")
+                "scar_radius", "tangential_force_amplitude", "displacement_amplitude",
+                "stick_radius", "dissipated_energy", "dissipated_energy_1d", "energy_per_cycle",
+                "max_pressure")
 
 
 def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> dict:
@@ -250,6 +252,7 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
         hist["contact_radius"].append(n["contact_radius"])
         hist["wear_center"].append(w[0])
         hist["wear_volume"].append(transforms.volume(w, model.dt))
+        hist["scar_radius"].append(scar_radius(model.x, w))
         hist["tangential_force_amplitude"].append(acc["Q_amp"])
         hist["displacement_amplitude"].append(acc["u_amp"] if not ramp else abs(st.u))
         hist["stick_radius"].append(stick_radius(model, st, acc, ramp))

@@ -212,10 +212,10 @@ def sphere_mesh(params: SphereMeshParameters, use_cache: bool = True) -> SphereM
     msh, npz = directory / f"{stem}.msh", directory / f"{stem}.npz"
     if use_cache and npz.is_file() and msh.is_file():
         try:
-            with np.load(npz) as z:
+            with np.load(npz, allow_pickle=False) as z:
                 return _from_arrays({k: z[k] for k in z.files}, params, msh)
-        except (OSError, ValueError, KeyError):
-            pass  # a damaged entry: regenerate it
+        except Exception:  # zipfile.BadZipFile, EOFError, OSError, ValueError, KeyError
+            pass  # a damaged (e.g. truncated) entry: regenerate it
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as exc:

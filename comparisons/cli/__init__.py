@@ -2,16 +2,44 @@
 
 Each module in this package defines ``add_parser(subparsers)`` (which returns
 its parser) and ``main(args)`` (which returns an exit code).
+
+Exit codes: 0 success; 1 a failed comparison or study level; 2 bad input (a
+case, an option, an output path wearcheck may not write); 3 a numerical
+failure; 4 a file could not be written or read (disk full, permissions, I/O
+error: nothing incomplete is left); 70 an internal error (a bug: one line,
+``WEARCHECK_TRACEBACK=1`` shows the traceback); 130 interrupted (SIGINT);
+143 terminated (SIGTERM).
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import pkgutil
+import signal
 import sys
+import warnings
 
 from wearcheck.cases import WearcheckError
+
+#: exit codes beyond those of the WearcheckError classes
+EXIT_IO, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_TERMINATED = 4, 70, 130, 143
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, handled like SIGINT: whatever is being written is abandoned cleanly."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
+def _one_line(text: str) -> str:
+    """A message as one printable line: whitespace runs collapsed, control
+    characters (e.g. from a fuzzed key name) shown as escapes, not sent to the terminal."""
+    text = " ".join(str(text).split())
+    return "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in text)
 
 
 def _subcommands():
@@ -20,8 +48,15 @@ def _subcommands():
             yield importlib.import_module(f"{__name__}.{info.name}")
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with its usage errors on one line (exit 2), like every other error."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {_one_line(message)} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="wearcheck",
         description="Gross-slip Reye-Archard wear of axisymmetric contacts: MDR and FEM, "
                     "cross-checked.")
@@ -44,14 +79,48 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     from wearcheck.comparisons.rundir import set_command
     set_command(["wearcheck", *argv])
+    name = f"wearcheck {args.command}"
+    previous = None
     try:
-        return int(args._main(args) or 0)
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    except ValueError:  # not the main thread (e.g. called from a test's thread)
+        pass
+    try:
+        with warnings.catch_warnings():
+            # library warnings (numpy overflow inside a solver that then reports
+            # the failure itself, Dask, pyvista) are not the user's business;
+            # wearcheck's own remarks are printed as "note:" lines
+            warnings.simplefilter("ignore")
+            os.environ.setdefault("PYTHONWARNINGS", "ignore")  # Dask worker processes
+            return int(args._main(args) or 0)
     except WearcheckError as exc:
-        print(f"wearcheck {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{name}: error: {_one_line(exc)}", file=sys.stderr)
         return exc.exit_code
+    except Terminated:
+        print(f"{name}: terminated; nothing incomplete was written", file=sys.stderr)
+        return EXIT_TERMINATED
     except KeyboardInterrupt:
-        print(f"wearcheck {args.command}: interrupted; nothing was written", file=sys.stderr)
-        return 130
+        print(f"{name}: interrupted; nothing was written", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except MemoryError:
+        print(f"{name}: error: out of memory; nothing was written (reduce the resolution)",
+              file=sys.stderr)
+        return EXIT_IO
+    except OSError as exc:
+        where = f" '{exc.filename}'" if getattr(exc, "filename", None) else ""
+        print(f"{name}: error: cannot write or read{where}: "
+              f"{_one_line(exc.strerror or exc)}; nothing incomplete was left",
+              file=sys.stderr)
+        return EXIT_IO
+    except Exception as exc:
+        if os.environ.get("WEARCHECK_TRACEBACK"):
+            raise
+        print(f"{name}: internal error: {type(exc).__name__}: {_one_line(exc)[:300]} "
+              "(a bug in wearcheck; WEARCHECK_TRACEBACK=1 shows where)", file=sys.stderr)
+        return EXIT_INTERNAL
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

@@ -2,11 +2,8 @@
 
 from __future__ import annotations
 
-import shutil
 import sys
 from pathlib import Path
-
-from wearcheck.cases import CaseError
 
 from ._common import add_case_arguments, load_case
 
@@ -26,7 +23,12 @@ def main(args) -> int:
 
     from wearcheck.fem.solver import mesh_parameters
 
+    from wearcheck.comparisons.outputs import check_output_file, write_file
     case = load_case(args)
+    if args.out is not None:
+        check_output_file(args.out, "mesh")  # before meshing
+    from wearcheck.comparisons.resources import check_memory
+    check_memory(case, "fem")  # the mesh is the FEM's: refuse one it could never solve
     params = mesh_parameters(case)
     mesh = meshes.sphere_mesh(params)
     order = case.fem.element_order
@@ -38,16 +40,7 @@ def main(args) -> int:
         n_edges = (3 * len(mesh.triangles) + sum(len(v) for k, v in mesh.lines.items())) // 2
         nodes += n_edges
     if args.out is not None:
-        out = Path(args.out)
-        if out.is_dir():
-            raise CaseError(f"--out '{out}' is a directory; give the path of the .msh file")
-        out.parent.mkdir(parents=True, exist_ok=True)
-        tmp = out.with_name(f".{out.name}.partial")
-        try:
-            shutil.copyfile(mesh.path, tmp)
-            tmp.replace(out)
-        finally:
-            tmp.unlink(missing_ok=True)
+        write_file(args.out, mesh.path, "mesh")
     a0 = reference.scales(case)["a0"]
     print(f"mesh: {len(mesh.points)} vertices, {len(mesh.triangles)} triangles; "
           f"order {order}: {nodes} nodes, {2 * nodes} DOFs; {contact_nodes} contact nodes on "

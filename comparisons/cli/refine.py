@@ -81,9 +81,13 @@ def main(args) -> int:
                          steps=args.steps, tolerance=args.tolerance, stage=args.stage,
                          scheduler=args.scheduler, workers=args.workers, quiet=args.quiet,
                          case=case)
-    except KeyboardInterrupt:
-        print(f"wearcheck refine: interrupted; the levels finished are in {out}, "
-              "no summary was written", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        from . import Terminated
+        written = getattr(exc, "summary_written", False)
+        print(f"wearcheck refine: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}"
+              f"; the levels finished are in {out}, "
+              + ("the summary was written, the figures may be missing" if written
+                 else "no summary was written"), file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
     print(table(summary))
     return 0 if all(lv["status"] == "ok" for lv in summary["levels"]) else 1

@@ -7,6 +7,8 @@ from pathlib import Path
 
 from wearcheck.cases import CaseError
 
+from wearcheck.comparisons.outputs import check_output
+from wearcheck.comparisons.resources import _estimator, check_export, check_memory
 from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.comparisons.rundir import atomic_directory, write_run_files
 from wearcheck.comparisons import registry
@@ -34,12 +36,19 @@ def main(args) -> int:
     args.vtk = args.vtk or args.revolve > 0
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-{args.solver}"
+    check_output(out, "run")  # before the solve: a path we may not write fails at once
+    check_memory(case, args.solver)
+    if args.revolve:
+        est = _estimator(args.solver)
+        if est is not None:
+            check_export(getattr(est, "section_points", lambda c: 0)(case),
+                         est.profile_points(case), args.revolve, len(case.stages.s_hat), out)
     bar = ProgressBar(f"{args.solver}", quiet=args.quiet)
     try:
         result = registry.solve(case, args.solver, progress=bar)
     finally:
         bar.close()
-    with atomic_directory(out) as tmp:
+    with atomic_directory(out, "run") as tmp:
         write_run_files(tmp, case, result, args.solver)
         if args.vtk:
             from wearcheck.comparisons.present.vtk import export_run

@@ -40,10 +40,11 @@ def main(args) -> int:
     try:
         rows = sweep(args.case, args.overrides, args.vary, args.solver, out,
                      scheduler=args.scheduler, workers=args.workers, quiet=args.quiet, case=case)
-    except KeyboardInterrupt:
-        print(f"wearcheck sweep: interrupted; the runs finished are in {out}, "
-              "no sweep.csv was written", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as exc:
+        from . import Terminated
+        print(f"wearcheck sweep: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}"
+              f"; the runs finished are in {out}, no sweep.csv was written", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
     names = [n for n, _ in (parse_vary(v) for v in args.vary)]
     print(f"{'run':<40} {'wall s':>8} {'final ŝ':>8} {'final F/F0':>10}  status")
     for r in rows:

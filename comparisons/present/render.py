@@ -151,7 +151,7 @@ def render_run(run_dir) -> list[Path]:
     if not len(run.stages["s"]):
         return []
     names = []
-    with atomic_directory(target) as tmp:
+    with atomic_directory(target, "render") as tmp:
         if run.fields is not None and "cells" in run.fields:  # a section mesh (FEM)
             fields = run.fields
             K = len(run.stages["s"])

@@ -18,7 +18,7 @@ import numpy as np
 from wearcheck.comparisons.analysis.convergence import MEASURES
 from wearcheck.cases import CaseError
 from wearcheck.comparisons import registry
-from wearcheck.comparisons.rundir import Run, provenance
+from wearcheck.comparisons.rundir import Run, _umask, provenance
 
 FIGURES = ("fig4_profiles.png", "fig4_force.png", "convergence.png", "cost.png")
 LABELS = {"profile": "profile / d0", "pressure": "pressure / p0",
@@ -41,6 +41,7 @@ def _save(fig, path: Path) -> None:
     try:
         fig.savefig(tmp, dpi=130, metadata={"Software": "wearcheck",
                                              "Description": provenance()["command"]})
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; figures are shared files
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -80,6 +81,10 @@ def write_figures(out: str | Path) -> list[Path]:
     out = Path(out)
     found = [s for s in studies(out) if s["finest"]]  # studies with a level that ran
     if not found:
+        # figures of an earlier study would pass for this one's (the study
+        # directory is ours: its marker was checked before the study ran)
+        for name in FIGURES:
+            (out / name).unlink(missing_ok=True)
         return []
     paths = []
     runs = {s["solver"]: [(row, Run(out / row["run_dir"])) for row in s["levels"]

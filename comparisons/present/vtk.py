@@ -449,6 +449,11 @@ def export_run(run_dir, revolve: int = 0) -> Path:
         raise CaseError(f"--revolve {revolve}: need 0 (no solid) or at least 3 segments")
     run = Run(run_dir)
     target = run.path / "vtk"
-    with atomic_directory(target) as tmp:
+    from wearcheck.comparisons.resources import check_export
+    # the FEM's section mesh is what a revolution multiplies; other fields are small
+    check_export(len(run.fields["points"]) if run.fields and "points" in run.fields else 0,
+                 len(run.stages["r"]), revolve or SURFACE_SEGMENTS, len(run.stages["s"]),
+                 run.path)
+    with atomic_directory(target, "vtk") as tmp:
         write_vtk_files(tmp, run, revolve)
     return target

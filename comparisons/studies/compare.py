@@ -241,6 +241,11 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
     t0 = time.perf_counter()
     solve = solve or solve_case
     ref, names = choose_solvers(case, solvers, reference_solver)
+    from wearcheck.comparisons.outputs import check_output
+    from wearcheck.comparisons.resources import check_memory
+    check_output(out, "comparison")  # before the solves: a path we may not write
+    for name in names:
+        check_memory(case, name)
     results = run_solvers(case, names, solve=solve, quiet=quiet)
     m = analyse(case, results, ref)
     study = None
@@ -252,7 +257,7 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
                                         solve=solve, quiet=quiet)
     prov = rundir.provenance(argv)
     out = Path(out)
-    with rundir.atomic_directory(out) as tmp:
+    with rundir.atomic_directory(out, "comparison") as tmp:
         for name, res in results.items():
             (tmp / name).mkdir()
             rundir.write_run_files(tmp / name, case, res, name, argv)

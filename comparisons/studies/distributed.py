@@ -19,6 +19,7 @@ tabulated profile, the table file at the same path.
 
 from __future__ import annotations
 
+import asyncio
 import importlib
 import json
 import math
@@ -26,7 +27,6 @@ import os
 import sys
 import threading
 import time
-import tomllib
 import traceback
 import uuid
 import warnings
@@ -34,6 +34,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from wearcheck import cases
+from wearcheck.cases.case import read_raw
 from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.comparisons.rundir import jsonable, write_run, write_text_atomic
 
@@ -41,6 +42,33 @@ from wearcheck.comparisons.rundir import jsonable, write_run, write_text_atomic
 RSS_INTERVAL = 0.01
 #: least seconds between two progress events of one task
 PROGRESS_INTERVAL = 0.5
+#: seconds to wait for a first worker (an external scheduler may have none);
+#: the environment variable WEARCHECK_WORKER_TIMEOUT overrides it
+WORKER_TIMEOUT = 30.0
+#: most worker processes per core of the embedded cluster (each is a Python process)
+WORKERS_PER_CORE = 4
+
+
+def _worker_timeout() -> float:
+    try:
+        value = float(os.environ.get("WEARCHECK_WORKER_TIMEOUT", WORKER_TIMEOUT))
+    except ValueError:
+        value = WORKER_TIMEOUT
+    return value if value > 0 else WORKER_TIMEOUT
+
+
+def check_workers(scheduler: str | None, workers) -> None:
+    """--workers must be a positive count (at most WORKERS_PER_CORE per core), and
+    only for the embedded cluster."""
+    if scheduler and workers:
+        raise cases.CaseError("--workers sizes the embedded cluster; an existing one "
+                              "(--scheduler) has the workers it has")
+    if workers is None:
+        return
+    most = WORKERS_PER_CORE * (os.cpu_count() or 1)
+    if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= most:
+        raise cases.CaseError(f"--workers {workers}: must be a whole number from 1 to {most} "
+                              f"({WORKERS_PER_CORE} per core on this machine)")
 
 
 @dataclass(frozen=True)
@@ -147,6 +175,8 @@ def execute(raw: dict, source: str, overrides: tuple[str, ...], solver: str, nam
     with _PeakRSS() as rss:
         try:
             case = cases.from_dict(raw, source=source, overrides=list(overrides))
+            from wearcheck.comparisons.resources import check_memory
+            check_memory(case, solver)  # this worker's memory, before allocating
             result = solve(case, solver, _progress_sender(topic, name))
             out.update(ok=True, case=case, result=result)
         except cases.WearcheckError as exc:
@@ -170,15 +200,22 @@ class _Client:
         import dask
         from distributed import Client, LocalCluster
         self.cluster = None
-        if scheduler and workers:
-            raise cases.CaseError("--workers sizes the embedded cluster; an existing one "
-                                  "(--scheduler) has the workers it has")
+        check_workers(scheduler, workers)
         if scheduler:
             try:
                 self.client = Client(scheduler, timeout="10s")
             except (OSError, TimeoutError, ValueError) as exc:
                 raise cases.WearcheckError(f"cannot reach the Dask scheduler at '{scheduler}': "
                                            f"{exc}") from None
+            try:
+                # tasks sent to a scheduler without workers would wait for ever
+                self.client.wait_for_workers(1, timeout=_worker_timeout())
+            except (TimeoutError, OSError) as exc:
+                self.client.close()
+                raise cases.WearcheckError(
+                    f"the Dask scheduler at '{scheduler}' has no worker: none joined within "
+                    f"{_worker_timeout():g} s; start workers (dask worker {scheduler}) or drop "
+                    "--scheduler") from None
             return
         n = workers or max(1, min(os.cpu_count() or 1, n_tasks))
         # a task that kills its worker (out of memory, crash) is reported at once,
@@ -197,6 +234,50 @@ class _Client:
         self.client.close()
         if self.cluster is not None:
             self.cluster.close()
+
+
+class _Watchdog:
+    """Cancels the study's tasks when the cluster has had no worker for a while.
+
+    An external scheduler whose workers all died would otherwise keep the
+    tasks waiting for ever; the embedded cluster restarts its workers, so
+    there this never fires.
+    """
+
+    def __init__(self, client, futures: dict, interval: float = 1.0):
+        self.client, self.futures, self.interval = client, futures, interval
+        self.reason = ""
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self):
+        since = None
+        while not self._stop.wait(self.interval):
+            try:
+                workers = len(self.client.nthreads())
+            except Exception:  # the scheduler itself is gone: the futures fail on their own
+                continue
+            if workers:
+                since = None
+                continue
+            since = since or time.monotonic()
+            if time.monotonic() - since >= _worker_timeout():
+                self.reason = (f"no worker left on the Dask scheduler for "
+                               f"{_worker_timeout():g} s; the task was cancelled")
+                for _ in range(3):
+                    try:
+                        futures = list(self.futures)
+                        break
+                    except RuntimeError:  # the dict grew meanwhile
+                        continue
+                for fut in futures:
+                    fut.cancel()
+                return
+
+    def stop(self):
+        self._stop.set()
+        self._thread.join(timeout=5)
 
 
 class _Reporter:
@@ -245,7 +326,7 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
     ``source`` is a case file or a :class:`cases.Case`; ``base_overrides`` apply
     to every task before its own. Returns the outcomes
     in the order of ``tasks``; each run directory is written (atomically, by
-    ``runio.write_run``) as soon as its result arrives, so an interrupted study
+    ``rundir.write_run``) as soon as its result arrives, so an interrupted study
     keeps the levels already done.
     """
     from distributed import KilledWorker, as_completed
@@ -254,9 +335,10 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
         raw, source = cases.to_dict(source), source.source
     else:
         source = str(Path(source).absolute())
-        raw = tomllib.loads(Path(source).read_text(encoding="utf-8"))
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+        raw = read_raw(Path(source))  # as cases.load reads it (a BOM, errors)
+    check_workers(scheduler, workers)
+    from wearcheck.comparisons.outputs import study_directory
+    out = study_directory(out)
     names = [t.name for t in tasks]
     if len(set(names)) != len(names):
         raise cases.CaseError("two runs would share a directory: " + ", ".join(names))
@@ -264,6 +346,7 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
     topic = f"wearcheck-progress-{uuid.uuid4().hex}"
     outcomes: dict[str, Outcome] = {}
     conn = _Client(scheduler, workers, len(tasks))
+    state = {"watchdog": None}
     try:
         client = conn.client
         client.subscribe_topic(topic, reporter.event)
@@ -272,6 +355,8 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
         def fill():
             # no more tasks out than worker threads: a task queued on a worker
             # that dies would be lost with it
+            if state["watchdog"] is not None and state["watchdog"].reason:
+                return  # no worker left: the pending tasks fail below
             slots = max(1, sum(client.nthreads().values()))
             while pending and running.count() < slots:
                 t = pending.pop(0)
@@ -281,7 +366,29 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
                 futures[fut] = t
                 running.add(fut)
         fill()
-        for fut in running:
+        watchdog = state["watchdog"] = _Watchdog(client, futures)
+
+        def completed():
+            # polled, not a blocking as_completed: a study whose workers all
+            # left must end once the watchdog gives up on it
+            handled = set()
+            while True:
+                batch = running.next_batch(block=False)
+                if batch:
+                    handled.update(batch)
+                    yield from batch
+                elif watchdog.reason:
+                    stuck = [f for f in list(futures) if f not in handled]
+                    running.clear()
+                    handled.update(stuck)
+                    yield from stuck
+                    return
+                elif running.is_empty():
+                    return
+                else:
+                    time.sleep(0.05)
+
+        for fut in completed():
             t = futures[fut]
             try:
                 rec = fut.result()
@@ -289,8 +396,9 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
             except KilledWorker:
                 outcome = Outcome(task=t, ok=False, message="its worker died while running it "
                                   "(a crash, or memory beyond the worker's limit)")
-            except Exception as exc:  # e.g. the scheduler was lost
-                outcome = Outcome(task=t, ok=False, message=f"{type(exc).__name__}: {exc}")
+            except (Exception, asyncio.CancelledError) as exc:  # the scheduler or workers lost
+                outcome = Outcome(task=t, ok=False, message=watchdog.reason or
+                                  f"{type(exc).__name__}: {exc}")
             fut.release()
             if outcome.ok:
                 meta = dict(task=t.name, overrides=list(t.overrides),
@@ -309,8 +417,14 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
             outcomes[t.name] = outcome
             reporter.finished(outcome)
             fill()
+        for t in pending:  # never started: no worker was left to run them
+            outcomes[t.name] = Outcome(task=t, ok=False, message=watchdog.reason)
+            discard_run(out / t.name)
+            reporter.finished(outcomes[t.name])
         client.unsubscribe_topic(topic)
     finally:
+        if state.get("watchdog") is not None:
+            state["watchdog"].stop()
         reporter.close()
         conn.close()
     return [outcomes[t.name] for t in tasks]
@@ -318,9 +432,8 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
 
 def discard_run(path: Path) -> None:
     """Remove an earlier run directory at ``path`` (only ever a wearcheck run)."""
-    import shutil
-    if (path / "meta.json").is_file():
-        shutil.rmtree(path)
+    from wearcheck.comparisons.outputs import remove_output
+    remove_output(path, "run")
 
 
 # --------------------------------------------------------------------------

@@ -47,13 +47,19 @@ def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolera
                          extra_meta=dict(study=f"refine-{solver}"))[::-1]
     summary = summarize(case, solver, lvls, outcomes, varied, tolerance, stage)
     summary.update(case=str(case_path), overrides=list(overrides), provenance=prov)
-    record_study(out, f"refine-{solver}", case, overrides, prov)
-    write_text_atomic(out / f"refinement-{solver}.json",
-                      json.dumps(jsonable(summary), indent=2) + "\n")
-    write_text_atomic(out / f"refinement-{solver}.csv", csv_text(summary))
-    write_text_atomic(out / "refinement.csv", combined_csv_text(out))
-    from wearcheck.comparisons.present.study_figures import write_figures
-    write_figures(out)
+    written = False
+    try:
+        record_study(out, f"refine-{solver}", case, overrides, prov)
+        write_text_atomic(out / f"refinement-{solver}.json",
+                          json.dumps(jsonable(summary), indent=2) + "\n")
+        written = True
+        write_text_atomic(out / f"refinement-{solver}.csv", csv_text(summary))
+        write_text_atomic(out / "refinement.csv", combined_csv_text(out))
+        from wearcheck.comparisons.present.study_figures import write_figures
+        write_figures(out)
+    except KeyboardInterrupt as exc:
+        exc.summary_written = written  # for the CLI's message: what is on disk
+        raise
     return summary
 
 

@@ -1,0 +1,390 @@
+"""Output safety: which paths wearcheck may write, replace or remove.
+
+Every output directory wearcheck writes carries a marker file,
+``.wearcheck-output``, holding JSON: the kind of output (``run``,
+``comparison``, ``study``, ``vtk``, ``render``; ``mesh`` for the side file of
+``wearcheck mesh --out``), whether it is complete, and the writing process
+(pid, host). Only that marker makes an existing path replaceable, and only by
+an output of the same kind; anything else is refused with one line and never
+deleted. Directories are built in a hidden ``.NAME.partial-*`` sibling and
+renamed into place when complete; a partial directory whose writer has died
+(same host, pid gone) is removed on the next write to the same path.
+
+The CLI checks an output path with :func:`check_output` before any solve, so a
+path that cannot be written fails in a second, not after the work.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import hashlib
+import json
+import os
+import platform
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+from wearcheck import cases
+
+#: written into every directory wearcheck creates: what may be replaced, and by what
+OUTPUT_MARKER = ".wearcheck-output"
+KINDS = ("run", "comparison", "study", "vtk", "render", "mesh")
+#: the text marker of wearcheck before the marker said its kind (runs and comparisons)
+_LEGACY_MARKER_TEXT = "written by wearcheck"
+#: what an unmarked RUN_DIR/vtk or RUN_DIR/render of older versions may hold
+_LEGACY_PARTS = {"vtk": (".vtu", ".pvd"), "render": (".png",)}
+
+
+class OutputError(cases.CaseError):
+    """An output path that wearcheck may not, or cannot, write (exit code 2)."""
+
+
+def marker_data(kind: str, complete: bool) -> dict:
+    return dict(wearcheck="output", kind=kind, complete=complete, pid=os.getpid(),
+                host=platform.node(), created=time.strftime("%Y-%m-%dT%H:%M:%S%z"))
+
+
+def write_marker(directory: Path, kind: str, complete: bool = True) -> None:
+    (Path(directory) / OUTPUT_MARKER).write_text(
+        json.dumps(marker_data(kind, complete)) + "\n", encoding="utf-8")
+
+
+def read_marker(directory: Path) -> dict | None:
+    """The marker of ``directory`` as a dict, or None when it has none (or it is not ours)."""
+    path = Path(directory) / OUTPUT_MARKER
+    try:
+        if path.is_symlink() or not path.is_file():
+            return None
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return None
+    if text.startswith(_LEGACY_MARKER_TEXT):
+        return dict(wearcheck="output", kind="legacy", complete=True)
+    try:
+        data = json.loads(text)
+    except ValueError:
+        return None
+    if not isinstance(data, dict) or data.get("wearcheck") != "output":
+        return None
+    return data
+
+
+def _kind_name(kind) -> str:
+    return {"legacy": "output (of an older wearcheck)"}.get(kind, str(kind))
+
+
+def _is_legacy_part(path: Path, kind: str) -> bool:
+    """RUN_DIR/vtk or RUN_DIR/render written before parts had markers of their own."""
+    suffixes = _LEGACY_PARTS.get(kind)
+    if suffixes is None or path.name != kind or read_marker(path.parent) is None:
+        return False
+    return all(p.is_file() and not p.is_symlink() and p.suffix in suffixes
+               for p in path.iterdir())
+
+
+def refusal(path: Path, kind: str) -> str | None:
+    """Why the existing ``path`` may not be replaced by a ``kind`` output; None if it may."""
+    # concurrent writers swap the directory at ``path`` under us: a verdict
+    # counts only if the same directory (inode) was there before and after
+    why = None
+    for _ in range(100):
+        try:
+            before = os.lstat(path).st_ino
+        except (FileNotFoundError, NotADirectoryError):
+            return None
+        try:
+            why = _refusal(path, kind)
+        except (FileNotFoundError, NotADirectoryError):
+            continue
+        try:
+            if os.lstat(path).st_ino == before:
+                return why
+        except (FileNotFoundError, NotADirectoryError):
+            return None
+    return why
+
+
+def _refusal(path: Path, kind: str) -> str | None:
+    if path.is_symlink():
+        return (f"output '{path}' is a symbolic link; give the real path (wearcheck does not "
+                "write through or replace links)")
+    if not path.exists():
+        return None
+    if not path.is_dir():
+        return (f"output '{path}' exists and is not a wearcheck output (it is a file); "
+                "choose another output path or remove it yourself")
+    marker = read_marker(path)
+    if marker is None:
+        if not any(path.iterdir()) or _is_legacy_part(path, kind):
+            return None
+        return (f"output '{path}' exists and is not a wearcheck output (no "
+                f"{OUTPUT_MARKER} marker); choose another output path or remove it yourself")
+    if not marker.get("complete", True):
+        return (f"output '{path}' is an incomplete wearcheck output; remove it yourself "
+                "or choose another path")
+    have = marker.get("kind")
+    if have == kind or (have == "legacy" and kind in ("run", "comparison")):
+        return None
+    return (f"output '{path}' is a wearcheck {_kind_name(have)} directory, not a {kind}; "
+            "choose another output path or remove it yourself")
+
+
+def check_output(path, kind: str) -> Path:
+    """Check that ``path`` can take a ``kind`` output, before any work; returns it absolute.
+
+    Refused (:class:`OutputError`, one line): a final component ``.`` or
+    ``..``, a symbolic link, an existing path that is not a complete
+    wearcheck output of this kind (an empty directory is fine), a path under
+    a file, and a directory wearcheck cannot create or write.
+    """
+    raw = str(path)
+    parts = Path(raw).parts
+    if not raw or raw.endswith(os.sep + ".") or (parts and parts[-1] in (".", "..")) \
+            or raw in (".", ".."):
+        raise OutputError(f"output '{raw}': name a directory or file of its own, not "
+                          "'.' or '..'")
+    given = Path(raw).absolute()
+    for part in [*reversed(given.parents), given]:
+        if part.is_symlink() and not part.exists():
+            raise OutputError(f"output '{raw}': '{part}' is a broken symbolic link; "
+                              "wearcheck does not write through it")
+    # the parent as the kernel resolves it ('..' after a link goes where the link leads)
+    path = Path(os.path.realpath(given.parent)) / given.name
+    why = refusal(path, kind)
+    if why:
+        raise OutputError(why)
+    # the nearest existing ancestor must be a directory we can write into
+    ancestor = path.parent
+    while not ancestor.exists() and not ancestor.is_symlink():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise OutputError(f"output '{path}': '{ancestor}' is not a directory (it is a file or "
+                          "a broken link), so nothing can be written under it")
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        raise OutputError(f"output '{path}': directory '{ancestor}' is not writable "
+                          "(permissions or a read-only file system)")
+    return path
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OverflowError, ValueError):
+        return True
+    return True
+
+
+def clean_stale(parent: Path, name: str) -> list[Path]:
+    """Remove ``.NAME.partial-*`` and ``.NAME.old-*`` siblings left by dead writers.
+
+    Only directories whose marker names this host and a process that no longer
+    exists; anything else is left alone. Returns what was removed.
+    """
+    removed = []
+    try:
+        entries = list(Path(parent).iterdir())
+    except OSError:
+        return removed
+    for entry in entries:
+        if not (entry.name.startswith(f".{name}.partial-")
+                or entry.name.startswith(f".{name}.old-")):
+            continue
+        if entry.is_symlink() or not entry.is_dir():
+            continue
+        marker = read_marker(entry)
+        if marker is None or marker.get("complete", True) is not False:
+            continue
+        pid = marker.get("pid")
+        if marker.get("host") != platform.node() or not isinstance(pid, int) or _pid_alive(pid):
+            continue
+        shutil.rmtree(entry, ignore_errors=True)
+        removed.append(entry)
+    return removed
+
+
+def is_partial(path: Path) -> bool:
+    """A ``.partial`` directory of another process: being written, or abandoned.
+
+    This process's own partial directory (e.g. ``run --vtk`` exporting the run
+    it is writing) is not refused.
+    """
+    path = Path(path)
+    marker = read_marker(path)
+    if marker is not None and marker.get("complete", True) is False:
+        return not (marker.get("pid") == os.getpid() and marker.get("host") == platform.node())
+    return marker is None and path.name.startswith(".") and ".partial-" in path.name
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def _install(tmp: Path, path: Path, kind: str) -> None:
+    """Rename the complete ``tmp`` onto ``path``, moving an earlier output aside.
+
+    Race-free under concurrent writers to one path: each rename either lands
+    or finds ``path`` taken, in which case the occupant (checked to be a
+    replaceable output) is moved into a private ``.old-`` directory and the
+    rename retried; the last writer to rename wins.
+    """
+    graveyard = None
+    try:
+        for attempt in range(100000):
+            try:
+                os.rename(tmp, path)
+                return
+            except OSError as exc:
+                if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST, errno.ENOTDIR,
+                                     errno.EISDIR):
+                    raise
+            why = refusal(path, kind)
+            if why:
+                raise OutputError(why)
+            if graveyard is None:
+                graveyard = Path(tempfile.mkdtemp(prefix=f".{path.name}.old-",
+                                                  dir=path.parent))
+                write_marker(graveyard, kind, complete=False)
+            try:
+                os.rename(path, graveyard / f"{attempt}")
+            except FileNotFoundError:
+                pass  # another writer moved it first
+        raise OSError(errno.EBUSY, f"could not install '{path}': too many concurrent writers")
+    finally:
+        if graveyard is not None:
+            shutil.rmtree(graveyard, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def atomic_directory(path, kind: str = "run"):
+    """Yield a fresh temporary directory that replaces ``path`` on success.
+
+    On an exception (or interrupt) the temporary directory is removed and
+    ``path`` is left as it was. An existing ``path`` that is not a complete
+    wearcheck output of ``kind`` is refused (:class:`OutputError`), never deleted.
+    """
+    if kind not in KINDS:
+        raise ValueError(f"unknown output kind {kind!r}")
+    path = check_output(path, kind)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    clean_stale(path.parent, path.name)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
+    try:
+        os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; outputs are shared like any dir
+        write_marker(tmp, kind, complete=False)
+        yield tmp
+        write_marker(tmp, kind, complete=True)
+        _install(tmp, path, kind)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
+def study_directory(path) -> Path:
+    """Create (or reuse) the study directory ``path`` of ``wearcheck refine``/``sweep``.
+
+    A new or empty directory gets a ``study`` marker; an existing one must
+    already be a wearcheck study. Its runs are written inside, each atomically.
+    """
+    path = check_output(path, "study")
+    path.mkdir(parents=True, exist_ok=True)
+    if read_marker(path) is None:
+        write_marker(path, "study", complete=True)
+    return path
+
+
+def remove_output(path: Path, kind: str) -> bool:
+    """Remove ``path`` if, and only if, it is a complete wearcheck output of ``kind``."""
+    path = Path(path)
+    if path.is_symlink() or not path.is_dir():
+        return False
+    marker = read_marker(path)
+    if marker is None or marker.get("kind") != kind:
+        return False
+    shutil.rmtree(path)
+    return True
+
+
+# -- single files (wearcheck mesh --out FILE) --------------------------------
+
+def _sidecar(path: Path) -> Path:
+    return path.with_name(f".{path.name}{OUTPUT_MARKER}")
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def check_output_file(path, kind: str = "mesh") -> Path:
+    """Check that the file ``path`` may be (over)written; returns it absolute.
+
+    An existing file is replaceable only if wearcheck wrote it and it is
+    unchanged since: its side marker ``.NAME.wearcheck-output`` names the kind
+    and the SHA-256 of the content.
+    """
+    path = check_output_path_common(path)
+    if path.is_symlink():
+        raise OutputError(f"output '{path}' is a symbolic link; give the real path")
+    if path.is_dir():
+        raise OutputError(f"output '{path}' is a directory; give the path of the file")
+    if path.exists():
+        if not path.is_file():
+            raise OutputError(f"output '{path}' exists and is not a regular file; "
+                              "choose another output path")
+        ok = False
+        side = _sidecar(path)
+        with contextlib.suppress(OSError, ValueError):
+            data = json.loads(side.read_text(encoding="utf-8"))
+            ok = (isinstance(data, dict) and data.get("kind") == kind
+                  and data.get("sha256") == _sha256(path))
+        if not ok:
+            raise OutputError(f"output '{path}' exists and is not a file wearcheck wrote "
+                              "(or it has changed since); choose another output path or "
+                              "remove it yourself")
+    return path
+
+
+def check_output_path_common(path) -> Path:
+    raw = str(path)
+    if not raw or Path(raw).name in ("", ".", "..") or raw.endswith(os.sep):
+        raise OutputError(f"output '{raw}': name a file of its own")
+    path = Path(raw).absolute()
+    ancestor = path.parent
+    while not ancestor.exists() and not ancestor.is_symlink():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise OutputError(f"output '{path}': '{ancestor}' is not a directory (it is a file or "
+                          "a broken link), so nothing can be written under it")
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        raise OutputError(f"output '{path}': directory '{ancestor}' is not writable "
+                          "(permissions or a read-only file system)")
+    return path
+
+
+def write_file(path, source: Path, kind: str = "mesh") -> Path:
+    """Copy ``source`` to ``path`` atomically, with its side marker."""
+    path = check_output_file(path, kind)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.partial-", dir=path.parent)
+    os.close(fd)
+    try:
+        shutil.copyfile(source, tmp)
+        os.chmod(tmp, 0o666 & ~_umask())
+        side = dict(marker_data(kind, True), sha256=_sha256(Path(tmp)))
+        os.replace(tmp, path)
+        _sidecar(path).write_text(json.dumps(side) + "\n", encoding="utf-8")
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+    return path

@@ -1,0 +1,35 @@
+"""Memory the MDR solver needs for a case, estimated before the run (pure)."""
+
+from __future__ import annotations
+
+#: the key whose value the estimate mostly depends on (named in refusals)
+RESOURCE_KEY = "mdr.elements"
+#: the solver's dense-factorisation limit (mdr.wear.DENSE_MAX), repeated to stay import-free
+_DENSE_MAX = 2048
+
+
+#: dense N x N matrices a run keeps at once, by time scheme (nested LU factors
+#: of the implicit step; adaptive stepping keeps several step sizes' factors)
+DENSE_MATRICES = {"adaptive": 12.0, "implicit": 4.0, "bdf2": 3.0, "explicit": 1.0}
+
+
+def memory_bytes(case, elements: int | None = None) -> float:
+    """Peak memory [bytes] of an MDR run of ``case`` (with ``elements`` springs if given).
+
+    Measured on paper.toml at N = 1500 (numpy's allocations, tracemalloc):
+    adaptive 193 MB (10.7 N² doubles; 11.4 at N = 1000), implicit 65 MB
+    (3.6 N²), bdf2 38 MB (2.1 N²); past the dense limit (N > 2048: FFT and
+    GMRES, O(N)) 10.5 MB at N = 3000. The model bounds these: 40 MB fixed,
+    DENSE_MATRICES[scheme] N² doubles up to the dense limit, 2 kB per node,
+    and the stored stages (profile and pressure, 16 bytes per node and stage).
+    """
+    n = float(case.mdr.elements if elements is None else elements) + 1.0
+    per = DENSE_MATRICES.get(case.sliding.scheme, max(DENSE_MATRICES.values()))
+    dense = per * 8.0 * n * n if n <= _DENSE_MAX + 1 else 0.0
+    stages = 16.0 * n * len(case.stages.s_hat)
+    return 40e6 + dense + 2e3 * n + stages
+
+
+def profile_points(case) -> int:
+    """Points of the stored profiles (what ``export`` revolves)."""
+    return int(case.mdr.elements) + 1
