@@ -16,7 +16,7 @@ from .schema import (BEMSettings, OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUI
                      REQUIRED_SECTIONS,
                      SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
                      Loading,
-                     MDRSettings, Sliding, Stages, Wear, _fmt, build_section,
+                     MDRSettings, Sliding, Stages, Wear, format_value, build_section,
                      section_fields, toml_string)
 
 
@@ -230,8 +230,8 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
             raise CaseError(f"missing section [{section}]")
     st = raw.get("stages", {})
     if isinstance(st, dict) and "s_hat" in st and "cycles" in st:
-        raise CaseError(f"keys 'stages.s_hat' = {_fmt(st['s_hat'])} and 'stages.cycles' = "
-                        f"{_fmt(st['cycles'])} both given; give the stages one way only")
+        raise CaseError(f"keys 'stages.s_hat' = {format_value(st['s_hat'])} and 'stages.cycles' = "
+                        f"{format_value(st['cycles'])} both given; give the stages one way only")
     built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS
              if name not in OPTIONAL_SECTIONS or name in raw}
     if "fretting" in raw:
@@ -312,10 +312,10 @@ def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
         with open(file, newline="", encoding="utf-8-sig") as fh:
             lines = list(csv.reader(fh))
     except UnicodeDecodeError as exc:
-        raise CaseError(f"key '{name}' = {_fmt(str(file))}: not UTF-8 text ({exc.reason} at "
+        raise CaseError(f"key '{name}' = {format_value(str(file))}: not UTF-8 text ({exc.reason} at "
                         f"byte {exc.start}); save the table as UTF-8") from None
     except (OSError, csv.Error) as exc:
-        raise CaseError(f"key '{name}' = {_fmt(str(file))}: cannot be read: {exc}") from None
+        raise CaseError(f"key '{name}' = {format_value(str(file))}: cannot be read: {exc}") from None
     for lineno, row in enumerate(lines, start=1):
         row = [c.strip() for c in row if c.strip()]
         if not row or row[0].startswith("#"):
@@ -482,7 +482,7 @@ def to_toml(case: Case) -> str:
             if isinstance(value, tuple):
                 text = "[" + ", ".join(repr(v) for v in value) + "]"
             else:
-                text = _fmt(value)
+                text = format_value(value)
             unit = f.metadata["unit"]
             lines.append(f"{name} = {text}" + (f"  # {unit}" if unit and unit != "1" else ""))
     return "\n".join(lines) + "\n"
@@ -501,7 +501,7 @@ def key_reference() -> str:
             elif isinstance(f.default, tuple):
                 default = "`[" + ", ".join(repr(v) for v in f.default) + "]`"
             else:
-                default = f"`{_fmt(f.default)}`"
+                default = f"`{format_value(f.default)}`"
             doc = meta["doc"]
             if meta["choices"]:
                 doc += " (" + " \\| ".join(f"`{c}`" for c in meta["choices"]) + ")"

@@ -334,7 +334,7 @@ def toml_string(text: str) -> str:
     return '"' + "".join(out) + '"'
 
 
-def _fmt(value) -> str:
+def format_value(value) -> str:
     if isinstance(value, str):
         return toml_string(value)
     if isinstance(value, bool):
@@ -351,18 +351,18 @@ def _check_number(name, value, meta):
         raise CaseError(f"key '{name}' = {value!r}: must be a finite number")
     unit = f" {meta['unit']}" if meta["unit"] and meta["unit"] != "1" else ""
     if meta["positive"] and not value > 0:
-        raise CaseError(f"key '{name}' = {_fmt(value)}: must be > 0{unit}")
+        raise CaseError(f"key '{name}' = {format_value(value)}: must be > 0{unit}")
     lo, hi = meta["minimum"], meta["maximum"]
     if lo is not None and (value < lo or (meta["open_minimum"] and value == lo)):
         lb = "(" if meta["open_minimum"] else "["
         rb = ")" if meta["open_maximum"] else "]"
         allowed = f"{lb}{lo:g}, {hi:g}{rb}" if hi is not None else f"{'>' if meta['open_minimum'] else '>='} {lo:g}"
-        raise CaseError(f"key '{name}' = {_fmt(value)}: must be in {allowed}{unit}")
+        raise CaseError(f"key '{name}' = {format_value(value)}: must be in {allowed}{unit}")
     if hi is not None and (value > hi or (meta["open_maximum"] and value == hi)):
         lb = "(" if meta["open_minimum"] else "["
         rb = ")" if meta["open_maximum"] else "]"
         allowed = f"{lb}{lo:g}, {hi:g}{rb}" if lo is not None else f"{'<' if meta['open_maximum'] else '<='} {hi:g}"
-        raise CaseError(f"key '{name}' = {_fmt(value)}: must be in {allowed}{unit}")
+        raise CaseError(f"key '{name}' = {format_value(value)}: must be in {allowed}{unit}")
     return value
 
 
@@ -373,11 +373,11 @@ def convert(name: str, f: dataclasses.Field, value: Any):
     origin = [typing.get_origin(t) for t in allowed]
     if tuple in origin:  # list of numbers
         if not isinstance(value, (list, tuple)) or not value:
-            raise CaseError(f"key '{name}' = {_fmt(value)}: must be a non-empty list of numbers")
+            raise CaseError(f"key '{name}' = {format_value(value)}: must be a non-empty list of numbers")
         out = []
         for v in value:
             if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise CaseError(f"key '{name}' = {_fmt(value)}: every entry must be a number")
+                raise CaseError(f"key '{name}' = {format_value(value)}: every entry must be a number")
             out.append(_check_number(name, float(_check_number(name, v, meta)), meta))
         return tuple(out)
     if isinstance(value, bool):
@@ -390,15 +390,15 @@ def convert(name: str, f: dataclasses.Field, value: Any):
     elif isinstance(value, str) and str in allowed:
         choices = meta["choices"]
         if float in allowed and value != "auto":  # a number or "auto"
-            raise CaseError(f"key '{name}' = {_fmt(value)}: must be a number or \"auto\"")
+            raise CaseError(f"key '{name}' = {format_value(value)}: must be a number or \"auto\"")
         if choices is not None and value not in choices:
-            raise CaseError(f"key '{name}' = {_fmt(value)}: must be one of "
+            raise CaseError(f"key '{name}' = {format_value(value)}: must be one of "
                             + ", ".join(f'"{c}"' for c in choices))
         return value
     want = " or ".join(_type_name(t) for t in allowed)
     if float in allowed and str in allowed:
         want = 'a number or "auto"'
-    raise CaseError(f"key '{name}' = {_fmt(value)}: must be {want}")
+    raise CaseError(f"key '{name}' = {format_value(value)}: must be {want}")
 
 
 def build_section(section: str, raw: dict) -> Any:
@@ -406,7 +406,7 @@ def build_section(section: str, raw: dict) -> Any:
     cls = SECTIONS[section]
     fields = {f.name: f for f in dataclasses.fields(cls)}
     if not isinstance(raw, dict):
-        raise CaseError(f"'{section}' must be a table [{section}], got {_fmt(raw)}")
+        raise CaseError(f"'{section}' must be a table [{section}], got {format_value(raw)}")
     unknown = sorted(set(raw) - set(fields))
     if unknown:
         raise CaseError(f"unknown key '{section}.{unknown[0]}'; allowed in [{section}]: "

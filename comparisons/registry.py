@@ -209,7 +209,7 @@ register(Solver(
     description="3D boundary elements on the elastic half-space: pixel grid, DC-FFT, "
                 "constrained conjugate gradients; also non-axisymmetric indenters",
     style=dict(ls="none", marker="s", ms=3.0, mfc="none", mew=0.8),
-    export_vtk="wearcheck.comparisons.vtk_image:write_bem_fields",
+    export_vtk="wearcheck.comparisons.present.vtk_image:write_bem_fields",
     history_columns=(Item("max_pressure", "Pa", "largest pixel pressure"),
                      Item("cg_iterations", "", "conjugate-gradient iterations of the step's "
                                                "contact solve"),

@@ -56,7 +56,8 @@ def test_comparison_metrics_match_the_dictionary(tmp_path):
     written = json.loads((tmp_path / "cmp" / "metrics.json").read_text())
     d = written["data_dictionary"]
     assert set(written) <= set(d["metrics_json"])
-    assert set(d["metrics_json"]) - set(written) == set(layout.METRICS_OPTIONAL) - {"edge_study"}
+    assert set(d["metrics_json"]) - set(written) == set(layout.METRICS_OPTIONAL) - {"edge_study",
+                                                                                   "scar"}
     for stage in m["pairs"]["fem"]["stages"]:
         assert set(stage) - {"index"} - {k for k in stage if k.endswith("_points")} \
             <= set(d["stage_metrics"])

@@ -5,7 +5,8 @@ import pytest
 
 from wearcheck import bem, cases
 from wearcheck.cases import WearcheckError, reference
-from wearcheck.comparisons import rundir, vtk_image
+from wearcheck.comparisons import rundir
+from wearcheck.comparisons.present import vtk_image
 from wearcheck.comparisons.present.vtk import export_run
 
 pv = pytest.importorskip("pyvista")

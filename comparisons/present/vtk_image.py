@@ -22,8 +22,8 @@ import numpy as np
 
 from wearcheck.cases import WearcheckError
 
-from .present.vtk import pvd_text
-from .rundir import Run
+from wearcheck.comparisons.present.vtk import pvd_text
+from wearcheck.comparisons.rundir import Run
 
 #: the per-stage surface fields of a BEM run (``RunResult.fields``)
 IMAGE_FIELDS = ("profile", "wear_depth", "pressure", "gap")
