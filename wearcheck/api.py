@@ -44,24 +44,13 @@ def load_case(case: str | Path | Case, changes: Mapping | Iterable[str] | None =
     CaseError
         one message naming the key, the value and what is allowed.
     """
-    if isinstance(case, Case):
-        loaded = case
-    else:
-        path = Path(case)
-        if not path.exists() and path.suffix == "" and path.name == str(case):
-            try:
-                path = cases.shipped(str(case))
-            except CaseError:
-                raise CaseError(f"case '{case}' is neither a file nor a shipped case; shipped: "
-                                + ", ".join(shipped_cases())) from None
-        loaded = cases.load(path)
+    loaded = case if isinstance(case, Case) else cases.load(cases.resolve(case))
     return loaded.derive(changes) if changes else loaded
 
 
 def shipped_cases() -> dict[str, Path]:
-    """The cases shipped with wearcheck: {name: path}."""
-    folder = Path(cases.__file__).parent
-    return {p.stem: p for p in sorted(folder.glob("*.toml"))}
+    """The cases shipped with wearcheck: {name: path} (``wearcheck cases`` describes them)."""
+    return cases.shipped_cases()
 
 
 # -- solving -----------------------------------------------------------------
