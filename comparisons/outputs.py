@@ -156,16 +156,7 @@ def check_output(path, kind: str) -> Path:
     why = refusal(path, kind)
     if why:
         raise OutputError(why)
-    # the nearest existing ancestor must be a directory we can write into
-    ancestor = path.parent
-    while not ancestor.exists() and not ancestor.is_symlink():
-        ancestor = ancestor.parent
-    if not ancestor.is_dir():
-        raise OutputError(f"output '{path}': '{ancestor}' is not a directory (it is a file or "
-                          "a broken link), so nothing can be written under it")
-    if not os.access(ancestor, os.W_OK | os.X_OK):
-        raise OutputError(f"output '{path}': directory '{ancestor}' is not writable "
-                          "(permissions or a read-only file system)")
+    _check_writable_ancestor(path)
     return path
 
 
@@ -359,15 +350,7 @@ def check_output_path_common(path) -> Path:
     if not raw or Path(raw).name in ("", ".", "..") or raw.endswith(os.sep):
         raise OutputError(f"output '{raw}': name a file of its own")
     path = Path(raw).absolute()
-    ancestor = path.parent
-    while not ancestor.exists() and not ancestor.is_symlink():
-        ancestor = ancestor.parent
-    if not ancestor.is_dir():
-        raise OutputError(f"output '{path}': '{ancestor}' is not a directory (it is a file or "
-                          "a broken link), so nothing can be written under it")
-    if not os.access(ancestor, os.W_OK | os.X_OK):
-        raise OutputError(f"output '{path}': directory '{ancestor}' is not writable "
-                          "(permissions or a read-only file system)")
+    _check_writable_ancestor(path)
     return path
 
 
@@ -388,3 +371,16 @@ def write_file(path, source: Path, kind: str = "mesh") -> Path:
             os.unlink(tmp)
         raise
     return path
+
+
+def _check_writable_ancestor(path: Path) -> None:
+    """The nearest existing ancestor of ``path`` must be a directory we can write into."""
+    ancestor = path.parent
+    while not ancestor.exists() and not ancestor.is_symlink():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise OutputError(f"output '{path}': '{ancestor}' is not a directory (it is a file or "
+                          "a broken link), so nothing can be written under it")
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        raise OutputError(f"output '{path}': directory '{ancestor}' is not writable "
+                          "(permissions or a read-only file system)")

@@ -3,6 +3,7 @@ top-level names (``cases``, ``mdr``, ...) are not importable, and the command wo
 from any directory. Built with pip as a user's ``pip install .`` would build it."""
 
 import os
+import shutil
 import subprocess
 import sys
 import zipfile
@@ -16,9 +17,14 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.fixture(scope="module")
 def installed(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("install")
+    # build from a copy of the sources: a build/ folder left in the checkout would
+    # lend the wheel files that the package list forgot
+    source = tmp / "source"
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(
+        ".git", "build", "dist", "*.egg-info", "runs", "__pycache__", ".pytest_cache"))
     wheels = tmp / "wheels"
     build = subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "-q",
-                            "-w", str(wheels), str(ROOT)], capture_output=True, text=True,
+                            "-w", str(wheels), str(source)], capture_output=True, text=True,
                            timeout=600)
     assert build.returncode == 0, build.stderr[-2000:]
     wheel = next(wheels.glob("wearcheck-*.whl"))
@@ -51,6 +57,8 @@ def test_wheel_holds_one_namespace(installed):
 def test_old_top_level_names_are_gone_and_wearcheck_imports(installed, tmp_path):
     _, target, _ = installed
     code = ("import importlib.util, wearcheck, wearcheck.mdr, wearcheck.fem\n"
+            "import wearcheck.comparisons.present, wearcheck.comparisons.cli.run\n"
+            "assert wearcheck.comparisons.present.__file__.startswith(wearcheck.__path__[0])\n"
             "print(wearcheck.__file__)\n"
             "print([n for n in ('cases', 'mdr', 'fem', 'meshes', 'comparisons')"
             " if importlib.util.find_spec(n)])\n")
