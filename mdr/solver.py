@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-from wearcheck.cases import CaseError, RunResult, SolverError, profiles, reference
+from wearcheck.cases import CaseError, RunResult, SolverError, profiles, programme, reference
 from wearcheck.cases.result import scar_radius
 
 from . import contact, linalg, transforms, wear
@@ -442,26 +442,9 @@ def _solve(case, progress=None) -> RunResult:
     if info["approximate"]:
         info["equivalent_radius"] = profiles.equivalent_radius(case.indenter)
         info["warning"] = ELLIPSOID_WARNING
-    s_cap = ADAPTIVE_MAX_S_HAT if adaptive else MAX_S_HAT
-    s_end = case.end_distance
-    if s_end is not None:
-        key = "sliding.distance" if sl.until == "distance" else "sliding.cycles"
-        if s_end * per_m > s_cap:
-            raise CaseError(f"key '{key}' = {getattr(sl, key.split('.')[1])!r}: ŝ = "
-                            f"{s_end * per_m:.4g} exceeds the solver's cap of {s_cap:g}"
-                            + ("" if adaptive else " for fixed steps (use sliding.scheme = "
-                               "\"adaptive\")"))
-        expected = s_end * per_m / step_hat
-        if expected > MAX_STEPS:
-            raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: the run would take "
-                            f"{expected:.3g} steps (cap {MAX_STEPS}); raise the step or use "
-                            "sliding.scheme = \"adaptive\"")
-    else:
-        s_end = s_cap / per_m
-    stage_s = [sh / per_m for sh in case.stages.s_hat]
-    if case.end_distance is not None:
-        stage_s = [s for s in stage_s if s <= s_end * (1 + 1e-12)]
-    until = "force_fraction" if sl.until == "force_fraction" else "distance"
+    s_end, stage_s, until = programme.sliding_plan(
+        case, step_hat, per_m, s_hat_cap=ADAPTIVE_MAX_S_HAT if adaptive else MAX_S_HAT,
+        max_steps=MAX_STEPS, adaptive=adaptive)
 
     def profile(x):
         return profiles.height(case.indenter, x, case.table)
@@ -470,7 +453,7 @@ def _solve(case, progress=None) -> RunResult:
               progress, tolerance=sl.tolerance, scales=sc, profile=profile, accept=ADAPTIVE_ACCEPT)
     if until == "force_fraction" and out["history"]["s"][-1] >= s_end * (1 - 1e-12):
         raise SolverError(f"the force did not fall below {sl.force_fraction} F0 within "
-                          f"ŝ = {s_cap:g}")
+                          f"ŝ = {s_end * per_m:g}")
     hist = out["history"]
     hist["s_hat"] = hist["s"] * per_m
     # cycles: NaN without a stroke (one set of columns for every case)

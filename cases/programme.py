@@ -1,0 +1,52 @@
+"""How far a run slides and where it keeps its stages, with the solvers' run-length caps.
+
+Shared by the solvers that step in ŝ (MDR, BEM): the checks are about the case,
+so they live beside it rather than in each solver.
+"""
+
+from __future__ import annotations
+
+from .errors import CaseError
+
+
+def sliding_plan(case, step_hat: float, per_m: float, *, s_hat_cap: float, max_steps: int,
+                 adaptive: bool) -> tuple[float, list[float], str]:
+    """The sliding distance to stop at, the stage distances and the stop rule.
+
+    Parameters
+    ----------
+    case : the case; step_hat : the (largest) step in ŝ (inf: none);
+    per_m : ŝ per metre of sliding; s_hat_cap, max_steps : the solver's caps;
+    adaptive : whether steps are chosen by the error control (no step cap).
+
+    Returns
+    -------
+    s_end [m] (the cap when the run stops on the force), stage_s [m] (the stages
+    at or before s_end), until ("force_fraction" or "distance").
+
+    Raises
+    ------
+    CaseError
+        a run past the caps, naming the key that sets its length.
+    """
+    sl = case.sliding
+    s_end = case.end_distance
+    if s_end is not None:
+        key = "sliding.distance" if sl.until == "distance" else "sliding.cycles"
+        if s_end * per_m > s_hat_cap:
+            raise CaseError(f"key '{key}' = {getattr(sl, key.split('.')[1])!r}: ŝ = "
+                            f"{s_end * per_m:.4g} exceeds the solver's cap of {s_hat_cap:g}"
+                            + ("" if adaptive else " for fixed steps (use sliding.scheme = "
+                               "\"adaptive\")"))
+        expected = s_end * per_m / step_hat
+        if expected > max_steps:
+            raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: the run would take "
+                            f"{expected:.3g} steps (cap {max_steps}); raise the step or use "
+                            "sliding.scheme = \"adaptive\"")
+    else:
+        s_end = s_hat_cap / per_m
+    stage_s = [sh / per_m for sh in case.stages.s_hat]
+    if case.end_distance is not None:
+        stage_s = [s for s in stage_s if s <= s_end * (1 + 1e-12)]
+    until = "force_fraction" if sl.until == "force_fraction" else "distance"
+    return s_end, stage_s, until
