@@ -159,3 +159,16 @@ def test_every_shipped_case_derives_to_itself(name):
     same = case.derive({"wear.mu": case.wear.mu})
     for section in cases.schema.SECTIONS:
         assert getattr(same, section) == getattr(case, section), section
+
+
+@pytest.mark.parametrize("solver", ["mdr", "bem"])
+def test_runs_past_the_caps_are_refused_before_solving(solver):
+    # ŝ per metre of the paper case is 34.6: 1e12 m is ŝ = 3.5e13, past the cap of 1e9
+    case = wearcheck.load_case("paper", {"sliding.until": "distance",
+                                         "sliding.distance": 1e12})
+    with pytest.raises(cases.CaseError, match=r"sliding\.distance.*exceeds the solver's cap"):
+        wearcheck.solve(case, solver)
+    fixed = case.derive({"sliding.scheme": "implicit", "sliding.step_hat": 1e-3,
+                         "sliding.distance": 200.0})  # ŝ = 6924: 6.9e6 steps of 1e-3
+    with pytest.raises(cases.CaseError, match=r"sliding\.step_hat.*steps \(cap"):
+        wearcheck.solve(fixed, solver)
