@@ -9,7 +9,7 @@ from wearcheck.comparisons import rundir
 from wearcheck.comparisons.present import vtk_image
 from wearcheck.comparisons.present.vtk import export_run
 
-pv = pytest.importorskip("pyvista")
+import pyvista as pv  # noqa: E402
 
 
 @pytest.fixture(scope="module")
