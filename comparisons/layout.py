@@ -39,6 +39,13 @@ RUN_FILES = (
     Item(".wearcheck-output", "", "ownership marker, JSON: kind (run, comparison, study, vtk, "
                                   "render), complete, writer pid and host; only such a path is "
                                   "ever replaced, and only by the same kind"),
+    Item("report.md", "", "fretting runs: loops, stick radius, energy and wear against cycles, "
+                          "checked against the closed forms"),
+    Item("report.html", "", "the same, with its figures embedded"),
+    Item("fretting_loops.png", "", "fretting runs: Q/μF against u/u* for the kept cycles, "
+                                   "with the Mindlin–Deresiewicz loop"),
+    Item("fretting_history.png", "", "fretting runs: stick radius, energy per cycle and worn "
+                                     "volume against cycles"),
 )
 
 #: history.csv columns every solver writes, in this order

@@ -42,6 +42,8 @@ class Solver:
         ``fields.npz``, ``function(directory, run, revolve=0) -> list[Path]`` (the
         .pvd files; ``run`` a ``rundir.Run``); None: the generic profile,
         pressure and surface series only.
+    run_report : "module:function" that adds a report to its run directories,
+        ``function(directory, case, result) -> list[Path]`` (it may write nothing).
     history_columns : its extra ``history.csv`` columns, ``layout.Item`` each.
     fields : its ``fields.npz`` arrays, ``layout.Item`` each.
     solve_function, supports_function : for solvers that are not packages
@@ -58,6 +60,7 @@ class Solver:
     description: str = ""
     style: dict = field(default_factory=dict)
     export_vtk: str | None = None
+    run_report: str | None = None
     history_columns: tuple = ()
     fields: tuple = ()
     solve_function: Callable | None = None
@@ -145,6 +148,7 @@ def solve(case: Case, solver: str, progress=None) -> RunResult:
 
 register(Solver(
     name="mdr", title="MDR", module="wearcheck.mdr", section="mdr",
+    run_report="wearcheck.comparisons.present.fretting_report:write",
     resolution_key="mdr.elements", default_levels=(100, 200, 400, 800, 1600, 3200),
     resolution_label="N",
     description="Method of Dimensionality Reduction: 1D springs, exact for axisymmetric "

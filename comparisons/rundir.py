@@ -198,6 +198,11 @@ def write_run_files(directory: Path, case: cases.Case, result: RunResult, solver
                                                     list(result.fields or {}),
                                                     list(result.stage_extra or {}))
     write_json(directory / "meta.json", meta)
+    entry = _registered(solver)
+    if entry is not None and entry.run_report:  # e.g. the MDR's fretting report
+        import importlib
+        module, _, function = entry.run_report.partition(":")
+        getattr(importlib.import_module(module), function)(directory, case, result)
 
 
 def _registered(solver: str):

@@ -1,0 +1,56 @@
+"""The report of a fretting run: written by every writer of a run directory, and its
+checks against the closed forms are the closed forms' (not the run's own numbers)."""
+
+import json
+
+import pytest
+
+import wearcheck
+from wearcheck.cases import reference_fretting as rf
+from wearcheck.comparisons.present import fretting_report
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    case = wearcheck.load_case("fretting", {"fretting.cycles": 30, "mdr.elements": 200})
+    result = wearcheck.solve(case, "mdr")
+    return case, result, result.write(tmp_path_factory.mktemp("fretting") / "run")
+
+
+def test_fretting_run_directory_has_its_report(run):
+    case, result, path = run
+    for name in ("report.md", "report.html", "fretting_loops.png", "fretting_history.png"):
+        assert (path / name).stat().st_size > 1000, name
+    text = (path / "report.md").read_text()
+    assert "c_CM/a" in text and "W_MD" in text and "Q*_CM" in text
+    assert "energy–wear identity" in text
+    # every file is described in the run's data dictionary
+    d = json.loads((path / "meta.json").read_text())["data_dictionary"]["files"]
+    assert {p.name for p in path.iterdir()} <= set(d)
+
+
+def test_first_cycle_against_the_closed_forms(run):
+    case, result, _ = run
+    checks = fretting_report.unworn_checks(case, result._run)
+    assert checks["regime"] == "partial slip"
+    # the closed forms, recomputed here from the case alone
+    h = result.history
+    a, F, mu = h["contact_radius"][0], h["force"][0], case.wear.mu
+    u_star = rf.gross_slip_displacement(mu, F, case.G_star, a)
+    c = rf.stick_radius(a, case.indenter.radius, case.E_star, case.G_star, mu,
+                        case.fretting.amplitude)
+    assert checks["stick_radius_closed_form"] == pytest.approx(c, rel=1e-12)
+    # N = 200: stick radius within 1e-3 a (measured 1e-4), energy per cycle within
+    # 3 % (its error falls from 1.1e-2 at N = 100 at order 1.3), Q* within 1e-2 μF
+    assert checks["stick_radius_difference"] < 1e-3
+    assert checks["energy_difference"] < 3e-2
+    assert checks["force_amplitude_difference"] < 1e-2
+    # V = (k/σ0) W holds to round-off at every cycle
+    assert checks["energy_wear_identity"] < 1e-9
+    assert u_star > case.fretting.amplitude
+
+
+def test_no_report_for_a_gross_slip_run(tmp_path):
+    path = wearcheck.solve(wearcheck.load_case("hertz", {"mdr.elements": 100}), "mdr").write(
+        tmp_path / "run")
+    assert not (path / "report.md").exists()
