@@ -8,7 +8,7 @@ import time
 import numpy as np
 from scipy import optimize
 
-from wearcheck.cases import CaseError, RunResult, SolverError, profiles, programme, reference
+from wearcheck.cases import CaseError, RunResult, profiles, programme, reference
 
 from . import wear
 from .operator import HalfSpace
@@ -182,14 +182,7 @@ def solve(case, progress=None) -> RunResult:
                    sl.force_fraction, progress, tolerance=sl.tolerance, scales=sc,
                    ring=(ring, rings, r),
                    max_steps=ADAPTIVE_MAX_STEPS if adaptive else MAX_STEPS)
-    if until == "force_fraction" and out["history"]["s"][-1] >= s_end * (1 - 1e-12):
-        raise SolverError(f"the force did not fall below {sl.force_fraction} F0 within "
-                          f"ŝ = {s_end * per_m:g}")
-    hist = out["history"]
-    hist["s_hat"] = hist["s"] * per_m
-    # cycles: NaN without a stroke (one set of columns for every case)
-    cpm = case.cycles_per_metre
-    hist["cycles"] = hist["s"] * (cpm if cpm is not None else math.nan)
+    hist = programme.finish_history(case, out["history"], until, s_end, per_m)
 
     # stages: azimuthal averages on rings one pixel wide, the full fields, anisotropy
     K = len(out["stages"])

@@ -6,7 +6,9 @@ so they live beside it rather than in each solver.
 
 from __future__ import annotations
 
-from .errors import CaseError
+import math
+
+from .errors import CaseError, SolverError
 
 
 def sliding_plan(case, step_hat: float, per_m: float, *, s_hat_cap: float, max_steps: int,
@@ -50,3 +52,21 @@ def sliding_plan(case, step_hat: float, per_m: float, *, s_hat_cap: float, max_s
         stage_s = [s for s in stage_s if s <= s_end * (1 + 1e-12)]
     until = "force_fraction" if sl.until == "force_fraction" else "distance"
     return s_end, stage_s, until
+
+
+def finish_history(case, history: dict, until: str, s_end: float, per_m: float) -> dict:
+    """Check that a run stopping on the force did stop, and add the columns every
+    ŝ-stepping solver writes: ``s_hat`` and ``cycles`` (NaN without a stroke).
+
+    Raises
+    ------
+    SolverError
+        the force did not fall below its fraction of F0 before the cap.
+    """
+    if until == "force_fraction" and history["s"][-1] >= s_end * (1 - 1e-12):
+        raise SolverError(f"the force did not fall below {case.sliding.force_fraction} F0 "
+                          f"within ŝ = {s_end * per_m:g}")
+    history["s_hat"] = history["s"] * per_m
+    cpm = case.cycles_per_metre
+    history["cycles"] = history["s"] * (cpm if cpm is not None else math.nan)
+    return history

@@ -451,14 +451,7 @@ def _solve(case, progress=None) -> RunResult:
 
     out = run(model, sl.scheme, step_hat / per_m, stage_s, until, s_end, sl.force_fraction,
               progress, tolerance=sl.tolerance, scales=sc, profile=profile, accept=ADAPTIVE_ACCEPT)
-    if until == "force_fraction" and out["history"]["s"][-1] >= s_end * (1 - 1e-12):
-        raise SolverError(f"the force did not fall below {sl.force_fraction} F0 within "
-                          f"ŝ = {s_end * per_m:g}")
-    hist = out["history"]
-    hist["s_hat"] = hist["s"] * per_m
-    # cycles: NaN without a stroke (one set of columns for every case)
-    cpm = case.cycles_per_metre
-    hist["cycles"] = hist["s"] * (cpm if cpm is not None else math.nan)
+    hist = programme.finish_history(case, out["history"], until, s_end, per_m)
     counters = out["counters"]
     info.update(counters)
     info["domain"] = counters.pop("domain")

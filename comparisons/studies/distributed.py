@@ -210,7 +210,7 @@ class _Client:
             try:
                 # tasks sent to a scheduler without workers would wait for ever
                 self.client.wait_for_workers(1, timeout=_worker_timeout())
-            except (TimeoutError, OSError) as exc:
+            except (TimeoutError, OSError):
                 self.client.close()
                 raise cases.WearcheckError(
                     f"the Dask scheduler at '{scheduler}' has no worker: none joined within "

@@ -23,6 +23,7 @@ from wearcheck.cases import reference
 
 from wearcheck.comparisons.rundir import provenance, write_text_atomic
 from wearcheck.comparisons.studies.distributed import Task, fmt, record_study, run_cases
+from wearcheck.comparisons.studies.sweep import check_varied
 
 COLUMNS = ("run", "status", "regime", "amplitude_over_u_star", "u_star", "normal_force",
            "stick_radius_over_a0", "tangential_force_amplitude", "wear_volume_per_cycle",
@@ -73,12 +74,7 @@ def fretting_map(case_path, overrides, varied, out, *, scheduler=None, workers=N
                               "condition map varies a fretting case")
     if not 1 <= len(varied) <= 2:
         raise cases.CaseError(f"fretting-map takes one or two --vary keys, got {len(varied)}")
-    names = [n for n, _ in varied]
-    if len(set(names)) != len(names):
-        raise cases.CaseError("--vary names a key twice: " + ", ".join(names))
-    both = set(names) & {o.partition("=")[0].strip() for o in overrides}
-    if both:
-        raise cases.CaseError(f"key {sorted(both)[0]} is both in --set and --vary")
+    names = check_varied(varied, overrides)
     tasks = tasks_for(varied)
     prov = provenance()
     out = Path(out)

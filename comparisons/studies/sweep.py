@@ -42,6 +42,17 @@ def split_values(text: str) -> list[str]:
     return values
 
 
+def check_varied(varied, overrides) -> list[str]:
+    """The varied key names; a key varied twice, or both set and varied, is refused."""
+    names = [n for n, _ in varied]
+    if len(set(names)) != len(names):
+        raise cases.CaseError("--vary names a key twice: " + ", ".join(names))
+    both = set(names) & {o.partition("=")[0].strip() for o in overrides}
+    if both:
+        raise cases.CaseError(f"key {sorted(both)[0]} is both in --set and --vary")
+    return names
+
+
 def parse_vary(text: str) -> tuple[str, list[str]]:
     """``section.key=v1,v2`` -> (``section.key``, [``v1``, ``v2``]), checked like ``--set``."""
     if "=" not in text:
@@ -70,12 +81,7 @@ def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=No
     from wearcheck.comparisons import registry
     registry.get(solver)  # an unknown solver is refused before the cluster starts
     varied = [parse_vary(v) for v in vary]
-    names = [n for n, _ in varied]
-    if len(set(names)) != len(names):
-        raise cases.CaseError("--vary names a key twice: " + ", ".join(names))
-    both = set(names) & {o.partition("=")[0].strip() for o in overrides}
-    if both:
-        raise cases.CaseError(f"key {sorted(both)[0]} is both in --set and --vary")
+    names = check_varied(varied, overrides)
     tasks = []
     for combo in itertools.product(*(vals for _, vals in varied)):
         run = "-".join([solver] + [f"{n}-{_dir_part(v)}" for n, v in zip(names, combo)])
