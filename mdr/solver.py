@@ -194,6 +194,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
     adaptive = scheme == "adaptive"
     systems: dict = {}
     m_prev = [state.m, state.m]
+    h_last = None
 
     def system_for(hc, exact=True):
         """The implicit system of wear compliance hc K (cached by hc; LRU of 6)."""
@@ -313,7 +314,8 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
                 cap = min(cap, ramp.pop(0))
             if hn > cap:
                 hn, s_new = cap, s + cap
-        guess = 2 * state.m - m_prev[-1]
+        # the contact edge extrapolated linearly in s from the last step
+        guess = state.m + (round((state.m - m_prev[-1]) * hn / h_last) if h_last else 0)
         try:
             if scheme == "explicit":
                 new = wear.explicit_step(model, state, hn)
@@ -326,9 +328,11 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
                 on_ladder = hn == h_cur
                 start = state if corr is None else dataclasses.replace(state, f=state.f + corr)
                 full = implicit(start, hn, exact=on_ladder, guess=guess)
+                # the full step ends where the two half steps do: its edge (to
+                # O(h²)) is the best guess for theirs
                 half = implicit(start, 0.5 * hn, exact=on_ladder,
-                                guess=(state.m + guess) // 2)
-                two = implicit(half, 0.5 * hn, exact=on_ladder, guess=guess)
+                                guess=(state.m + full.m) // 2)
+                two = implicit(half, 0.5 * hn, exact=on_ladder, guess=full.m)
                 err = error_of(two, full)
                 for st in (full, half, two):
                     for k in ("gmres_iterations", "contact_iterations"):
@@ -368,7 +372,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
         m_prev[:] = [m_prev[-1], state.m]
         if not np.all(np.isfinite(new.f)) or not math.isfinite(new.force):
             raise SolverError("the wear run produced non-finite values; reduce sliding.step_hat")
-        state, s = new, s_new
+        state, s, h_last = new, s_new, hn
         counters["steps"] += 1
         rec(model, state, s)
         if counters["steps"] >= max_steps:
