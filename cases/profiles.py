@@ -9,7 +9,7 @@ approximation); :func:`height_xy` gives the true surface over the plane.
 from __future__ import annotations
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
+import scipy  # submodules load on first use (scipy is lazy): import wearcheck stays quick
 
 from .schema import Indenter
 
@@ -21,7 +21,7 @@ def equivalent_radius(indenter: Indenter) -> float:
 
 def _table_interpolant(table):
     r, f = table
-    return PchipInterpolator(r, f, extrapolate=True)
+    return scipy.interpolate.PchipInterpolator(r, f, extrapolate=True)
 
 
 def height(indenter: Indenter, r, table=None) -> np.ndarray:

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import integrate, optimize, special
+import scipy  # submodules load on first use (scipy is lazy): import wearcheck stays quick
 
 from .errors import CaseError
 from .profiles import slope
@@ -46,7 +46,7 @@ def truncated_paraboloid(E_star, R, b, depth=None, force=None):
         def excess(a):
             return 2 * E_star / (3 * R) * math.sqrt(a**2 - b**2) * (2 * a**2 + b**2) - force
         hi = 2 * b + (3 * force * R / (4 * E_star)) ** (1 / 3)
-        a = optimize.brentq(excess, b, hi, xtol=1e-15 * hi, rtol=1e-14)
+        a = scipy.optimize.brentq(excess, b, hi, xtol=1e-15 * hi, rtol=1e-14)
     d = a / R * math.sqrt(a**2 - b**2)
     F = 2.0 * E_star / (3.0 * R) * math.sqrt(a**2 - b**2) * (2.0 * a**2 + b**2)
     return dict(contact_radius=a, depth=d, force=F)
@@ -70,14 +70,14 @@ def truncated_paraboloid_pressure(r, E_star, R, b, contact_radius):
             def g(t):
                 x = math.sqrt(b * b + t * t)
                 return (2 * x * x - b * b) / (x * math.sqrt(x * x - ri * ri))
-            val, _ = integrate.quad(g, 0.0, math.sqrt(a * a - b * b), epsabs=0, epsrel=1e-12,
+            val, _ = scipy.integrate.quad(g, 0.0, math.sqrt(a * a - b * b), epsabs=0, epsrel=1e-12,
                                     limit=200)
             out[i] = val
         else:
             def h(u):
                 x = math.sqrt(ri * ri + u * u)
                 return (2 * x * x - b * b) / (x * math.sqrt(x * x - b * b))
-            val, _ = integrate.quad(h, 0.0, math.sqrt(a * a - ri * ri), epsabs=0, epsrel=1e-12,
+            val, _ = scipy.integrate.quad(h, 0.0, math.sqrt(a * a - ri * ri), epsabs=0, epsrel=1e-12,
                                     limit=200)
             out[i] = val
     return E_star / (math.pi * R) * out
@@ -113,13 +113,13 @@ def hertz_elliptical(E_star, R1, R2, depth=None, force=None):
         d = c["depth"]
     else:
         def mismatch(e2):
-            K, E = special.ellipk(e2), special.ellipe(e2)
+            K, E = scipy.special.ellipk(e2), scipy.special.ellipe(e2)
             return (K - E) / (E / (1.0 - e2) - K) - ratio
         # the ratio falls from 1 (e → 0) to 0 (e → 1)
         # near e = 0 the ratio is 1 - (3/4)e² + ...: bracket below that
-        e2 = optimize.brentq(mismatch, 0.1 * (1.0 - ratio), 1.0 - 1e-15, xtol=1e-16,
+        e2 = scipy.optimize.brentq(mismatch, 0.1 * (1.0 - ratio), 1.0 - 1e-15, xtol=1e-16,
                              rtol=1e-15)
-        K, E = special.ellipk(e2), special.ellipe(e2)
+        K, E = scipy.special.ellipk(e2), scipy.special.ellipe(e2)
         if depth is None:
             # F ∝ d^(3/2): solve at a unit depth and scale
             unit = hertz_elliptical(E_star, R1, R2, depth=1.0)
@@ -152,10 +152,10 @@ def sphere(E_star, R, depth=None, force=None):
         return E_star * ((a**2 + R**2) * math.atanh(a / R) - R * a)
 
     if depth is not None:
-        a = optimize.brentq(lambda a: d_of(a) - depth, 0.0, R * (1 - 1e-15),
+        a = scipy.optimize.brentq(lambda a: d_of(a) - depth, 0.0, R * (1 - 1e-15),
                             xtol=1e-16 * R, rtol=1e-14)
     else:
-        a = optimize.brentq(lambda a: F_of(a) - force, 0.0, R * (1 - 1e-15),
+        a = scipy.optimize.brentq(lambda a: F_of(a) - force, 0.0, R * (1 - 1e-15),
                             xtol=1e-16 * R, rtol=1e-14)
     return dict(contact_radius=a, depth=d_of(a), force=F_of(a))
 
@@ -171,7 +171,7 @@ def cone(E_star, slope_angle, depth=None, force=None):
 
 def power_law_factor(n):
     """κ(n) in g(x) = κ c |x|^n for f = c r^n (MDR stretch factor)."""
-    return math.sqrt(math.pi) * special.gamma(n / 2 + 1) / special.gamma(n / 2 + 0.5)
+    return math.sqrt(math.pi) * scipy.special.gamma(n / 2 + 1) / scipy.special.gamma(n / 2 + 0.5)
 
 
 def power_law(E_star, c, n, depth=None, force=None):
@@ -190,7 +190,7 @@ def mdr_transform_quad(indenter, x, table=None):
     x = float(x)
     if x == 0.0:
         return 0.0
-    val, _ = integrate.quad(lambda p: float(slope(indenter, x * math.sin(p), table)),
+    val, _ = scipy.integrate.quad(lambda p: float(slope(indenter, x * math.sin(p), table)),
                             0.0, math.pi / 2, epsabs=0, epsrel=1e-11, limit=200)
     return x * val
 
@@ -219,12 +219,12 @@ def general(E_star, indenter, table, depth=None, force=None):
         if g(hi)[0] < depth:
             raise CaseError(f"key 'loading.depth' = {depth!r}: deeper than the tabulated profile "
                             f"reaches (g at its last radius is {g(hi)[0]:.4g} m)")
-        a = optimize.brentq(lambda x: g(x)[0] - depth, 0.0, hi, xtol=1e-14 * hi, rtol=1e-12)
+        a = scipy.optimize.brentq(lambda x: g(x)[0] - depth, 0.0, hi, xtol=1e-14 * hi, rtol=1e-12)
     else:
         if F_of(hi) < force:
             raise CaseError(f"key 'loading.force' = {force!r}: larger than the tabulated profile "
                             "can carry within its last radius")
-        a = optimize.brentq(lambda x: F_of(x) - force, 0.0, hi, xtol=1e-14 * hi, rtol=1e-12)
+        a = scipy.optimize.brentq(lambda x: F_of(x) - force, 0.0, hi, xtol=1e-14 * hi, rtol=1e-12)
     return dict(contact_radius=a, depth=float(g(a)[0]), force=F_of(a))
 
 
