@@ -299,20 +299,24 @@ def test_pressure_exponent_schemes_agree():
                                                                            abs=1e-2)
 
 
-def test_pressure_exponent_asymptote():
-    # n = 2, force control: b^6 -> 6 R K_2 (F/π)² s; relative deviation of the
-    # contact radius falling with s (measured at N = 400: 0.74, 0.25, 0.051,
-    # 0.010 at 10 ... 10^4 cycles)
-    case = ball("mdr.elements=200", "wear.pressure_exponent=2.0", "sliding.cycles=10000.0",
+@pytest.mark.parametrize("n, last", [(2.0, 0.03), (4.0, 0.15)])
+def test_pressure_exponent_asymptote(n, last):
+    # force control: b^(2(n+1)) -> 2(n+1) R K_n (F/π)^n s; relative deviation
+    # of the contact radius falling with s. Measured at N = 200, 10 ... 10^4
+    # cycles: n = 2: 0.74, 0.25, 0.050, 0.010; n = 4 (the top of the allowed
+    # range, where the Newton iteration of the implicit step used to stop with
+    # an error, its change stalled at 2-5e-7 of max p): 1.07, 0.65, 0.32, 0.10
+    # — the scar grows as s^(1/10), so the elastic start is forgotten later
+    case = ball("mdr.elements=200", f"wear.pressure_exponent={n}", "sliding.cycles=10000.0",
                 "stages.cycles=[0.0, 10.0, 100.0, 1000.0, 10000.0]")
     res = mdr.solve(case)
     h = res.history
     i = np.searchsorted(h["s"], res.stage_s[1:])
     b = reference.worn_sphere_asymptote(case.indenter.radius, case.loading.force,
-                                        res.stage_s[1:], case.wear_rate, exponent=2.0,
+                                        res.stage_s[1:], case.wear_rate, exponent=n,
                                         hardness=case.wear.hardness)["scar_radius"]
     dev = np.abs(h["contact_radius"][i] / b - 1)
-    assert np.all(np.diff(dev) < 0) and dev[-1] < 0.03
+    assert np.all(np.diff(dev) < 0) and dev[-1] < last
 
 
 # -- what an experimenter reads off ----------------------------------------------
