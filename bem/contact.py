@@ -79,7 +79,10 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
     h : (n, n) height of the (worn) profile [m].
     depth, force : give one: the approach d [m] (depth control) or the
         normal force W [N] (force control).
-    sigma : wear compliance σ [m/Pa] added to G (implicit wear step).
+    sigma : wear compliance σ [m/Pa] added to G (implicit wear step): a
+        number, or one per pixel (the linearised wear law of a pressure
+        exponent n != 1); the preconditioner then takes its mean over the
+        loaded pixels.
     p_init : starting pressure (clipped to >= 0), e.g. the last step's.
     p_scale, g_scale : pressure and gap scales of the residual [Pa], [m].
     tol : complementarity tolerance (see module docstring).
@@ -94,14 +97,16 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
     if (depth is None) == (force is None):
         raise ValueError("give depth or force")
     area = op.spacing**2
-    sigma = float(sigma)
+    per_pixel = np.ndim(sigma) > 0
+    sigma = np.asarray(sigma, dtype=float) if per_pixel else float(sigma)
     if p_init is None or not np.any(p_init > 0):
         p = initial_pressure(h, depth, force)
     else:
         p = np.maximum(np.asarray(p_init, dtype=float), 0.0)
     if force is not None:
         p = p * (force / (area * np.sum(p)))
-    precond = op.preconditioner(sigma) if precondition else None
+    sigma_bar = float(np.mean(sigma[p > 0])) if per_pixel else sigma
+    precond = op.preconditioner(sigma_bar) if precondition else None
     t = np.zeros_like(p)
     gz_old = 1.0
     free_old = None
@@ -158,7 +163,7 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
             values = -p[clipped]
             p[clipped] = 0.0
             op.add_point_loads(u, clipped, values)
-            u[clipped] += sigma * values
+            u[clipped] += (sigma[clipped] if per_pixel else sigma) * values
         if force is not None:
             total = area * np.sum(p)
             if not total > 0.0:

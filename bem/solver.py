@@ -64,6 +64,11 @@ def largest_contact_radius(case, sc: dict) -> float:
 
     if ld.control == "depth":
         return max(sc["a0"], beyond(ld.depth))
+    if case.wear.pressure_exponent != 1.0 and ind.profile in ("sphere", "paraboloid"):
+        # V = K F s holds for n = 1 only; the long-run asymptote from a0 sizes the scar
+        return max(sc["a0"], reference.predicted_scar_radius(case, case.end_distance or 0.0))
+    # n != 1 on other profiles: V = K F s as an estimate (exact for n = 1); a
+    # scar that outgrows the box stops the run with a clear error (bem.box)
     volume = case.wear_rate * ld.force * (case.end_distance or 0.0)
     if volume <= 0.0:
         return sc["a0"]
@@ -113,16 +118,12 @@ def supports(case) -> str | None:
     """None when the BEM can run ``case``, else why not.
 
     It solves every profile (axisymmetric or the ellipsoid) against either
-    counterface, in gross slip with the Reye–Archard law; not fretting
-    (partial slip) and not a pressure exponent other than 1.
+    counterface, in gross slip, with any pressure exponent of the wear law;
+    not fretting (partial slip).
     """
     if getattr(case, "fretting", None) is not None:
         return ("fretting (partial slip) needs the tangential contact problem, which the BEM "
                 "does not solve (normal contact, gross slip only); use the MDR")
-    n = getattr(case.wear, "pressure_exponent", 1.0)
-    if n != 1.0:
-        return (f"key 'wear.pressure_exponent' = {n!r}: the BEM implements the Reye–Archard "
-                "law (exponent 1) only; use the MDR")
     return None
 
 
@@ -144,8 +145,13 @@ def solve(case, progress=None) -> RunResult:
     d_scale = case.loading.depth if case.loading.control == "depth" else sc["d0"]
     model = wear.Model(op=op, f0=f0, wear_rate=case.wear_rate, depth=case.loading.depth,
                        force=case.loading.force, p_scale=sc["p0"], g_scale=d_scale,
-                       tol=bem.tolerance, centre=(n // 2, n // 2))
+                       tol=bem.tolerance, centre=(n // 2, n // 2),
+                       exponent=case.wear.pressure_exponent, hardness=case.wear.hardness)
     limit_hat = wear.explicit_limit(op, case.wear_rate) * per_m
+    if model.exponent != 1.0:
+        # the rate's derivative n (p/σ0)^(n-1) scales the stiffness; bounded at
+        # 1.5 p0 as in the MDR
+        limit_hat /= float(wear.wear_speed_slope(model, np.array([1.5 * sc["p0"]]))[0])
     info = dict(solver="bem", grid=n, pixel=dx, box_side=n * dx, largest_contact_radius=a_max,
                 scheme=sl.scheme, tolerance=bem.tolerance,
                 explicit_limit_step_hat=float(limit_hat),

@@ -2,7 +2,9 @@
 
 The state is the worn profile f = f0 + w on the pixels. Over a sliding
 increment h each pixel wears by Δw = K p h, K = k μ/σ0 (pressure-driven
-Archard wear, the same law as the MDR and FEM solvers).
+Archard wear, the same law as the MDR and FEM solvers), or by
+Δw = K σ0 (p/σ0)^n h with a pressure exponent n (implicit steps then
+iterate on the linearised law, :func:`implicit_state`).
 
 - explicit Euler: w_{n+1} = w_n + h K p_n, then a static contact solve;
   stable for h K / λ_min(G) <= 2 (:func:`explicit_limit`).
@@ -59,6 +61,8 @@ class Model:
     tol: float = 1e-8
     maxiter: int = 5000
     centre: tuple[int, int] = (0, 0)
+    exponent: float = 1.0      # n of the wear law dw/ds = K σ0 (p/σ0)^n
+    hardness: float = 1.0      # σ0 [Pa]; enters only when exponent != 1
 
 
 @dataclass
@@ -71,6 +75,18 @@ class State:
     iterations: int
     residual: float
     stats: dict = field(default_factory=dict)
+
+
+def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
+    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard)."""
+    if model.exponent == 1.0:
+        return model.wear_rate * p
+    return model.wear_rate * p * (np.maximum(p, 0.0) / model.hardness) ** (model.exponent - 1.0)
+
+
+def wear_speed_slope(model: Model, p: np.ndarray) -> np.ndarray:
+    """d(dw/ds)/dp divided by K: n (p/σ0)^(n-1)."""
+    return model.exponent * (np.maximum(p, 0.0) / model.hardness) ** (model.exponent - 1.0)
 
 
 def bdf2_coefficients(h: float, h_prev: float | None) -> tuple[float, float, float]:
@@ -118,9 +134,61 @@ def contact_state(model: Model, base: np.ndarray, sigma: float = 0.0,
                       p_init=p_init, p_scale=model.p_scale, g_scale=model.g_scale,
                       tol=model.tol, maxiter=model.maxiter)
     check_edge(c.pressure)
-    f = base + sigma * c.pressure if sigma else base
+    f = base + sigma * c.pressure if np.any(sigma) else base
     return State(f=f, p=c.pressure, gap=c.gap, depth=c.depth, force=c.force,
                  iterations=c.iterations, residual=c.residual)
+
+
+#: Newton iteration of a pressure exponent n != 1 (as the MDR's,
+#: docs/time-stepping.md): relative change of p that ends it (at least ten
+#: times the contact solve's tolerance), most iterations, undamped ones, the
+#: floor of the pressure the slope is taken at, and the stall rule
+NEWTON_TOL = 1e-7
+NEWTON_MAX = 60
+NEWTON_UNDAMPED = 8
+NEWTON_FLOOR = 0.05
+NEWTON_STALL = 1e-5
+NEWTON_STALL_AFTER = 4
+
+
+def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> State:
+    """One implicit step: the contact of ``base`` + eff·(wear speed at its end).
+
+    eff is the step times the scheme's factor (h for backward Euler, c h for
+    BDF2). n = 1: one contact solve with wear compliance eff·K. n != 1: the
+    wear speed is linearised about the last iterate (Newton: per-pixel wear
+    compliance eff K n (p_k/σ0)^(n-1), base shifted by eff (r(p_k) - r'(p_k)
+    p_k)) until p settles; the profile is then base + eff r(p).
+    """
+    K = model.wear_rate
+    if model.exponent == 1.0:
+        return contact_state(model, base, eff * K, p_guess)
+    p_k = contact_state(model, base, 0.0, p_guess).p if p_guess is None else p_guess
+    tol = max(NEWTON_TOL, 10.0 * model.tol)
+    iterations, changes = 0, []
+    for it in range(NEWTON_MAX):
+        # the slope vanishes as p -> 0 (n > 1): floored, or an edge pixel would
+        # enter unworn and leave worn, iterate after iterate (any slope leaves
+        # the fixed point p = p_k unchanged)
+        slope = wear_speed_slope(model, np.maximum(p_k, NEWTON_FLOOR * np.max(p_k)))
+        shift = eff * (wear_speed(model, p_k) - K * slope * p_k)
+        new = contact_state(model, base + shift, eff * K * slope, p_k)
+        iterations += new.iterations
+        change = float(np.max(np.abs(new.p - p_k))) / float(np.max(new.p))
+        if change <= tol:
+            break
+        changes.append(change)
+        if len(changes) > NEWTON_STALL_AFTER and change <= NEWTON_STALL and \
+                min(changes[-NEWTON_STALL_AFTER:]) >= 0.5 * min(changes[:-NEWTON_STALL_AFTER]):
+            break     # settled at the accuracy of the contact solves
+        p_k = new.p if it < NEWTON_UNDAMPED else 0.5 * (p_k + new.p)
+    else:
+        raise SolverError(f"implicit wear step: the Newton iteration of the pressure exponent "
+                          f"did not converge in {NEWTON_MAX} iterations (last change "
+                          f"{change:.2e} of max p)")
+    new.f = base + eff * wear_speed(model, new.p)
+    new.iterations = iterations
+    return new
 
 
 def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
@@ -135,7 +203,6 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
     column (from the ring-averaged wear). Returns the history, the stages
     reached (s, f, p, gap, depth) and counters.
     """
-    K = model.wear_rate
     area = model.op.spacing**2
     i0, j0 = model.centre
     state = contact_state(model, model.f0.copy())
@@ -188,7 +255,7 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
         counters.update(rejected_steps=0, largest_step_hat=0.0)
 
     def backward_euler(start_f, p_guess, hn):
-        return contact_state(model, start_f, hn * K, p_guess)
+        return implicit_state(model, start_f, hn, p_guess)
 
     def error_of(a, b):
         """Local error estimate between two solutions of one step."""
@@ -229,7 +296,7 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
             if not np.any(guess > 0):
                 guess = state.p
         if scheme == "explicit":
-            new = contact_state(model, state.f + hn * K * state.p, 0.0, guess)
+            new = contact_state(model, state.f + hn * wear_speed(model, state.p), 0.0, guess)
         elif adaptive:
             on_ladder = hn == h_cur
             start = state.f if corr is None else state.f + corr
@@ -254,10 +321,10 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
         else:
             if scheme == "bdf2" and previous is not None:
                 a, b, c = bdf2_coefficients(hn, previous[1])
-                base, sigma = a * state.f + b * previous[0], c * hn * K
+                base, eff = a * state.f + b * previous[0], c * hn
             else:
-                base, sigma = state.f, hn * K
-            new = contact_state(model, base, sigma, guess)
+                base, eff = state.f, hn
+            new = implicit_state(model, base, eff, guess)
             if scheme == "bdf2":
                 previous = (state.f, hn)
         if not np.all(np.isfinite(new.f)) or not math.isfinite(new.force):
