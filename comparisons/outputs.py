@@ -23,6 +23,7 @@ import json
 import os
 import platform
 import shutil
+import stat
 import tempfile
 import time
 from pathlib import Path
@@ -47,9 +48,140 @@ def marker_data(kind: str, complete: bool) -> dict:
                 host=platform.node(), created=time.strftime("%Y-%m-%dT%H:%M:%S%z"))
 
 
-def write_marker(directory: Path, kind: str, complete: bool = True) -> None:
-    (Path(directory) / OUTPUT_MARKER).write_text(
-        json.dumps(marker_data(kind, complete)) + "\n", encoding="utf-8")
+def write_marker(directory: Path, kind: str, complete: bool = True, files=None) -> None:
+    """Write the marker; ``files`` (from :func:`inventory`) lists what the output holds."""
+    data = marker_data(kind, complete)
+    if files is not None:
+        data["files"] = files
+    (Path(directory) / OUTPUT_MARKER).write_text(json.dumps(data) + "\n", encoding="utf-8")
+
+
+def _parse_marker(text: str) -> dict | None:
+    if text.startswith(_LEGACY_MARKER_TEXT):
+        return dict(wearcheck="output", kind="legacy", complete=True)
+    try:
+        data = json.loads(text)
+    except ValueError:
+        return None
+    if not isinstance(data, dict) or data.get("wearcheck") != "output":
+        return None
+    return data
+
+
+def _marker_at(fd: int) -> dict | None:
+    """The marker of the directory open as ``fd`` (None when it has none)."""
+    try:
+        st = os.stat(OUTPUT_MARKER, dir_fd=fd, follow_symlinks=False)
+        if not stat.S_ISREG(st.st_mode):      # a regular file, not a link
+            return None
+        mfd = os.open(OUTPUT_MARKER, os.O_RDONLY, dir_fd=fd)
+        with os.fdopen(mfd, encoding="utf-8", errors="replace") as fh:
+            return _parse_marker(fh.read())
+    except OSError:
+        return None
+
+
+def _walk(fd: int, prefix: str, files: dict, nested: list) -> None:
+    """Fill ``files`` with the inventory below the directory ``fd``; collect nested outputs.
+
+    Everything is read through the open directory, so a concurrent writer that
+    renames another directory onto the same path cannot mix two outputs.
+    Nested outputs are appended as (relative path, open descriptor).
+    """
+    with os.scandir(fd) as it:
+        entries = sorted(it, key=lambda e: e.name)
+    for e in entries:
+        if not prefix and e.name == OUTPUT_MARKER:
+            continue
+        rel = prefix + e.name
+        if e.is_dir(follow_symlinks=False):
+            sub = os.open(e.name, os.O_RDONLY | os.O_DIRECTORY, dir_fd=fd)
+            marker = _marker_at(sub)
+            if marker is not None and marker.get("complete", True):
+                nested.append((rel, sub))
+                continue
+            try:
+                files[rel] = []
+                _walk(sub, rel + "/", files, nested)
+            finally:
+                os.close(sub)
+        else:
+            st = e.stat(follow_symlinks=False)
+            files[rel] = [st.st_size, st.st_mtime_ns]
+
+
+def inventory(directory: Path) -> dict:
+    """What ``directory`` holds: {relative path: [size, mtime_ns]} of its files and
+    links, [] for its directories.
+
+    The marker is left out, and so is a nested complete wearcheck output (a
+    run's ``vtk/`` or ``render/``, written later by another command): it has
+    its own marker and inventory and is checked on its own.
+    """
+    fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
+    files, nested = {}, []
+    try:
+        _walk(fd, "", files, nested)
+    finally:
+        os.close(fd)
+        for _, sub in nested:
+            os.close(sub)
+    return files
+
+
+def foreign_content(directory: Path) -> str | None:
+    """Why replacing the wearcheck output ``directory`` would lose something; None if not.
+
+    Compares what it holds now with the inventory its marker recorded when it
+    was written: a file or directory added since, or a file changed since (size
+    or modification time), would be lost; so would anything in a nested output
+    that fails the same check. An output without an inventory (written by an
+    older wearcheck) cannot be checked and is not replaced.
+    """
+    try:
+        fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    try:
+        why = _foreign(fd, str(directory))
+        # a concurrent writer may have moved this directory aside (and emptied
+        # it) while it was read: then the verdict is about a directory that is
+        # no longer there, and the caller looks again (FileNotFoundError). The
+        # open descriptor keeps its inode from being reused meanwhile.
+        st = os.fstat(fd)
+        if st.st_nlink == 0 or os.lstat(directory).st_ino != st.st_ino:
+            raise FileNotFoundError(directory)
+        return why
+    finally:
+        os.close(fd)
+
+
+def _foreign(fd: int, name: str) -> str | None:
+    recorded = (_marker_at(fd) or {}).get("files")
+    if not isinstance(recorded, dict):
+        return (f"output '{name}' was written by an older wearcheck that kept no list of "
+                "its files, so it cannot tell whether you added any; remove it yourself or "
+                "choose another output path")
+    now, nested = {}, []
+    try:
+        _walk(fd, "", now, nested)
+        added = [k for k in now if k not in recorded]
+        changed = [k for k in now if k in recorded and now[k] != recorded[k]]
+        for what, names in (("holds files wearcheck did not write", added),
+                            ("holds files changed since wearcheck wrote them", changed)):
+            if names:
+                shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more"
+                                                if len(names) > 3 else "")
+                return (f"output '{name}' {what} ({shown}); replacing it would lose them: "
+                        "move them out or choose another output path")
+        for rel, sub in nested:
+            why = _foreign(sub, f"{name}/{rel}")
+            if why:
+                return why
+        return None
+    finally:
+        for _, sub in nested:
+            os.close(sub)
 
 
 def read_marker(directory: Path) -> dict | None:
@@ -61,15 +193,7 @@ def read_marker(directory: Path) -> dict | None:
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError:
         return None
-    if text.startswith(_LEGACY_MARKER_TEXT):
-        return dict(wearcheck="output", kind="legacy", complete=True)
-    try:
-        data = json.loads(text)
-    except ValueError:
-        return None
-    if not isinstance(data, dict) or data.get("wearcheck") != "output":
-        return None
-    return data
+    return _parse_marker(text)
 
 
 def _kind_name(kind) -> str:
@@ -126,8 +250,10 @@ def _refusal(path: Path, kind: str) -> str | None:
         return (f"output '{path}' is an incomplete wearcheck output; remove it yourself "
                 "or choose another path")
     have = marker.get("kind")
+    if have == kind and kind == "study":
+        return None          # a study directory is reused, never replaced
     if have == kind or (have == "legacy" and kind in ("run", "comparison")):
-        return None
+        return foreign_content(path)
     return (f"output '{path}' is a wearcheck {_kind_name(have)} directory, not a {kind}; "
             "choose another output path or remove it yourself")
 
@@ -153,11 +279,44 @@ def check_output(path, kind: str) -> Path:
                               "wearcheck does not write through it")
     # the parent as the kernel resolves it ('..' after a link goes where the link leads)
     path = Path(os.path.realpath(given.parent)) / given.name
-    why = refusal(path, kind)
+    why = _inside_output(path, kind) or refusal(path, kind)
     if why:
         raise OutputError(why)
     _check_writable_ancestor(path)
     return path
+
+
+#: what may be written inside a complete wearcheck output: (its kind, the kind
+#: written, whether only as its child named after the kind)
+_NESTED = {("run", "vtk"): True, ("run", "render"): True, ("comparison", "vtk"): True,
+           ("comparison", "render"): True, ("legacy", "vtk"): True, ("legacy", "render"): True,
+           ("study", "run"): False, ("study", "comparison"): False}
+
+
+def _inside_output(path: Path, kind: str) -> str | None:
+    """Why ``path`` may not be written where it lies: inside another wearcheck output.
+
+    A re-run of that output replaces it whole, and with it anything written
+    inside; only its own parts are allowed (a run's ``vtk/`` and ``render/``,
+    a study's runs) and this process's own directory being written.
+    """
+    for ancestor in path.parents:
+        marker = read_marker(ancestor)
+        if marker is None:
+            continue
+        have = marker.get("kind")
+        if marker.get("complete", True) is False:
+            if marker.get("pid") == os.getpid() and marker.get("host") == platform.node():
+                return None      # this process's output being written (run --vtk)
+            return (f"output '{path}' lies inside '{ancestor}', a wearcheck output being "
+                    "written or left incomplete; choose a path outside it")
+        child_only = _NESTED.get((have, kind))
+        if child_only is not None and (not child_only or
+                                       (ancestor == path.parent and path.name == kind)):
+            return None
+        return (f"output '{path}' lies inside the wearcheck {_kind_name(have)} '{ancestor}', "
+                "which a re-run replaces whole; choose a path outside it")
+    return None
 
 
 def _pid_alive(pid: int) -> bool:
@@ -270,7 +429,7 @@ def atomic_directory(path, kind: str = "run"):
         os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; outputs are shared like any dir
         write_marker(tmp, kind, complete=False)
         yield tmp
-        write_marker(tmp, kind, complete=True)
+        write_marker(tmp, kind, complete=True, files=inventory(tmp))
         _install(tmp, path, kind)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)

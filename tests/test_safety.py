@@ -91,6 +91,78 @@ def test_a_child_of_a_run_directory_is_not_replaceable(tmp_path, capsys):
     assert _snapshot(tmp_path) == before
 
 
+def test_a_rerun_never_deletes_what_the_user_added(tmp_path, capsys):
+    # a re-run replaces the run it wrote, not the notes and folders added since
+    run = tmp_path / "run"
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    (run / "my_notes.txt").write_text("n")
+    (run / "myplots").mkdir()
+    before = _snapshot(tmp_path)
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert "my_notes.txt" in line and "myplots" in line
+    assert _snapshot(tmp_path) == before
+    # a file wearcheck wrote and the user changed is the user's too
+    (run / "my_notes.txt").unlink()
+    (run / "myplots").rmdir()
+    with open(run / "history.csv", "a") as fh:
+        fh.write("# checked by hand\n")
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 2
+    assert "history.csv" in _one_error_line(capsys.readouterr().err)
+    # as written, it is replaced
+    (run / "history.csv").unlink()
+    shutil.rmtree(run)
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+
+
+def test_a_file_added_to_an_exported_vtk_folder_survives_a_rerun(tmp_path, capsys):
+    run = tmp_path / "run"
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    assert cli_main(["export", str(run)]) == 0
+    # the export is the run's own part: a re-run replaces both
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    assert cli_main(["export", str(run)]) == 0
+    (run / "vtk" / "state.pvsm").write_text("paraview state")
+    capsys.readouterr()
+    before = _snapshot(tmp_path)
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 2
+    assert "state.pvsm" in _one_error_line(capsys.readouterr().err)
+    assert _snapshot(tmp_path) == before
+
+
+@pytest.mark.parametrize("inner", ["inner", "vtk", "deeper/still"])
+def test_an_output_inside_another_output_is_refused(tmp_path, capsys, inner, no_solve):
+    # a re-run of the outer output would delete it; only a run's own vtk/
+    # (by export) and a study's runs live inside another output
+    outer = tmp_path / "outer"
+    outer.mkdir()
+    from wearcheck.comparisons import outputs
+    outputs.write_marker(outer, "run", files=outputs.inventory(outer))
+    before = _snapshot(tmp_path)
+    assert cli_main(["run", HERTZ, "--out", str(outer / inner), *SMALL]) == 2
+    assert "lies inside" in _one_error_line(capsys.readouterr().err)
+    assert cli_main(["compare", HERTZ, "--out", str(outer / inner)]) == 2
+    # (after the case's Dundurs note, which every command prints first)
+    err = "\n".join(l for l in capsys.readouterr().err.splitlines()
+                    if not l.startswith("note:"))
+    assert "lies inside" in _one_error_line(err)
+    assert _snapshot(tmp_path) == before
+
+
+def test_an_output_of_an_older_wearcheck_is_not_replaced(tmp_path, capsys):
+    # its marker lists no files: what the user added cannot be told apart
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / ".wearcheck-output").write_text(json.dumps(
+        {"wearcheck": "output", "kind": "run", "complete": True}))
+    (old / "history.csv").write_text("s\n")
+    before = _snapshot(tmp_path)
+    assert cli_main(["run", HERTZ, "--out", str(old), *SMALL]) == 2
+    assert "older wearcheck" in _one_error_line(capsys.readouterr().err)
+    assert _snapshot(tmp_path) == before
+
+
 def test_an_output_of_another_kind_is_not_replaced(tmp_path):
     from wearcheck.comparisons import outputs
     run = tmp_path / "run"

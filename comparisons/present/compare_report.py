@@ -337,8 +337,13 @@ def _sphere_blocks(sw) -> list:
                                         "a0/R.")] if sw.get("figure") else [])
 
 
-def print_summary(m, out, stream=sys.stderr) -> None:
-    """A few lines for the terminal: one per compared solver and stage."""
+def print_summary(m, out, stream=None) -> None:
+    """A few lines for the terminal: one per compared solver and stage (default: stderr).
+
+    The default is looked up at the call: a stream bound at import time may be
+    one that was replaced and closed since (a notebook's, a test's capture).
+    """
+    stream = sys.stderr if stream is None else stream
     ref = title(m["reference"])
     for name, pair in m["pairs"].items():
         print(f"{title(name)} against {ref}:", file=stream)
