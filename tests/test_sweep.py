@@ -96,3 +96,27 @@ def test_mdr_sweep_over_the_wear_coefficient_is_self_similar(cluster, tmp_path):
     assert np.allclose(fend, fend[0], rtol=1e-8, atol=0)
     for r in rows:
         assert Run(out / r["run"]).case.wear.k == float(r["wear.k"])
+
+
+@pytest.mark.parametrize("command, vary", [
+    ("sweep", "wear.mu=0.3,a"),
+    ("fretting-map", "fretting.amplitude=-1e-7,1e-7"),
+])
+def test_a_value_its_key_cannot_take_is_refused_before_the_cluster(tmp_path, capsys,
+                                                                    monkeypatch, command, vary):
+    # one line naming the key and the value, exit 2, no directory; the
+    # cluster never starts (run_cases would)
+    from wearcheck.comparisons.cli import main as cli_main
+    from wearcheck.comparisons.studies import fretting_map, sweep as sweep_mod
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("the cluster started")
+    for module in (sweep_mod, fretting_map):
+        monkeypatch.setattr(module, "run_cases", no_cluster)
+    case = "hertz" if command == "sweep" else "fretting"
+    out = tmp_path / "out"
+    assert cli_main([command, case, "--vary", vary, "--out", str(out), "--quiet"]) == 2
+    err = [l for l in capsys.readouterr().err.splitlines() if not l.startswith("note:")]
+    key, _, values = vary.partition("=")
+    assert len(err) == 1 and f"key '{key}'" in err[0]
+    assert not out.exists()

@@ -48,4 +48,6 @@ def main(args) -> int:
               f"{fmt(r['wear_volume_per_cycle'], '.4g'):>12}  {r['status']}")
     print(f"-> {Path(out) / 'fretting_map.csv'}, {Path(out) / 'fretting_map.png'}")
     failed = [r for r in rows if r["status"] != "ok"]
+    if failed:  # an error, shown with --quiet too
+        print(f"{len(failed)} of {len(rows)} runs failed", file=sys.stderr)
     return 1 if failed else 0

@@ -53,6 +53,6 @@ def main(args) -> int:
               f"{r['status']}")
     print(f"-> {Path(out) / 'sweep.csv'} ({', '.join(names)})")
     failed = [r for r in rows if r["status"] != "ok"]
-    if failed and not args.quiet:
+    if failed:  # an error, shown with --quiet too
         print(f"{len(failed)} of {len(rows)} runs failed", file=sys.stderr)
     return 1 if failed else 0

@@ -74,7 +74,7 @@ def fretting_map(case_path, overrides, varied, out, *, scheduler=None, workers=N
                               "condition map varies a fretting case")
     if not 1 <= len(varied) <= 2:
         raise cases.CaseError(f"fretting-map takes one or two --vary keys, got {len(varied)}")
-    names = check_varied(varied, overrides)
+    names = check_varied(varied, overrides, case)
     tasks = tasks_for(varied)
     prov = provenance()
     out = Path(out)

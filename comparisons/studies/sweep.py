@@ -42,14 +42,29 @@ def split_values(text: str) -> list[str]:
     return values
 
 
-def check_varied(varied, overrides) -> list[str]:
-    """The varied key names; a key varied twice, or both set and varied, is refused."""
+def check_varied(varied, overrides, case=None) -> list[str]:
+    """The varied key names; a key varied twice, or both set and varied, is refused.
+
+    With ``case``, each value is also tried on it alone: a value its key can
+    never take (a word for a number, a negative count) is refused here, before
+    the cluster starts, rather than as a failed run per combination. An error
+    about another key is left to the runs (the value may be fine in its
+    combination).
+    """
     names = [n for n, _ in varied]
     if len(set(names)) != len(names):
         raise cases.CaseError("--vary names a key twice: " + ", ".join(names))
     both = set(names) & {o.partition("=")[0].strip() for o in overrides}
     if both:
         raise cases.CaseError(f"key {sorted(both)[0]} is both in --set and --vary")
+    if case is not None:
+        for name, values in varied:
+            for v in values:
+                try:
+                    case.derive([f"{name}={v}"])
+                except cases.CaseError as exc:
+                    if f"key '{name}'" in str(exc):
+                        raise cases.CaseError(f"--vary {name}: {exc}") from None
     return names
 
 
@@ -81,7 +96,7 @@ def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=No
     from wearcheck.comparisons import registry
     registry.get(solver)  # an unknown solver is refused before the cluster starts
     varied = [parse_vary(v) for v in vary]
-    names = check_varied(varied, overrides)
+    names = check_varied(varied, overrides, case)
     tasks = []
     for combo in itertools.product(*(vals for _, vals in varied)):
         run = "-".join([solver] + [f"{n}-{_dir_part(v)}" for n, v in zip(names, combo)])
