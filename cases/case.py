@@ -246,6 +246,7 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     _check_materials(built)
     _check_programme(built)
     case = Case(**built, source=str(source), table=table)
+    _check_sphere_depth(case)
     _check_scales(case)
     if case.stages.cycles is not None:
         # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
@@ -258,6 +259,16 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     return replace(case, warnings=_warnings(case))
 
 
+def _check_sphere_depth(case: Case) -> None:
+    """A sphere pressed as deep as its radius has no surface there to touch."""
+    ind, ld = case.indenter, case.loading
+    if ind.profile == "sphere" and ld.control == "depth" and ld.depth >= ind.radius:
+        raise CaseError(f"key 'loading.depth' = {ld.depth!r}: not below the sphere's radius "
+                        f"(indenter.radius = {ind.radius!r} m), where the sphere has no "
+                        "surface; the depth must be smaller (half-space theory wants it far "
+                        "smaller: d/R <= 0.01 gives a0/R <= 0.1)")
+
+
 def _check_scales(case: Case) -> None:
     """The unworn contact must be computable: extreme (valid) numbers can underflow."""
     from . import reference
@@ -265,7 +276,7 @@ def _check_scales(case: Case) -> None:
         sc = reference.scales(case)
         ok = all(math.isfinite(sc[k]) and sc[k] > 0 for k in ("a0", "d0", "F0", "p0",
                                                                 "s_hat_per_m"))
-    except (ArithmeticError, ValueError):
+    except (ArithmeticError, ValueError, RuntimeError):  # RuntimeError: a root not found
         ok = False
     if not ok:
         control = case.loading.control

@@ -356,13 +356,15 @@ def _check_number(name, value, meta):
     if lo is not None and (value < lo or (meta["open_minimum"] and value == lo)):
         lb = "(" if meta["open_minimum"] else "["
         rb = ")" if meta["open_maximum"] else "]"
-        allowed = f"{lb}{lo:g}, {hi:g}{rb}" if hi is not None else f"{'>' if meta['open_minimum'] else '>='} {lo:g}"
-        raise CaseError(f"key '{name}' = {format_value(value)}: must be in {allowed}{unit}")
+        allowed = f"in {lb}{lo:g}, {hi:g}{rb}" if hi is not None else \
+            f"{'>' if meta['open_minimum'] else '>='} {lo:g}"
+        raise CaseError(f"key '{name}' = {format_value(value)}: must be {allowed}{unit}")
     if hi is not None and (value > hi or (meta["open_maximum"] and value == hi)):
         lb = "(" if meta["open_minimum"] else "["
         rb = ")" if meta["open_maximum"] else "]"
-        allowed = f"{lb}{lo:g}, {hi:g}{rb}" if lo is not None else f"{'<' if meta['open_maximum'] else '<='} {hi:g}"
-        raise CaseError(f"key '{name}' = {format_value(value)}: must be in {allowed}{unit}")
+        allowed = f"in {lb}{lo:g}, {hi:g}{rb}" if lo is not None else \
+            f"{'<' if meta['open_maximum'] else '<='} {hi:g}"
+        raise CaseError(f"key '{name}' = {format_value(value)}: must be {allowed}{unit}")
     return value
 
 
@@ -385,6 +387,10 @@ def convert(name: str, f: dataclasses.Field, value: Any):
             return value
     elif isinstance(value, int) and int in allowed:
         return int(_check_number(name, value, meta))
+    elif isinstance(value, float) and int in allowed and float not in allowed \
+            and math.isfinite(value) and value.is_integer():
+        # 1e3 is a float in TOML; an integral one is the integer (as in JSON Schema)
+        return int(_check_number(name, int(value), meta))
     elif isinstance(value, (int, float)) and float in allowed:
         return _check_number(name, float(_check_number(name, value, meta)), meta)
     elif isinstance(value, str) and str in allowed:

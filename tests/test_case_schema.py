@@ -41,7 +41,9 @@ def _valid(schema, value) -> bool:
     tp = schema.get("type")
     if tp == "number" and (isinstance(value, bool) or not isinstance(value, (int, float))):
         return False
-    if tp == "integer" and (isinstance(value, bool) or not isinstance(value, int)):
+    # draft-06 on: an integer is any number with a zero fractional part (1.6e3 is one)
+    if tp == "integer" and (isinstance(value, bool) or not isinstance(value, (int, float))
+                            or (isinstance(value, float) and not value.is_integer())):
         return False
     if tp in TYPES and not isinstance(value, TYPES[tp]):
         return False
@@ -192,6 +194,7 @@ GOOD = {
                             ("counterface", "youngs_modulus", 70e9),
                             ("counterface", "poisson_ratio", 0.2)),
     "integer where a number is asked": _with(("wear", "hardness", 2000000000)),
+    "integral float for an integer": _with(("mdr", "elements", 1.6e3)),
     "step auto and stages": _with(("sliding", "step_hat", "auto"), ("stages", "s_hat", [0, 1.5])),
     "numeric step": _with(("sliding", "scheme", "bdf2"), ("sliding", "step_hat", 0.05)),
 }
