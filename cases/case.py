@@ -240,7 +240,8 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
             if raw.get(section) and built[section] != SECTIONS[section]():
                 raise CaseError(f"section [{section}] given with [fretting]; a fretting run "
                                 "lasts fretting.cycles and keeps fretting.stage_cycles — "
-                                f"remove [{section}]")
+                                f"remove [{section}] (to start from a shipped case: "
+                                "wearcheck cases NAME > my.toml, then edit it)")
     base = Path(source).parent if source != "<dict>" else Path.cwd()
     built, table = _check_indenter(built, base)
     _check_materials(built)

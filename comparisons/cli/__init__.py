@@ -68,8 +68,9 @@ class _Parser(argparse.ArgumentParser):
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="wearcheck",
-        description="Gross-slip Reye-Archard wear of axisymmetric contacts: MDR and FEM, "
-                    "cross-checked.")
+        description="Wear of contacts (Reye-Archard, gross slip and fretting): MDR, "
+                    "axisymmetric FEM and 3D BEM, cross-checked against each other and "
+                    "closed forms.")
     from importlib.metadata import PackageNotFoundError, version
     try:
         v = version("wearcheck")

@@ -110,7 +110,13 @@ def history_figure(stem, curves, *, stage_s_hat=(), formats=("png", "pdf")) -> l
     ax1.set_ylabel("F / F0")
     ax2.set_xlabel("ŝ")
     ax2.set_ylabel("a / a0")
+    lo = min((float(np.min(F)) for _, F, _ in curves.values() if len(F)), default=1.0)
+    hi = max((float(np.max(F)) for _, F, _ in curves.values() if len(F)), default=1.0)
+    if hi - lo < 1e-6:
+        # force control: F/F0 is 1 to round-off; an autoscaled axis would plot the noise
+        ax1.set_ylim(0.0, 1.1 * max(hi, 1e-300))
     for ax in (ax1, ax2):
+        ax.ticklabel_format(axis="y", useOffset=False)
         ax.grid(alpha=0.3)
         ax.legend()
     out = _save(fig, stem, formats)
