@@ -52,16 +52,18 @@ def test_vary_values_split_like_set():
 
 def test_sweep_writes_one_run_per_value(cluster, tmp_path):
     out = tmp_path / "sweep"
-    # 3 x 2 combinations; wear.k = -1 is rejected by the case (k > 0)
-    rows = sweep(cases.shipped("paper"), [], ["wear.k=1e-5,1e-4,-1", "loading.depth=1e-6,2e-6"],
+    # 2 x 2 x 2 combinations; sliding.until = "distance" is a fine value whose
+    # runs fail (the case gives no sliding.distance): error rows, no directory
+    rows = sweep(cases.shipped("paper"), [], ["wear.k=1e-5,1e-4", "loading.depth=1e-6,2e-6",
+                                              "sliding.until=force_fraction,distance"],
                  "mdr", out, scheduler=cluster, quiet=True, solve=fake_solve)
-    assert len(rows) == 6
+    assert len(rows) == 8
     with open(out / "sweep.csv", newline="") as fh:
         table = list(csv.DictReader(line for line in fh if not line.startswith("#")))
     assert [r["run"] for r in table] == [r["run"] for r in rows]
     for r in table:
-        if r["wear.k"] == "-1":
-            assert "wear.k" in r["status"] and not (out / r["run"]).exists()
+        if r["sliding.until"] == "distance":
+            assert "sliding.distance" in r["status"] and not (out / r["run"]).exists()
             continue
         assert r["status"] == "ok"
         run = Run(out / r["run"])  # a complete run directory, read back
