@@ -397,14 +397,17 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
             F2 = w @ transforms.line_load(p2, model.dt)
             d = (model.force - F2) / F1
             p = d * p1 + p2
-        q = transforms.line_load(p, model.dt)
+        q = None      # the line load, formed only where more than its edge value is needed
+        # its edge value exactly: the triangular P⁻¹ has b[0] = 1 on its diagonal
+        q_edge = 0.5 * math.pi * math.sqrt(model.dt) * p[m]
         f = base.copy()
         f[:n] += sigma * p
         g = transforms.to_1d(f)
         below = np.flatnonzero(d - g[n:] > tol * d)
         if below.size:
             m_new = n + int(below[-1])
-        elif q[m] < -tol * E * d:
+        elif q_edge < -tol * E * d:
+            q = transforms.line_load(p, model.dt)
             pos = np.flatnonzero(q > 0.0)
             m_new = int(pos[-1]) if pos.size else 0
         elif accurate:
@@ -412,7 +415,8 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
         else:
             accurate, x0 = True, p
             continue
-        if marginal == m and m_new == m - 1 and -q[m] < 1e-3 * np.max(q):
+        if marginal == m and m_new == m - 1 and \
+                -q_edge < 1e-3 * np.max(transforms.line_load(p, model.dt) if q is None else q):
             # the marginal node: slightly tensile in contact, slightly
             # penetrating out of it; keep it in, its line load clipped to 0
             if accurate:
@@ -447,7 +451,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
                                   f"(nodes {m} <-> {m_new}); reduce sliding.step_hat")
         m = m_new
     qq = np.zeros(N + 1)
-    qq[:n] = np.maximum(q, 0.0)
+    qq[:n] = np.maximum(transforms.line_load(p, model.dt), 0.0)
     pp = np.zeros(N + 1)
     pp[:n] = p
     return State(f=f, depth=float(d), q=qq, p=pp, force=transforms.force(qq, model.dt),
