@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from wearcheck.cases import SolverError
+from wearcheck.cases import SolverError, wear_law
 from wearcheck.cases.result import scar_radius
 
 from . import contact
@@ -78,15 +78,13 @@ class State:
 
 
 def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
-    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard)."""
-    if model.exponent == 1.0:
-        return model.wear_rate * p
-    return model.wear_rate * p * (np.maximum(p, 0.0) / model.hardness) ** (model.exponent - 1.0)
+    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard): :func:`cases.wear_law.speed`."""
+    return wear_law.speed(p, model.wear_rate, model.exponent, model.hardness)
 
 
 def wear_speed_slope(model: Model, p: np.ndarray) -> np.ndarray:
     """d(dw/ds)/dp divided by K: n (p/σ0)^(n-1)."""
-    return model.exponent * (np.maximum(p, 0.0) / model.hardness) ** (model.exponent - 1.0)
+    return wear_law.slope(p, model.exponent, model.hardness)
 
 
 def bdf2_coefficients(h: float, h_prev: float | None) -> tuple[float, float, float]:

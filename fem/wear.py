@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import linalg
 
-from wearcheck.cases import SolverError
+from wearcheck.cases import SolverError, wear_law
 from wearcheck.cases.result import scar_radius
 
 from .contact import PrefixCholesky, solve_lcp
@@ -130,10 +130,8 @@ def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
     adaptive = scheme == "adaptive"
 
     def speed(p):
-        """Wear speed dw/ds at nodal pressures p."""
-        if exponent == 1.0:
-            return rate * p
-        return rate * p * (np.maximum(p, 0.0) / hardness) ** (exponent - 1.0)
+        """Wear speed dw/ds at nodal pressures p (:func:`cases.wear_law.speed`)."""
+        return wear_law.speed(p, rate, exponent, hardness)
 
     def factor_for(eff):
         """Factor of C + rate·eff/A (eff: the step times the scheme's c; 0: C).
@@ -177,7 +175,7 @@ def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
             return res, base + rate * eff * res.f / area
         p_k = res_prev[0].f / area
         for _ in range(30):
-            slope = exponent * (np.maximum(p_k, 0.0) / hardness) ** (exponent - 1.0)
+            slope = wear_law.slope(p_k, exponent, hardness)
             shift = eff * (speed(p_k) - rate * slope * p_k)
             fac = PrefixCholesky(C + np.diag(rate * eff * slope / area))
             out.refactorisations += 1

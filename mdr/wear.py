@@ -30,7 +30,7 @@ import numpy as np
 from scipy.linalg import lu_factor, lu_solve
 from scipy.sparse.linalg import LinearOperator, eigs
 
-from wearcheck.cases import SolverError
+from wearcheck.cases import SolverError, wear_law
 
 from . import contact, linalg, transforms
 
@@ -70,17 +70,13 @@ class State:
 
 
 def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
-    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard)."""
-    if model.exponent == 1.0:
-        return model.wear_rate * p
-    return model.wear_rate * p * (np.maximum(p, 0.0) / model.hardness) ** (model.exponent - 1.0)
+    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard): :func:`cases.wear_law.speed`."""
+    return wear_law.speed(p, model.wear_rate, model.exponent, model.hardness)
 
 
 def wear_speed_slope(model: Model, p: np.ndarray) -> np.ndarray:
-    """d(dw/ds)/dp = n K (p/σ0)^(n-1), divided by K (the implicit step's factor on h K)."""
-    if model.exponent == 1.0:
-        return np.ones_like(p)
-    return model.exponent * (np.maximum(p, 0.0) / model.hardness) ** (model.exponent - 1.0)
+    """d(dw/ds)/dp divided by K (the implicit step's factor on h K): n (p/σ0)^(n-1)."""
+    return wear_law.slope(p, model.exponent, model.hardness)
 
 
 def contact_state(model: Model, f: np.ndarray) -> State:
