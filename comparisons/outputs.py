@@ -35,8 +35,6 @@ OUTPUT_MARKER = ".wearcheck-output"
 KINDS = ("run", "comparison", "study", "vtk", "render", "mesh")
 #: the text marker of wearcheck before the marker said its kind (runs and comparisons)
 _LEGACY_MARKER_TEXT = "written by wearcheck"
-#: what an unmarked RUN_DIR/vtk or RUN_DIR/render of older versions may hold
-_LEGACY_PARTS = {"vtk": (".vtu", ".pvd"), "render": (".png",)}
 
 
 class OutputError(cases.CaseError):
@@ -81,15 +79,63 @@ def _marker_at(fd: int) -> dict | None:
         return None
 
 
-def _walk(fd: int, prefix: str, files: dict, nested: list) -> None:
+#: files up to this size are fingerprinted by content (SHA-256), larger ones by
+#: size and modification time: an edit that keeps both would pass for them
+HASH_MAX_BYTES = 64 << 20
+#: the nested outputs an output may hold, written later by another command:
+#: its own vtk/ and render/ (a comparison's also in each solver's folder), and
+#: a comparison's runs; anything else marked inside an output is foreign
+_PARTS = ("vtk", "render")
+
+
+def _fingerprint(fd: int, name: str, st) -> list:
+    """[size, mtime_ns, sha256 or None] of the file ``name`` in the directory ``fd``."""
+    digest = None
+    if stat.S_ISREG(st.st_mode) and st.st_size <= HASH_MAX_BYTES:
+        h = hashlib.sha256()
+        ffd = os.open(name, os.O_RDONLY | getattr(os, "O_NOFOLLOW", 0), dir_fd=fd)
+        with os.fdopen(ffd, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                h.update(block)
+        digest = h.hexdigest()
+    return [st.st_size, st.st_mtime_ns, digest]
+
+
+def _same(now: list, recorded) -> bool:
+    """Whether a file is as it was written: its content, else its size and mtime."""
+    if not isinstance(recorded, list) or len(recorded) < 2 or not isinstance(now, list):
+        return now == recorded
+    if not now or not recorded:          # directories: [] both
+        return now == recorded
+    if now[0] != recorded[0]:
+        return False
+    if len(recorded) > 2 and recorded[2] and len(now) > 2 and now[2]:
+        return now[2] == recorded[2]     # a copy (tar, cp) may not keep the mtime
+    return now[1] == recorded[1]
+
+
+def _allowed_part(root_kind, depth: int, name: str, marker: dict) -> bool:
+    """Whether a complete output found inside a ``root_kind`` output is one of its parts."""
+    kind = marker.get("kind")
+    if kind in _PARTS and name == kind:
+        return depth == 1 or (depth == 2 and root_kind == "comparison")
+    return root_kind == "comparison" and kind == "run" and depth == 1
+
+
+def _walk(fd: int, prefix: str, files: dict, nested: list, root_kind=None,
+          partials: list | None = None) -> None:
     """Fill ``files`` with the inventory below the directory ``fd``; collect nested outputs.
 
     Everything is read through the open directory, so a concurrent writer that
     renames another directory onto the same path cannot mix two outputs.
-    Nested outputs are appended as (relative path, open descriptor).
+    Nested outputs that are this output's own parts are appended to ``nested``
+    as (relative path, open descriptor) and left out of ``files``; another
+    command's directory being written (``.NAME.partial-*``) goes to
+    ``partials`` as (relative path, marker).
     """
     with os.scandir(fd) as it:
         entries = sorted(it, key=lambda e: e.name)
+    depth = prefix.count("/") + 1
     for e in entries:
         if not prefix and e.name == OUTPUT_MARKER:
             continue
@@ -97,31 +143,37 @@ def _walk(fd: int, prefix: str, files: dict, nested: list) -> None:
         if e.is_dir(follow_symlinks=False):
             sub = os.open(e.name, os.O_RDONLY | os.O_DIRECTORY, dir_fd=fd)
             marker = _marker_at(sub)
-            if marker is not None and marker.get("complete", True):
+            if marker is not None and marker.get("complete", True) is False \
+                    and partials is not None and e.name.startswith(".") \
+                    and (".partial-" in e.name or ".old-" in e.name):
+                partials.append((rel, marker))
+                os.close(sub)
+                continue
+            if marker is not None and marker.get("complete", True) \
+                    and _allowed_part(root_kind, depth, e.name, marker):
                 nested.append((rel, sub))
                 continue
             try:
                 files[rel] = []
-                _walk(sub, rel + "/", files, nested)
+                _walk(sub, rel + "/", files, nested, root_kind, partials)
             finally:
                 os.close(sub)
         else:
-            st = e.stat(follow_symlinks=False)
-            files[rel] = [st.st_size, st.st_mtime_ns]
+            files[rel] = _fingerprint(fd, e.name, e.stat(follow_symlinks=False))
 
 
-def inventory(directory: Path) -> dict:
-    """What ``directory`` holds: {relative path: [size, mtime_ns]} of its files and
-    links, [] for its directories.
+def inventory(directory: Path, kind=None) -> dict:
+    """What the ``kind`` output ``directory`` holds: {relative path: [size, mtime_ns,
+    sha256]} of its files and links, [] for its directories.
 
-    The marker is left out, and so is a nested complete wearcheck output (a
-    run's ``vtk/`` or ``render/``, written later by another command): it has
-    its own marker and inventory and is checked on its own.
+    The marker is left out, and so are the output's own parts written later by
+    another command (a run's ``vtk/`` and ``render/``, a comparison's runs):
+    they have their own marker and inventory and are checked on their own.
     """
     fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
     files, nested = {}, []
     try:
-        _walk(fd, "", files, nested)
+        _walk(fd, "", files, nested, kind)
     finally:
         os.close(fd)
         for _, sub in nested:
@@ -129,14 +181,22 @@ def inventory(directory: Path) -> dict:
     return files
 
 
+def _shown(names) -> str:
+    names = [n if n.isprintable() else repr(n) for n in names]
+    return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+
+
 def foreign_content(directory: Path) -> str | None:
     """Why replacing the wearcheck output ``directory`` would lose something; None if not.
 
     Compares what it holds now with the inventory its marker recorded when it
-    was written: a file or directory added since, or a file changed since (size
-    or modification time), would be lost; so would anything in a nested output
-    that fails the same check. An output without an inventory (written by an
-    older wearcheck) cannot be checked and is not replaced.
+    was written: a file or directory added since, or a file changed since
+    (content; size and mtime above HASH_MAX_BYTES), would be lost; so would
+    anything in one of its parts that fails the same check. A directory that
+    another wearcheck process is writing inside it makes it busy; one left by
+    a process that died on this host is wearcheck's own debris. An output
+    without an inventory (written by an older wearcheck) cannot be checked
+    and is not replaced.
     """
     try:
         fd = os.open(directory, os.O_RDONLY | os.O_DIRECTORY)
@@ -157,23 +217,29 @@ def foreign_content(directory: Path) -> str | None:
 
 
 def _foreign(fd: int, name: str) -> str | None:
-    recorded = (_marker_at(fd) or {}).get("files")
+    marker = _marker_at(fd) or {}
+    recorded = marker.get("files")
     if not isinstance(recorded, dict):
         return (f"output '{name}' was written by an older wearcheck that kept no list of "
                 "its files, so it cannot tell whether you added any; remove it yourself or "
                 "choose another output path")
-    now, nested = {}, []
+    now, nested, partials = {}, [], []
     try:
-        _walk(fd, "", now, nested)
+        _walk(fd, "", now, nested, marker.get("kind"), partials)
+        for rel, pm in partials:
+            pid = pm.get("pid")
+            if pm.get("host") == platform.node() and isinstance(pid, int) \
+                    and not _pid_alive(pid):
+                continue              # left by a wearcheck process that died: debris
+            return (f"output '{name}' is being written into by wearcheck process {pid} on "
+                    f"{pm.get('host')} ({_shown([rel])}); try again when it has finished")
         added = [k for k in now if k not in recorded]
-        changed = [k for k in now if k in recorded and now[k] != recorded[k]]
+        changed = [k for k in now if k in recorded and not _same(now[k], recorded[k])]
         for what, names in (("holds files wearcheck did not write", added),
                             ("holds files changed since wearcheck wrote them", changed)):
             if names:
-                shown = ", ".join(names[:3]) + (f" and {len(names) - 3} more"
-                                                if len(names) > 3 else "")
-                return (f"output '{name}' {what} ({shown}); replacing it would lose them: "
-                        "move them out or choose another output path")
+                return (f"output '{name}' {what} ({_shown(names)}); replacing it would lose "
+                        "them: move them out or choose another output path")
         for rel, sub in nested:
             why = _foreign(sub, f"{name}/{rel}")
             if why:
@@ -198,15 +264,6 @@ def read_marker(directory: Path) -> dict | None:
 
 def _kind_name(kind) -> str:
     return {"legacy": "output (of an older wearcheck)"}.get(kind, str(kind))
-
-
-def _is_legacy_part(path: Path, kind: str) -> bool:
-    """RUN_DIR/vtk or RUN_DIR/render written before parts had markers of their own."""
-    suffixes = _LEGACY_PARTS.get(kind)
-    if suffixes is None or path.name != kind or read_marker(path.parent) is None:
-        return False
-    return all(p.is_file() and not p.is_symlink() and p.suffix in suffixes
-               for p in path.iterdir())
 
 
 def refusal(path: Path, kind: str) -> str | None:
@@ -242,7 +299,7 @@ def _refusal(path: Path, kind: str) -> str | None:
                 "choose another output path or remove it yourself")
     marker = read_marker(path)
     if marker is None:
-        if not any(path.iterdir()) or _is_legacy_part(path, kind):
+        if not any(path.iterdir()):
             return None
         return (f"output '{path}' exists and is not a wearcheck output (no "
                 f"{OUTPUT_MARKER} marker); choose another output path or remove it yourself")
@@ -311,8 +368,9 @@ def _inside_output(path: Path, kind: str) -> str | None:
             return (f"output '{path}' lies inside '{ancestor}', a wearcheck output being "
                     "written or left incomplete; choose a path outside it")
         child_only = _NESTED.get((have, kind))
+        parents = (path.parent, path.parent.parent) if have == "comparison" else (path.parent,)
         if child_only is not None and (not child_only or
-                                       (ancestor == path.parent and path.name == kind)):
+                                       (ancestor in parents and path.name == kind)):
             return None
         return (f"output '{path}' lies inside the wearcheck {_kind_name(have)} '{ancestor}', "
                 "which a re-run replaces whole; choose a path outside it")
@@ -382,9 +440,14 @@ def _install(tmp: Path, path: Path, kind: str) -> None:
     Race-free under concurrent writers to one path: each rename either lands
     or finds ``path`` taken, in which case the occupant (checked to be a
     replaceable output) is moved into a private ``.old-`` directory and the
-    rename retried; the last writer to rename wins.
+    rename retried; the last writer to rename wins. The occupant is checked
+    again once moved aside, where nobody can add to it any more: a file that
+    reached it between the first check and the move is not lost, the
+    occupant goes back (or, if another writer took the path meanwhile, stays
+    beside it under a name the error gives).
     """
     graveyard = None
+    kept = False
     try:
         for attempt in range(100000):
             try:
@@ -401,13 +464,25 @@ def _install(tmp: Path, path: Path, kind: str) -> None:
                 graveyard = Path(tempfile.mkdtemp(prefix=f".{path.name}.old-",
                                                   dir=path.parent))
                 write_marker(graveyard, kind, complete=False)
+            aside = graveyard / f"{attempt}"
             try:
-                os.rename(path, graveyard / f"{attempt}")
+                os.rename(path, aside)
             except FileNotFoundError:
-                pass  # another writer moved it first
+                continue  # another writer moved it first
+            why = foreign_content(aside)
+            if why:
+                try:
+                    os.rename(aside, path)
+                except OSError:
+                    keep = path.with_name(f"{path.name}.kept-{os.getpid()}-{attempt}")
+                    os.rename(aside, keep)
+                    kept = True
+                    raise OutputError(f"output '{path}': files reached it while it was being "
+                                      f"replaced; it was kept as '{keep}'") from None
+                raise OutputError(why.replace(str(aside), str(path)))
         raise OSError(errno.EBUSY, f"could not install '{path}': too many concurrent writers")
     finally:
-        if graveyard is not None:
+        if graveyard is not None and not kept:
             shutil.rmtree(graveyard, ignore_errors=True)
 
 
@@ -429,33 +504,132 @@ def atomic_directory(path, kind: str = "run"):
         os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; outputs are shared like any dir
         write_marker(tmp, kind, complete=False)
         yield tmp
-        write_marker(tmp, kind, complete=True, files=inventory(tmp))
+        write_marker(tmp, kind, complete=True, files=inventory(tmp, kind))
         _install(tmp, path, kind)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
 
 
-def study_directory(path) -> Path:
+def study_directory(path, runs=()) -> Path:
     """Create (or reuse) the study directory ``path`` of ``wearcheck refine``/``sweep``.
 
     A new or empty directory gets a ``study`` marker; an existing one must
-    already be a wearcheck study. Its runs are written inside, each atomically.
+    already be a wearcheck study, the files the studies wrote into it
+    (:func:`write_study_file`) as they wrote them, and each of ``runs`` (the
+    names of the run directories this study will write) absent or a run it
+    may replace: all checked here, before any work. Its runs are written
+    inside, each atomically.
     """
     path = check_output(path, "study")
     path.mkdir(parents=True, exist_ok=True)
-    if read_marker(path) is None:
-        write_marker(path, "study", complete=True)
+    marker = read_marker(path)
+    if marker is None:
+        write_marker(path, "study", complete=True, files={})
+        return path
+    recorded = marker.get("files")
+    if not isinstance(recorded, dict):
+        raise OutputError(f"study '{path}' was written by an older wearcheck that kept no list "
+                          "of its files, so it cannot tell whether you changed any; remove it "
+                          "yourself or choose another output path")
+    for name, rec in recorded.items():
+        if (path / name).exists() or (path / name).is_symlink():
+            _check_study_file(path, name, recorded)
+    for run in runs:
+        why = refusal(path / run, "run")
+        if why:
+            raise OutputError(why)
     return path
 
 
+def _path_fingerprint(path: Path) -> list:
+    fd = os.open(path.parent, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        return _fingerprint(fd, path.name, os.stat(path.name, dir_fd=fd, follow_symlinks=False))
+    finally:
+        os.close(fd)
+
+
+def _check_study_file(study: Path, name: str, recorded: dict) -> None:
+    """``study/name`` exists: it must be a file the studies wrote there, unchanged since."""
+    path = study / name
+    if path.is_symlink() or not path.is_file() or name not in recorded \
+            or not _same(_path_fingerprint(path), recorded[name]):
+        raise OutputError(f"'{path}' is not a file wearcheck wrote into this study, or it "
+                          "changed since; move it out (or rename it) and run again")
+
+
+def write_study_file(study, name: str, write) -> Path:
+    """Write the file ``study/name`` by ``write(temporary path)``, atomically.
+
+    Only a file this study directory's marker lists, unchanged since, is
+    replaced; the marker then lists the new one. Never written through a link.
+    """
+    study = Path(study)
+    path = study / name
+    marker = read_marker(study) or {}
+    recorded = marker.get("files") if isinstance(marker.get("files"), dict) else {}
+    if path.exists() or path.is_symlink():
+        _check_study_file(study, name, recorded)
+    fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=Path(name).suffix, dir=study)
+    os.close(fd)
+    try:
+        write(Path(tmp))
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; study files are shared
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+        raise
+    recorded[name] = _path_fingerprint(path)
+    _rewrite_marker(study, dict(marker or marker_data("study", True), files=recorded))
+    return path
+
+
+def write_study_text(study, name: str, text: str) -> Path:
+    """:func:`write_study_file` of a UTF-8 text."""
+    return write_study_file(study, name, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+
+
+def remove_study_file(study, name: str) -> bool:
+    """Remove ``study/name`` if the study wrote it and it is unchanged; else leave it."""
+    study = Path(study)
+    marker = read_marker(study) or {}
+    recorded = marker.get("files") if isinstance(marker.get("files"), dict) else {}
+    path = study / name
+    if not (path.exists() or path.is_symlink()):
+        return False
+    try:
+        _check_study_file(study, name, recorded)
+    except OutputError:
+        return False
+    path.unlink()
+    recorded.pop(name, None)
+    _rewrite_marker(study, dict(marker, files=recorded))
+    return True
+
+
+def _rewrite_marker(directory: Path, data: dict) -> None:
+    fd, tmp = tempfile.mkstemp(prefix=f"{OUTPUT_MARKER}.", dir=directory)
+    with os.fdopen(fd, "w", encoding="utf-8") as fh:
+        fh.write(json.dumps(data) + "\n")
+    os.chmod(tmp, 0o666 & ~_umask())
+    os.replace(tmp, Path(directory) / OUTPUT_MARKER)
+
+
 def remove_output(path: Path, kind: str) -> bool:
-    """Remove ``path`` if, and only if, it is a complete wearcheck output of ``kind``."""
+    """Remove ``path`` if, and only if, it is a complete wearcheck output of ``kind``
+    holding nothing but what wearcheck wrote (:func:`foreign_content`)."""
     path = Path(path)
     if path.is_symlink() or not path.is_dir():
         return False
     marker = read_marker(path)
-    if marker is None or marker.get("kind") != kind:
+    if marker is None or marker.get("kind") != kind or not marker.get("complete", True):
+        return False
+    try:
+        if foreign_content(path):
+            return False
+    except FileNotFoundError:
         return False
     shutil.rmtree(path)
     return True
@@ -483,6 +657,20 @@ def check_output_file(path, kind: str = "mesh") -> Path:
     and the SHA-256 of the content.
     """
     path = check_output_path_common(path)
+    why = _inside_output(Path(os.path.realpath(path.parent)) / path.name, kind)
+    if why:
+        raise OutputError(why)
+    side = _sidecar(path)
+    if side.is_symlink() or (side.exists() and not side.is_file()):
+        raise OutputError(f"output '{path}': its side marker '{side}' exists and is not a "
+                          "regular file; remove it yourself or choose another output path")
+    if side.exists():
+        data = None
+        with contextlib.suppress(OSError, ValueError):
+            data = json.loads(side.read_text(encoding="utf-8"))
+        if not (isinstance(data, dict) and data.get("wearcheck") == "output"):
+            raise OutputError(f"output '{path}': '{side}' exists and is not a wearcheck side "
+                              "marker; remove it yourself or choose another output path")
     if path.is_symlink():
         raise OutputError(f"output '{path}' is a symbolic link; give the real path")
     if path.is_dir():
@@ -524,7 +712,11 @@ def write_file(path, source: Path, kind: str = "mesh") -> Path:
         os.chmod(tmp, 0o666 & ~_umask())
         side = dict(marker_data(kind, True), sha256=_sha256(Path(tmp)))
         os.replace(tmp, path)
-        _sidecar(path).write_text(json.dumps(side) + "\n", encoding="utf-8")
+        # the side marker by rename too: never written through a link put in its place
+        sfd, stmp = tempfile.mkstemp(prefix=f".{path.name}.marker-", dir=path.parent)
+        with os.fdopen(sfd, "w", encoding="utf-8") as fh:
+            fh.write(json.dumps(side) + "\n")
+        os.replace(stmp, _sidecar(path))
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)

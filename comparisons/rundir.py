@@ -10,7 +10,6 @@ damages an earlier complete run at the same path.
 
 from __future__ import annotations
 
-import contextlib
 import importlib.metadata
 import json
 import os
@@ -18,7 +17,6 @@ import platform
 import shlex
 import subprocess
 import sys
-import tempfile
 import time
 import tomllib
 from pathlib import Path
@@ -35,22 +33,7 @@ DEPENDENCIES = ("numpy", "scipy", "scikit-fem", "meshio", "gmsh", "pyvista", "ma
 
 
 # output safety lives in comparisons.outputs; these names are kept for their users
-from wearcheck.comparisons.outputs import OUTPUT_MARKER, _umask, atomic_directory  # noqa: E402,F401
-
-
-def write_text_atomic(path: str | Path, text: str) -> None:
-    """Write a single file atomically (temporary file, then rename)."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
+from wearcheck.comparisons.outputs import OUTPUT_MARKER, atomic_directory  # noqa: E402,F401
 
 
 def wearcheck_version() -> str | None:

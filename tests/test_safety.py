@@ -150,6 +150,151 @@ def test_an_output_inside_another_output_is_refused(tmp_path, capsys, inner, no_
     assert _snapshot(tmp_path) == before
 
 
+def _sums(root: Path) -> dict:
+    return {str(p.relative_to(root)): (p.read_bytes() if p.is_file() and not p.is_symlink()
+                                       else os.readlink(p) if p.is_symlink() else None)
+            for p in sorted(root.rglob("*"))}
+
+
+@pytest.mark.parametrize("how", ["moved run", "copied vtk"])
+def test_an_output_put_inside_another_survives_its_rerun(tmp_path, capsys, how):
+    # only a run's own vtk/ and render/ are its parts: another output moved or
+    # copied in is the user's
+    run = tmp_path / "run"
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    if how == "moved run":
+        assert cli_main(["run", HERTZ, "--out", str(tmp_path / "old"), *SMALL]) == 0
+        (tmp_path / "old").rename(run / "backup-run")
+    else:
+        assert cli_main(["export", str(run)]) == 0
+        shutil.copytree(run / "vtk", run / "vtk-backup", symlinks=True)
+    capsys.readouterr()
+    before = _snapshot(tmp_path)
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 2
+    assert "backup" in _one_error_line(capsys.readouterr().err)
+    assert _snapshot(tmp_path) == before
+
+
+def test_an_unmarked_vtk_folder_of_the_user_is_not_replaced_by_export(tmp_path, capsys):
+    run = tmp_path / "run"
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    (run / "vtk").mkdir()
+    (run / "vtk" / "mine.vtu").write_text("user mesh")
+    before = _snapshot(tmp_path)
+    assert cli_main(["export", str(run)]) == 2
+    _one_error_line(capsys.readouterr().err)
+    assert _snapshot(tmp_path) == before
+
+
+def test_a_file_added_while_an_output_is_replaced_is_kept(tmp_path, monkeypatch):
+    # the race between the check and the move aside: the occupant is checked
+    # again once moved, and goes back with the file
+    from wearcheck.comparisons import outputs
+    out = tmp_path / "out"
+    with outputs.atomic_directory(out) as tmp:
+        (tmp / "payload").write_text("first")
+    (out / "user_notes.txt").write_text("notes")           # arrives after the check
+    monkeypatch.setattr(outputs, "refusal", lambda path, kind: None)
+    with pytest.raises(cases.CaseError, match="user_notes.txt"):
+        with outputs.atomic_directory(out) as tmp:
+            (tmp / "payload").write_text("second")
+    assert (out / "user_notes.txt").read_text() == "notes"
+    assert (out / "payload").read_text() == "first"
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+
+
+def test_debris_of_a_dead_export_does_not_block_a_rerun(tmp_path):
+    from wearcheck.comparisons import outputs
+    run = tmp_path / "run"
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True).stdout.strip()
+    partial = run / ".vtk.partial-abc"
+    partial.mkdir()
+    (partial / outputs.OUTPUT_MARKER).write_text(json.dumps(dict(
+        wearcheck="output", kind="vtk", complete=False, pid=int(dead), host=platform.node())))
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    assert not partial.exists()
+
+
+def test_a_copy_that_loses_the_mtime_is_still_replaceable(tmp_path):
+    # tar keeps whole seconds only: the content decides, not the mtime
+    run = tmp_path / "run"
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    for p in run.iterdir():
+        os.utime(p, (1e9, 1e9), follow_symlinks=False)
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    # the same size with other bytes and the mtime put back is a change
+    h = run / "history.csv"
+    st = h.stat()
+    text = h.read_text()
+    h.write_text(("X" if text[0] != "X" else "Y") + text[1:])
+    os.utime(h, ns=(st.st_atime_ns, st.st_mtime_ns))
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 2
+
+
+def test_study_files_and_runs_the_user_changed_are_kept(tmp_path):
+    from wearcheck.comparisons import outputs
+    study = outputs.study_directory(tmp_path / "study")
+    outputs.write_study_text(study, "sweep.csv", "a\n")
+    outputs.write_study_text(study, "sweep.csv", "b\n")     # its own file: replaced
+    with open(study / "sweep.csv", "a") as fh:
+        fh.write("# my notes\n")
+    with pytest.raises(cases.CaseError, match="sweep.csv"):
+        outputs.study_directory(study)                      # before any work
+    with pytest.raises(cases.CaseError, match="sweep.csv"):
+        outputs.write_study_text(study, "sweep.csv", "c\n")
+    assert not outputs.remove_study_file(study, "sweep.csv")
+    assert (study / "sweep.csv").read_text() == "b\n# my notes\n"
+    # a link put in place of a study file: refused, its target untouched
+    target = tmp_path / "picture.png"
+    target.write_text("precious")
+    (study / "cost.png").symlink_to(target)
+    with pytest.raises(cases.CaseError, match="cost.png"):
+        outputs.write_study_text(study, "cost.png", "png")
+    assert target.read_text() == "precious"
+    # a run of the study with the user's notes: refused before the work, never removed
+    (study / "sweep.csv").unlink()
+    (study / "cost.png").unlink()
+    with outputs.atomic_directory(study / "r1") as tmp:
+        (tmp / "history.csv").write_text("s\n")
+    (study / "r1" / "notes.txt").write_text("n")
+    with pytest.raises(cases.CaseError, match="notes.txt"):
+        outputs.study_directory(study, runs=["r1"])
+    assert not outputs.remove_output(study / "r1", "run")
+    assert (study / "r1" / "notes.txt").read_text() == "n"
+
+
+def test_the_mesh_side_marker_is_never_written_through_a_link(tmp_path, monkeypatch):
+    from wearcheck.comparisons import outputs
+    source = tmp_path / "src.msh"
+    source.write_text("$MeshFormat\n")
+    precious = tmp_path / "user_text.txt"
+    precious.write_text("precious")
+    out = tmp_path / "m.msh"
+    (tmp_path / ".m.msh.wearcheck-output").symlink_to(precious)
+    with pytest.raises(cases.CaseError, match="side marker"):
+        outputs.write_file(out, source)
+    assert precious.read_text() == "precious" and not out.exists()
+    # nor inside another output
+    run = tmp_path / "run"
+    run.mkdir()
+    outputs.write_marker(run, "run", files=outputs.inventory(run, "run"))
+    with pytest.raises(cases.CaseError, match="lies inside"):
+        outputs.write_file(run / "sphere.msh", source)
+
+
+def test_a_comparisons_solver_folder_takes_its_own_export(tmp_path):
+    from wearcheck.comparisons import outputs
+    comparison = tmp_path / "cmp"
+    (comparison / "mdr").mkdir(parents=True)
+    outputs.write_marker(comparison, "comparison",
+                         files=outputs.inventory(comparison, "comparison"))
+    assert outputs._inside_output(comparison / "mdr" / "vtk", "vtk") is None
+    assert outputs._inside_output(comparison / "mdr" / "render", "render") is None
+    assert "lies inside" in outputs._inside_output(comparison / "mdr" / "other", "run")
+
+
 def test_an_output_of_an_older_wearcheck_is_not_replaced(tmp_path, capsys):
     # its marker lists no files: what the user added cannot be told apart
     old = tmp_path / "old"

@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +16,8 @@ import numpy as np
 from wearcheck.comparisons.analysis.convergence import MEASURES
 from wearcheck.cases import CaseError
 from wearcheck.comparisons import registry
-from wearcheck.comparisons.rundir import Run, _umask, provenance
+from wearcheck.comparisons.outputs import remove_study_file, write_study_file
+from wearcheck.comparisons.rundir import Run, provenance
 
 FIGURES = ("fig4_profiles.png", "fig4_force.png", "convergence.png", "cost.png")
 LABELS = {"profile": "profile / d0", "pressure": "pressure / p0",
@@ -35,17 +34,9 @@ def studies(out: Path) -> list[dict]:
 
 
 def _save(fig, path: Path) -> None:
-    """Save a PNG atomically, the command line in its metadata."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".png", dir=path.parent)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=130, metadata={"Software": "wearcheck",
-                                             "Description": provenance()["command"]})
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; figures are shared files
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    """Save a PNG into its study atomically, the command line in its metadata."""
+    write_study_file(path.parent, path.name, lambda tmp: fig.savefig(
+        tmp, dpi=130, metadata={"Software": "wearcheck", "Description": provenance()["command"]}))
 
 
 def _level_label(study, row):
@@ -84,7 +75,7 @@ def write_figures(out: str | Path) -> list[Path]:
         # figures of an earlier study would pass for this one's (the study
         # directory is ours: its marker was checked before the study ran)
         for name in FIGURES:
-            (out / name).unlink(missing_ok=True)
+            remove_study_file(out, name)
         return []
     paths = []
     runs = {s["solver"]: [(row, Run(out / row["run_dir"])) for row in s["levels"]

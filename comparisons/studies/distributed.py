@@ -36,7 +36,7 @@ from pathlib import Path
 from wearcheck import cases
 from wearcheck.cases.case import read_raw
 from wearcheck.comparisons.present.progress import ProgressBar
-from wearcheck.comparisons.rundir import jsonable, write_run, write_text_atomic
+from wearcheck.comparisons.rundir import jsonable, write_run
 
 #: seconds between two samples of a task's resident set size
 RSS_INTERVAL = 0.01
@@ -338,7 +338,7 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
         raw = read_raw(Path(source))  # as cases.load reads it (a BOM, errors)
     check_workers(scheduler, workers)
     from wearcheck.comparisons.outputs import study_directory
-    out = study_directory(out)
+    out = study_directory(out, runs=[t.name for t in tasks])
     names = [t.name for t in tasks]
     if len(set(names)) != len(names):
         raise cases.CaseError("two runs would share a directory: " + ", ".join(names))
@@ -451,7 +451,8 @@ def record_study(out: Path, study: str, case, overrides, prov) -> None:
     meta.setdefault("studies", {})[study] = dict(
         prov, case_file=str(getattr(case, "source", "")), overrides=list(overrides),
         resolved_case=cases.to_toml(case))
-    write_text_atomic(path, json.dumps(jsonable(meta), indent=2) + "\n")
+    from wearcheck.comparisons.outputs import write_study_text
+    write_study_text(out, "meta.json", json.dumps(jsonable(meta), indent=2) + "\n")
 
 
 def fmt(v, spec=".4g"):

@@ -21,7 +21,8 @@ from pathlib import Path
 from wearcheck import cases
 from wearcheck.cases import reference
 
-from wearcheck.comparisons.rundir import provenance, write_text_atomic
+from wearcheck.comparisons.outputs import write_study_file, write_study_text
+from wearcheck.comparisons.rundir import provenance
 from wearcheck.comparisons.studies.distributed import Task, fmt, record_study, run_cases
 from wearcheck.comparisons.studies.sweep import check_varied
 
@@ -93,9 +94,9 @@ def fretting_map(case_path, overrides, varied, out, *, scheduler=None, workers=N
             "final worn volume / cycles [m^3]; energy_last_cycle [J]",
             ",".join(list(names) + list(COLUMNS))]
     body = [",".join(_cell(r[k]) for k in list(names) + list(COLUMNS)) for r in rows]
-    write_text_atomic(out / "fretting_map.csv", "\n".join(head + body) + "\n")
+    write_study_text(out, "fretting_map.csv", "\n".join(head + body) + "\n")
     from wearcheck.comparisons.present.fretting_map_figure import write_figure
-    write_figure(rows, names, out / "fretting_map.png")
+    write_study_file(out, "fretting_map.png", lambda tmp: write_figure(rows, names, tmp))
     return rows
 
 

@@ -19,7 +19,8 @@ from wearcheck import cases
 from wearcheck.comparisons import registry
 from wearcheck.comparisons.analysis import convergence as rf
 from wearcheck.comparisons.studies.distributed import Task, fmt as _fmt, record_study, run_cases
-from wearcheck.comparisons.rundir import jsonable, provenance, write_text_atomic
+from wearcheck.comparisons.outputs import write_study_text
+from wearcheck.comparisons.rundir import jsonable, provenance
 
 
 def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolerance=0.01,
@@ -50,11 +51,11 @@ def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolera
     written = False
     try:
         record_study(out, f"refine-{solver}", case, overrides, prov)
-        write_text_atomic(out / f"refinement-{solver}.json",
-                          json.dumps(jsonable(summary), indent=2) + "\n")
+        write_study_text(out, f"refinement-{solver}.json",
+                         json.dumps(jsonable(summary), indent=2) + "\n")
         written = True
-        write_text_atomic(out / f"refinement-{solver}.csv", csv_text(summary))
-        write_text_atomic(out / "refinement.csv", combined_csv_text(out))
+        write_study_text(out, f"refinement-{solver}.csv", csv_text(summary))
+        write_study_text(out, "refinement.csv", combined_csv_text(out))
         from wearcheck.comparisons.present.study_figures import write_figures
         write_figures(out)
     except KeyboardInterrupt as exc:

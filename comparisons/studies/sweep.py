@@ -18,7 +18,8 @@ from wearcheck.cases.case import parse_override
 from wearcheck.cases.reference import scales as case_scales
 from wearcheck.cases.schema import section_fields
 from wearcheck.comparisons.studies.distributed import Task, fmt, record_study, run_cases
-from wearcheck.comparisons.rundir import provenance, write_text_atomic
+from wearcheck.comparisons.outputs import write_study_text
+from wearcheck.comparisons.rundir import provenance
 
 
 def split_values(text: str) -> list[str]:
@@ -134,5 +135,5 @@ def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=No
             ",".join(rows[0])]
     body = [",".join('"' + v.replace('"', "'") + '"' if isinstance(v, str) else fmt(v, ".10g")
                      for v in r.values()) for r in rows]
-    write_text_atomic(out / "sweep.csv", "\n".join(head + body) + "\n")
+    write_study_text(out, "sweep.csv", "\n".join(head + body) + "\n")
     return rows
