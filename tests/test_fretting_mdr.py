@@ -164,24 +164,31 @@ def test_depth_control_converges_to_popovs_limiting_profile():
 def test_force_control_reaches_a_limiting_profile_with_its_stick_radius():
     # constant F: the annulus is unloaded in the end and the profile is Popov's
     # g∞ with the stick radius c the run ends with and d∞ = F/(2E*c) + c²/(3R).
-    # Under force control c grows slightly during the transient (the depth
-    # rises as the annulus wears, so springs at the stick edge stop slipping
-    # before they are worn): measured c/c0 = 1.010, 1.005, 1.017, 1.016 at
-    # N = 50, 100, 200, 400 (k = 0.1; 1.017 also at k = 0.01, N = 200), and
-    # depth/d∞(c) = 0.989, 0.994, 0.997, 0.999 (rate 1 in N).
-    case, res, c0 = _limit_run(100, "force")
+    # Popov's "c keeps its initial value" is exact under depth control (above)
+    # and an approximation under force control: the depth rises as the annulus
+    # wears, and the springs just outside the stick edge, whose slip and wear
+    # vanish there, reach the stick threshold w_c = G*u0/(μE*) before they are
+    # worn. c stays within c0 <= c <= c_max (docs/fretting.md §2.1; c_max/c0 =
+    # 1.071 here); measured c∞/c0 = 1.0174, 1.0165, 1.0160, 1.0157 at N = 200,
+    # 400, 800, 1600, the same for k, cycle jumping and increments per cycle
+    # (tests/test_fretting_stick_growth.py); depth/d∞(c) = 0.997 at N = 200.
+    case, res, c0 = _limit_run(200, "force")
     h = res.history
     c = h["stick_radius"][-1]
-    assert 1.0 <= c / c0 < 1.03
+    lo, c_max = rf.stick_radius_bounds(FORCE, case.E_star, case.G_star, MU,
+                                       case.fretting.amplitude, R)
+    assert lo == pytest.approx(c0, rel=1e-12)
+    assert c0 <= c <= c_max
     d_inf = rf.limiting_depth(FORCE, case.E_star, c, R)
     b = math.sqrt(R * d_inf)
     annulus = (res.r > 1.02 * c) & (res.r < b)
-    # measured 1.3e-4 p0 after 800 cycles (1.7e-5 after 1000): unloading
+    # measured 1.3e-4 p0 after 800 cycles at N = 100: unloading
     assert np.max(res.p[-1][annulus]) < 1e-3 * np.max(res.p[0])
-    # the depth to 0.6 % (the grid's error of the stick edge, as at fixed depth)
-    assert h["depth"][-1] == pytest.approx(d_inf, rel=1e-2)
+    # the depth to 0.3 % (the grid's error of the stick edge, as at fixed depth;
+    # rate 1 in N: 0.989, 0.994, 0.997, 0.999 at N = 50 to 400)
+    assert h["depth"][-1] == pytest.approx(d_inf, rel=5e-3)
     f_inf = rf.limiting_profile_3d(res.r, R, c, d_inf)
-    assert np.max(np.abs(res.f[-1] - f_inf)[res.r <= b]) / d_inf < 0.02
+    assert np.max(np.abs(res.f[-1] - f_inf)[res.r <= b]) / d_inf < 0.015
 
 
 def test_large_amplitude_is_the_gross_slip_solver():
