@@ -376,7 +376,8 @@ def _check_monotone(model, hist, normal, cycle):
         raise SolverError(
             f"the fretting run became unstable at cycle {cycle}: the {what} by "
             f"{abs(now / prev - 1):.2g} (relative) while wear can only remove material; "
-            "lower wear.k, fretting.jump_tolerance or mdr.elements")
+            "raise fretting.increments, or lower fretting.jump_tolerance, wear.k or "
+            "mdr.elements")
 
 
 def _extrapolate(model, st, totals, W, sums, jump):
