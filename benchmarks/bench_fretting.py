@@ -100,7 +100,8 @@ def speed_and_jumps(args, sections):
     w0 = every.f[-1] - every.f[0]
     print(f"{'tol':>6} {'cpu s':>7} {'wall s':>7} {'simulated':>9} {'max|dw|/max w':>14} "
           f"{'dV/V':>10} {'d depth/depth':>14}")
-    print(f"{0:>6g} {cpu0:7.2f} {wall0:7.2f} {every.info['simulated_cycles']:9d} {'(reference)':>14}")
+    print(f"{0:>6g} {cpu0:7.2f} {wall0:7.2f} {every.info['simulated_cycles']:9d} "
+          f"{'(reference)':>14}")
     for tol in [float(t) for t in args.tolerances.split(",")]:
         _, r, cpu, wall = run(path, common + [f"fretting.jump_tolerance={tol}"])
         w = r.f[-1] - r.f[0]

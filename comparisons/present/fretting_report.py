@@ -157,7 +157,8 @@ def write(directory, case, result) -> list[Path]:
                  ["first cycle: |W / W_MD − 1|", fmt(checks["energy_difference"]),
                   f"W_MD = {checks['energy_closed_form']:.4g} J"]]
         if "force_amplitude_difference" in checks:
-            rows += [["first cycle: |Q* − Q*_CM| / μF", fmt(checks["force_amplitude_difference"]),
+            rows += [["first cycle: |Q* − Q*_CM| / μF",
+                      fmt(checks["force_amplitude_difference"]),
                       f"Q*_CM = {checks['force_amplitude_closed_form']:.4g} N"]]
         else:
             rows += [["first quarter cycle: |u0 − u0_CM| / u*",
