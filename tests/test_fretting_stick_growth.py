@@ -40,7 +40,7 @@ def test_stick_radius_stays_within_its_bounds_over_the_whole_history(base):
     c, d = h["stick_radius"], h["depth"]
     c0, c_max = rf.stick_radius_bounds(FORCE, case.E_star, case.G_star, MU, u0, R)
     wc = rf.stick_compression(case.E_star, case.G_star, MU, u0)
-    # the depth never falls under force control (wear only adds material:
+    # the depth never falls under force control (wear only raises the profile f:
     # Δd = (1/a)∫ Δf r dr/√(a² - r²) >= 0); 1e-12 d: round-off of the force solve
     assert np.all(np.diff(d) >= -1e-12 * d[0])
     assert d[-1] > 1.05 * d[0]                   # it did rise: the annulus wore
