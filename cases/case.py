@@ -128,6 +128,10 @@ class Case:
             if section in raw and not isinstance(raw[section], dict):
                 raise CaseError(f"'{section}' must be a table [{section}]")
             raw.setdefault(section, {})[key] = value
+            # a fretting amplitude given the other way replaces the case's
+            other = _OTHER_WAY.get((section, key)) if section == "fretting" else None
+            if other and f"{section}.{other}" not in items:
+                raw[section].pop(other, None)
         return from_dict(raw, source=self.source)
 
 
@@ -200,6 +204,12 @@ def read_raw(path: str | Path) -> dict:
         raise CaseError(f"case file '{path}': nested too deeply to be a case") from None
 
 
+#: keys of which a case gives one; setting one by an override drops the other
+_OTHER_WAY = {("stages", "s_hat"): "cycles", ("stages", "cycles"): "s_hat",
+              ("fretting", "amplitude"): "force_amplitude",
+              ("fretting", "force_amplitude"): "amplitude"}
+
+
 def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Case:
     """Read a case file, apply ``section.key=value`` overrides, validate."""
     path = Path(path)
@@ -221,9 +231,10 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
             raise CaseError(f"'{section}' must be a table [{section}]")
         raw[section][k] = value
         overridden.add((section, k))
-        # stages given one way by an override replace the file's other way
-        other = {"s_hat": "cycles", "cycles": "s_hat"}.get(k) if section == "stages" else None
-        if other and ("stages", other) not in overridden:
+        # stages (a fretting amplitude) given one way by an override replace
+        # the file's other way
+        other = _OTHER_WAY.get((section, k))
+        if other and (section, other) not in overridden:
             raw[section].pop(other, None)
     for section in REQUIRED_SECTIONS:
         if section not in raw:

@@ -138,3 +138,57 @@ def limiting_profile_3d(r, R, stick_radius, depth):
         out[i] = (2.0 / math.pi) * ((J(c) + J(ri) - J(rb)) / R
                                     + depth * (math.asin(min(rb / ri, 1.0)) - math.asin(c / ri)))
     return out
+
+
+# -- the stick radius under force control (docs/fretting.md, §2.1) -------------
+
+def stick_compression(E_star, G_star, mu, amplitude):
+    """w_c = G* u0/(μE*): the least normal compression d - g(x) of a spring that sticks.
+
+    A 1D spring slides in a cycle ±u0 unless its Coulomb limit μE*(d - g)/G*
+    reaches u0.
+    """
+    return G_star * amplitude / (mu * E_star)
+
+
+def stick_radius_at_depth(depth, R, E_star, G_star, mu, amplitude):
+    """c = √(R (d - w_c)): the stick radius if the profile at the stick edge is unworn.
+
+    An upper bound on the stick radius at depth d when wear never lowers the
+    1D profile below x²/R (docs/fretting.md, §2.1); at the Hertz depth it is
+    Cattaneo–Mindlin's c. Returns 0 when d <= w_c.
+    """
+    c2 = R * (depth - stick_compression(E_star, G_star, mu, amplitude))
+    return math.sqrt(c2) if c2 > 0.0 else 0.0
+
+
+def depth_bound(force, E_star, R, initial_stick_radius, compression, stick_radius):
+    """Largest depth under force F while the stick zone is [0, c] (docs/fretting.md, §2.1).
+
+    d <= [F/(2E*) + c0³/(3R) - w_c (c - c0)]/c0: the unworn core |x| <= c0
+    carries E*(d - x²/R), every other sticking spring at least E* w_c, the
+    slipping annulus nothing less than zero. c = c0 gives d∞ of Popov at c0.
+    """
+    c0, wc = initial_stick_radius, compression
+    return (force / (2.0 * E_star) + c0**3 / (3.0 * R) - wc * (stick_radius - c0)) / c0
+
+
+def stick_radius_bounds(force, E_star, G_star, mu, amplitude, R):
+    """Bounds c0 <= c(t) <= c_max on the stick radius of fretting wear under constant F and u0.
+
+    c0 is Cattaneo–Mindlin's stick radius of the unworn paraboloid (a stuck
+    spring is never worn and the depth never falls under force control);
+    c_max the positive root of (c0/R) c² + w_c c = F/(2E*) + c0³/(3R), which
+    combines :func:`depth_bound` with c² <= R(d - w_c) at the stick edge.
+    Derivation: docs/fretting.md, §2.1. Valid at every cycle, not only in
+    the limiting state. Returns (c0, c_max); (0, 0) at and beyond gross slip.
+    """
+    a = (3.0 * force * R / (4.0 * E_star)) ** (1.0 / 3.0)
+    c0 = stick_radius(a, R, E_star, G_star, mu, amplitude)
+    if c0 == 0.0:
+        return 0.0, 0.0
+    wc = stick_compression(E_star, G_star, mu, amplitude)
+    A, B, C = c0 / R, wc, force / (2.0 * E_star) + c0**3 / (3.0 * R)
+    # the root of A c² + B c - C = 0 written without cancellation
+    c_max = 2.0 * C / (B + math.sqrt(B * B + 4.0 * A * C))
+    return c0, c_max

@@ -246,11 +246,13 @@ class Fretting:
     amplitude: float | None = key(None, unit="m", positive=True,
                                   doc="tangential displacement amplitude u0 of the indenter "
                                       "(triangle wave between +u0 and -u0); give this or "
-                                      "force_amplitude")
+                                      "force_amplitude (an override of one replaces the "
+                                      "other)")
     force_amplitude: float | None = key(None, unit="N", positive=True,
                                         doc="tangential force amplitude Q* (triangle wave "
                                             "between +Q* and -Q*), below μF; give this or "
-                                            "amplitude")
+                                            "amplitude (an override of one replaces the "
+                                            "other)")
     cycles: int = key(unit="1", minimum=1, doc="number of fretting cycles (+U -> -U -> +U)")
     increments: int = key(40, unit="1", minimum=4,
                           doc="load increments per cycle, a multiple of 4 (the first "

@@ -14,8 +14,14 @@ law of paper Eq. 1 with the real slip
 the profile (explicitly: the increment's wear is small against the profile;
 the normal contact is re-solved once the wear since the last solve exceeds
 NORMAL_RESOLVE = 1e-7 of the depth, in gross slip after every increment). The
-energy dissipated is accumulated as ∫ |τ| |Δslip| dA with the same
-quadrature as the worn volume, so V = (k/σ0) W holds to round-off.
+friction work is taken as (τ·Δslip)₊, which is |τ||Δslip| wherever the
+surface slides under pressure: where the grid's 3D pressure is tensile
+(round-off in an unloaded slip annulus) the two disagree in sign and nothing
+wears; with |τ||Δslip| that noise seeded a growing grid-scale mode in the
+limiting state. The energy dissipated is accumulated as ∫ (τ·Δslip)₊ dA with
+the same quadrature as the worn volume, so V = (k/σ0) W holds to round-off.
+A depth that falls under force control (a force that rises under depth
+control) is a SolverError: wear only removes material.
 
 Cycle jumping: one cycle (+U -> -U -> +U) is simulated increment by
 increment, giving the profile change per cycle W_k; the profile is then
@@ -51,6 +57,10 @@ WEAR_FLOOR = 1e-12
 #: wear (relative to the depth) after which the normal contact is solved again
 #: within a cycle; below it the pressure lags by that fraction of p0
 NORMAL_RESOLVE = 1e-7
+#: largest relative fall of the depth (force control) or rise of the force
+#: (depth control) from one recorded cycle to the next: wear only removes
+#: material, so either would mean the explicit wear went unstable
+MONOTONE_TOLERANCE = 1e-6
 
 
 @dataclass
@@ -154,7 +164,7 @@ def increment(model: Model, st: State, target: float, acc: dict) -> None:
     n = m + 2
     tau = tangential.shear_traction(v_new[:n], model.G_star, model.dt)
     s3 = tangential.slip_3d(slip[:n])
-    work = np.abs(tau) * np.abs(s3)                     # dissipation per area [J/m²]
+    work = np.maximum(tau * s3, 0.0)                    # dissipation per area [J/m²]
     acc["energy"] += transforms.volume(work, model.dt)
     # the 1D springs' own dissipation, an independent sum (MDR energy equivalence)
     acc["energy_1d"] += float(model.weights[:n] @ (np.abs(model.G_star * v_new[:n])
@@ -217,7 +227,10 @@ def stick_radius(model: Model, st: State, acc: dict, ramp: bool) -> float:
     """Stick radius of the last stroke: the crossing of L - U, U the stroke's half travel."""
     U = acc["u_amp"] if not ramp else abs(st.u)
     margin = st.L - U
-    return tangential.stick_radius(acc["slipped"], margin, model.t)
+    # a spring without normal load cannot hold any tangential force: it
+    # counts as slipping even in a stroke in which no loaded spring slid
+    # (the limiting state, where the annulus is unloaded exactly)
+    return tangential.stick_radius(acc["slipped"] | (st.L <= 0.0), margin, model.t)
 
 
 HISTORY_KEYS = ("cycles", "s", "force", "depth", "contact_radius", "wear_center", "wear_volume",
@@ -244,6 +257,8 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
 
     def record(acc, ramp=False):
         n = st.normal
+        if hist["cycles"]:
+            _check_monotone(model, hist, n, totals["cycles"])
         w = st.f - model.f0
         hist["cycles"].append(totals["cycles"])
         hist["s"].append(totals["s"])
@@ -343,6 +358,26 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
     return dict(history={k: np.asarray(v, dtype=float) for k, v in hist.items()},
                 stages={k: np.asarray(v) for k, v in stages.items()},
                 loops=loops, counters=counters)
+
+
+def _check_monotone(model, hist, normal, cycle):
+    """SolverError if the normal load moved against the wear (docs/fretting.md, §3).
+
+    Under force control Δd = (1/a) ∫_0^a Δf(r) r dr/√(a² - r²) >= 0 for any
+    wear Δf >= 0; under depth control the force falls likewise.
+    """
+    if model.force is not None:
+        prev, now, what = hist["depth"][-1], normal["depth"], "depth fell"
+        bad = now < prev * (1.0 - MONOTONE_TOLERANCE)
+    else:
+        prev, now, what = hist["force"][-1], normal["force"], "force rose"
+        bad = now > prev * (1.0 + MONOTONE_TOLERANCE)
+    if bad:
+        raise SolverError(
+            f"the fretting run became unstable at cycle {cycle}: the {what} by "
+            f"{abs(now / prev - 1):.2g} (relative) while wear can only remove material; "
+            "raise fretting.increments, or lower fretting.jump_tolerance, wear.k or "
+            "mdr.elements")
 
 
 def _extrapolate(model, st, totals, W, sums, jump):

@@ -172,3 +172,31 @@ def test_api_derives_and_round_trips_a_fretting_case():
     # a gross-slip case whose [sliding] is not the default cannot become a fretting one
     with pytest.raises(cases.CaseError, match=r"\[(sliding|stages)\] given with \[fretting\]"):
         wearcheck.load_case("paper", {"fretting.amplitude": 1e-7, "fretting.cycles": 3})
+
+
+def test_wearcheck_run_vtk_of_a_fretting_case_carries_the_shear_traction(tmp_path):
+    # the command line end to end: `wearcheck run fretting --vtk`
+    import pyvista as pv
+    from wearcheck.comparisons.cli import main
+    out = tmp_path / "run"
+    code = main(["run", "fretting", "--set", "mdr.elements=60", "--set", "fretting.cycles=3",
+                 "--set", "fretting.stage_cycles=[0, 3]", "--out", str(out), "--vtk",
+                 "--quiet"])
+    assert code == 0
+    tau = np.load(out / "stages.npz")["tau"]
+    mesh = pv.read(out / "vtk" / "profile_001.vtu")
+    np.testing.assert_array_equal(mesh.point_data["shear_traction"], tau[1])
+    assert (out / "report.md").is_file()
+
+
+def test_an_override_switches_the_tangential_loading_between_displacement_and_force():
+    # the shipped case gives fretting.amplitude; setting force_amplitude (on the
+    # command line or through derive) replaces it, as stages.s_hat replaces cycles
+    case = cases.load(cases.shipped("fretting"), ["fretting.force_amplitude=4.5"])
+    assert case.fretting.amplitude is None and case.fretting.force_amplitude == 4.5
+    back = case.derive({"fretting.amplitude": 1e-7})
+    assert back.fretting.force_amplitude is None and back.fretting.amplitude == 1e-7
+    # both at once is still the one clear error
+    with pytest.raises(cases.CaseError, match="exactly one"):
+        cases.load(cases.shipped("fretting"), ["fretting.force_amplitude=4.5",
+                                               "fretting.amplitude=1e-7"])

@@ -81,3 +81,45 @@ def test_limiting_profile_3d_is_eq3_of_the_1d_one():
         assert fi == pytest.approx(2 / math.pi * q, rel=1e-10)
     # inside the stick zone the unworn paraboloid is untouched
     assert closed[0] == pytest.approx((0.3 * c) ** 2 / (2 * R), rel=1e-14)
+
+
+@pytest.mark.parametrize("frac", [0.1, 0.5, 0.9])
+def test_stick_radius_bounds_meet_the_two_conditions(frac):
+    # c_max: the depth bound and the edge condition c² = R(d - w_c) meet there
+    a = hertz()["contact_radius"]
+    u0 = frac * rf.gross_slip_displacement(MU, F, G_STAR, a)
+    c0, c_max = rf.stick_radius_bounds(F, E_STAR, G_STAR, MU, u0, R)
+    wc = rf.stick_compression(E_STAR, G_STAR, MU, u0)
+    assert c0 == pytest.approx(rf.stick_radius(a, R, E_STAR, G_STAR, MU, u0), rel=1e-12)
+    d = rf.depth_bound(F, E_STAR, R, c0, wc, c_max)
+    assert rf.stick_radius_at_depth(d, R, E_STAR, G_STAR, MU, u0) == pytest.approx(c_max,
+                                                                                   rel=1e-12)
+    assert c0 < c_max < a
+    # at the Hertz depth the edge condition is Cattaneo–Mindlin's c0, and the
+    # depth bound at c = c0 is Popov's d∞(c0)
+    assert rf.stick_radius_at_depth(a * a / R, R, E_STAR, G_STAR, MU, u0) == \
+        pytest.approx(c0, rel=1e-12)
+    assert rf.depth_bound(F, E_STAR, R, c0, wc, c0) == \
+        pytest.approx(rf.limiting_depth(F, E_STAR, c0, R), rel=1e-12)
+
+
+def test_stick_radius_bound_is_attained_by_its_extremal_profile():
+    # the profile that attains c_max: x²/R on [0, c0], every spring of (c0, c]
+    # loaded by exactly w_c (g = d - w_c), the annulus beyond c unloaded
+    # (g = d); paper Eq. 12 by quadrature carries F at d = c²/R + w_c
+    a = hertz()["contact_radius"]
+    u0 = 0.5 * rf.gross_slip_displacement(MU, F, G_STAR, a)
+    c0, c = rf.stick_radius_bounds(F, E_STAR, G_STAR, MU, u0, R)
+    wc = rf.stick_compression(E_STAR, G_STAR, MU, u0)
+    d = c * c / R + wc
+
+    def g(x):
+        return x * x / R if x <= c0 else (d - wc if x <= c else d)
+    val = integrate.quad(lambda x: max(d - g(x), 0.0), 0.0, c, points=[c0],
+                         epsabs=0, epsrel=1e-12)[0]
+    assert 2 * E_STAR * val == pytest.approx(F, rel=1e-10)
+    # the springs of (c0, c] lie on or above x²/R (an admissible worn profile)
+    assert d - wc >= c * c / R * (1 - 1e-12)
+    # u0 -> 0 leaves no room: c0 = c_max = a
+    c0_small, c_small = rf.stick_radius_bounds(F, E_STAR, G_STAR, MU, 1e-9 * u0, R)
+    assert c_small == pytest.approx(a, rel=1e-6) and c0_small == pytest.approx(a, rel=1e-6)

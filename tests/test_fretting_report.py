@@ -54,3 +54,33 @@ def test_no_report_for_a_gross_slip_run(tmp_path):
     path = wearcheck.solve(wearcheck.load_case("hertz", {"mdr.elements": 100}), "mdr").write(
         tmp_path / "run")
     assert not (path / "report.md").exists()
+
+
+def test_force_controlled_tangential_loading_is_checked_too(tmp_path):
+    # fretting.force_amplitude: c/a = (1 - Q*/μF)^(1/3), u0 = u*[1 - (1 - Q*/μF)^(2/3)]
+    # and the energy per cycle of Q* (Mindlin–Deresiewicz), from the case alone
+    from wearcheck import cases
+    raw = cases.to_dict(wearcheck.load_case("fretting", {"fretting.cycles": 10,
+                                                         "mdr.elements": 200}))
+    del raw["fretting"]["amplitude"]
+    raw["fretting"]["force_amplitude"] = 4.5            # Q*/μF = 0.5
+    case = cases.from_dict(raw, source="force_amplitude.toml")
+    result = wearcheck.solve(case, "mdr")
+    path = result.write(tmp_path / "run")
+    checks = fretting_report.unworn_checks(case, result._run)
+    h = result.history
+    a, F, mu = h["contact_radius"][0], h["force"][0], case.wear.mu
+    u_star = rf.gross_slip_displacement(mu, F, case.G_star, a)
+    assert checks["regime"] == "partial slip"
+    assert checks["stick_radius_closed_form"] == pytest.approx(
+        rf.stick_radius_from_force(a, 4.5, mu, F), rel=1e-12)
+    assert checks["energy_closed_form"] == pytest.approx(
+        rf.energy_per_cycle(4.5, mu, F, u_star), rel=1e-12)
+    # N = 200: as for displacement control (stick radius 1e-3 a, energy 3 %),
+    # the displacement amplitude within 1e-3 u* (measured: 1e-5 a, 0.7 %, 2e-5 u*)
+    assert checks["stick_radius_difference"] < 1e-3
+    assert checks["energy_difference"] < 3e-2
+    assert checks["displacement_amplitude_difference"] < 1e-3
+    text = (path / "report.md").read_text()
+    assert "u0_CM" in text and "c_CM/a" in text and "W_MD" in text
+    assert (path / "fretting_loops.png").stat().st_size > 1000

@@ -34,26 +34,38 @@ def unworn_checks(case, result) -> dict:
     K = case.wear.k / case.wear.hardness
     big = max(float(np.max(np.abs(V))), 1e-300)
     out["energy_wear_identity"] = float(np.max(np.abs(V - K * W)) / big)
-    if case.indenter.profile not in ("paraboloid", "sphere") or fr.amplitude is None:
+    if case.indenter.profile not in ("paraboloid", "sphere"):
         return out
-    u0 = fr.amplitude
-    if u0 >= u_star:
-        out["regime"] = "gross slip"
-        return out
+    R = case.indenter.radius
+    if fr.amplitude is not None:
+        u0 = fr.amplitude
+        if u0 >= u_star:
+            out["regime"] = "gross slip"
+            return out
+        c = rf.stick_radius(a, R, case.E_star, case.G_star, mu, u0)
+        Q = float(rf.tangential_force(u0, mu, F, u_star))
+        out.update(force_amplitude_closed_form=Q,
+                   force_amplitude=float(h["tangential_force_amplitude"][0]),
+                   force_amplitude_difference=abs(float(h["tangential_force_amplitude"][0])
+                                                  - Q) / (mu * F))
+    else:
+        # force-controlled tangential loading: Q* < μF, or the solver refused the run
+        Q = fr.force_amplitude
+        c = rf.stick_radius_from_force(a, Q, mu, F)
+        u0 = float(rf.tangential_displacement(Q, mu, F, u_star))
+        out.update(displacement_amplitude_closed_form=u0,
+                   displacement_amplitude=float(h["displacement_amplitude"][0]),
+                   displacement_amplitude_difference=abs(float(h["displacement_amplitude"][0])
+                                                         - u0) / u_star)
     out["regime"] = "partial slip"
-    c = rf.stick_radius(a, case.indenter.radius, case.E_star, case.G_star, mu, u0)
-    Q = float(rf.tangential_force(u0, mu, F, u_star))
+    out["amplitude"] = u0
     Wc = rf.energy_per_cycle_displacement(u0, mu, F, u_star)
     # row 0 is the first quarter cycle (virgin loading), row 1 the first full cycle
     k = 1 if len(h["cycles"]) > 1 else 0
     out.update(stick_radius_closed_form=c, stick_radius=float(h["stick_radius"][0]),
                stick_radius_difference=abs(float(h["stick_radius"][0]) - c) / a,
                energy_closed_form=Wc, energy=float(h["energy_per_cycle"][k]),
-               energy_difference=abs(float(h["energy_per_cycle"][k]) / Wc - 1.0),
-               force_amplitude_closed_form=Q,
-               force_amplitude=float(h["tangential_force_amplitude"][0]),
-               force_amplitude_difference=abs(float(h["tangential_force_amplitude"][0]) - Q)
-               / (mu * F))
+               energy_difference=abs(float(h["energy_per_cycle"][k]) / Wc - 1.0))
     return out
 
 
@@ -74,7 +86,7 @@ def _figures(directory: Path, case, result, checks) -> list[str]:
             ax.plot(np.asarray(u) / u_star, np.asarray(Q) / (mu * F), lw=1.2,
                     label=f"MDR, cycle {n:g}")
         if checks.get("regime") == "partial slip":
-            u0 = case.fretting.amplitude
+            u0 = checks["amplitude"]
             u = np.linspace(-u0, u0, 201)
             for branch in ("unloading", "reloading"):
                 ax.plot(u / u_star, rf.loop_force(u, u0, mu, F, u_star, branch) / (mu * F),
@@ -135,16 +147,23 @@ def write(directory, case, result) -> list[Path]:
                      f"{case.loading.control} control, {load}, {fr.cycles:g} cycles "
                      f"({result.info.get('simulated_cycles', '?')} simulated, the rest by "
                      f"cycle jumps at tolerance {fr.jump_tolerance:g}). u* = "
-                     f"{checks['u_star']:.4g} m ({checks.get('regime', '')}).")]
+                     f"{checks['u_star']:.4g} m"
+                     + (f" ({checks['regime']})." if "regime" in checks else "."))]
     rows = [["energy–wear identity max |V − (k/σ0)W| / max V", fmt(
         checks["energy_wear_identity"]), "to round-off"]]
     if "stick_radius_difference" in checks:
         rows += [["first cycle: |c − c_CM| / a", fmt(checks["stick_radius_difference"]),
                   f"c_CM/a = {checks['stick_radius_closed_form'] / checks['contact_radius']:.4f}"],
                  ["first cycle: |W / W_MD − 1|", fmt(checks["energy_difference"]),
-                  f"W_MD = {checks['energy_closed_form']:.4g} J"],
-                 ["first cycle: |Q* − Q*_CM| / μF", fmt(checks["force_amplitude_difference"]),
-                  f"Q*_CM = {checks['force_amplitude_closed_form']:.4g} N"]]
+                  f"W_MD = {checks['energy_closed_form']:.4g} J"]]
+        if "force_amplitude_difference" in checks:
+            rows += [["first cycle: |Q* − Q*_CM| / μF",
+                      fmt(checks["force_amplitude_difference"]),
+                      f"Q*_CM = {checks['force_amplitude_closed_form']:.4g} N"]]
+        else:
+            rows += [["first quarter cycle: |u0 − u0_CM| / u*",
+                      fmt(checks["displacement_amplitude_difference"]),
+                      f"u0_CM = {checks['displacement_amplitude_closed_form']:.4g} m"]]
     blocks += [R.heading("Against the closed forms", 3),
                R.table(["check", "value", "reference"], rows)]
     h = result.history
