@@ -511,14 +511,15 @@ def atomic_directory(path, kind: str = "run"):
         raise
 
 
-def study_directory(path, runs=()) -> Path:
+def study_directory(path, runs=(), files=()) -> Path:
     """Create (or reuse) the study directory ``path`` of ``wearcheck refine``/``sweep``.
 
     A new or empty directory gets a ``study`` marker; an existing one must
     already be a wearcheck study, the files the studies wrote into it
-    (:func:`write_study_file`) as they wrote them, and each of ``runs`` (the
-    names of the run directories this study will write) absent or a run it
-    may replace: all checked here, before any work. Its runs are written
+    (:func:`write_study_file`) as they wrote them, each of ``files`` (the
+    names this study will write there) absent or one of those, and each of
+    ``runs`` (the names of its run directories) absent or a run it may
+    replace: all checked here, before any work. Its runs are written
     inside, each atomically.
     """
     path = check_output(path, "study")
@@ -532,7 +533,7 @@ def study_directory(path, runs=()) -> Path:
         raise OutputError(f"study '{path}' was written by an older wearcheck that kept no list "
                           "of its files, so it cannot tell whether you changed any; remove it "
                           "yourself or choose another output path")
-    for name, rec in recorded.items():
+    for name in {*recorded, *files}:
         if (path / name).exists() or (path / name).is_symlink():
             _check_study_file(path, name, recorded)
     for run in runs:

@@ -253,6 +253,12 @@ def test_study_files_and_runs_the_user_changed_are_kept(tmp_path):
     with pytest.raises(cases.CaseError, match="cost.png"):
         outputs.write_study_text(study, "cost.png", "png")
     assert target.read_text() == "precious"
+    # a file of the user's under a name the study will write: refused before the work
+    (study / "cost.png").unlink()
+    (study / "cost.png").write_text("my plot")
+    with pytest.raises(cases.CaseError, match="cost.png"):
+        outputs.study_directory(study, files=["cost.png"])
+    assert (study / "cost.png").read_text() == "my plot"
     # a run of the study with the user's notes: refused before the work, never removed
     (study / "sweep.csv").unlink()
     (study / "cost.png").unlink()

@@ -320,8 +320,12 @@ class _Reporter:
 
 def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Task], out: str | Path, *,
               scheduler: str | None = None, workers: int | None = None, quiet: bool = False,
-              solve=None, extra_meta: dict | None = None) -> list[Outcome]:
+              solve=None, extra_meta: dict | None = None,
+              study_files=("meta.json",)) -> list[Outcome]:
     """Run every task on Dask; write each successful one to ``out/<task.name>``.
+
+    ``study_files``: the files the study will write into ``out`` itself,
+    checked (with the runs' directories) before the cluster starts.
 
     ``source`` is a case file or a :class:`cases.Case`; ``base_overrides`` apply
     to every task before its own. Returns the outcomes
@@ -338,7 +342,7 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
         raw = read_raw(Path(source))  # as cases.load reads it (a BOM, errors)
     check_workers(scheduler, workers)
     from wearcheck.comparisons.outputs import study_directory
-    out = study_directory(out, runs=[t.name for t in tasks])
+    out = study_directory(out, runs=[t.name for t in tasks], files=study_files)
     names = [t.name for t in tasks]
     if len(set(names)) != len(names):
         raise cases.CaseError("two runs would share a directory: " + ", ".join(names))

@@ -80,7 +80,8 @@ def fretting_map(case_path, overrides, varied, out, *, scheduler=None, workers=N
     prov = provenance()
     out = Path(out)
     outcomes = run_cases(case_path, overrides, tasks, out, scheduler=scheduler, workers=workers,
-                         quiet=quiet, solve=solve, extra_meta=dict(study="fretting-map"))
+                         quiet=quiet, solve=solve, extra_meta=dict(study="fretting-map"),
+                         study_files=("meta.json", "fretting_map.csv", "fretting_map.png"))
     rows = []
     for t, o in zip(tasks, outcomes):
         row = summarise(o)

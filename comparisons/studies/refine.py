@@ -20,6 +20,7 @@ from wearcheck.comparisons import registry
 from wearcheck.comparisons.analysis import convergence as rf
 from wearcheck.comparisons.studies.distributed import Task, fmt as _fmt, record_study, run_cases
 from wearcheck.comparisons.outputs import write_study_text
+from wearcheck.comparisons.present.study_figures import FIGURES
 from wearcheck.comparisons.rundir import jsonable, provenance
 
 
@@ -45,7 +46,10 @@ def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolera
     # finest (longest) levels first, so that the short ones fill in around them
     outcomes = run_cases(case_path, overrides, tasks[::-1], out, scheduler=scheduler,
                          workers=workers, quiet=quiet, solve=solve,
-                         extra_meta=dict(study=f"refine-{solver}"))[::-1]
+                         extra_meta=dict(study=f"refine-{solver}"),
+                         study_files=("meta.json", f"refinement-{solver}.json",
+                                      f"refinement-{solver}.csv", "refinement.csv",
+                                      *FIGURES))[::-1]
     summary = summarize(case, solver, lvls, outcomes, varied, tolerance, stage)
     summary.update(case=str(case_path), overrides=list(overrides), provenance=prov)
     written = False

@@ -107,7 +107,8 @@ def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=No
     prov = provenance()
     out = Path(out)
     outcomes = run_cases(case_path, overrides, tasks, out, scheduler=scheduler, workers=workers,
-                         quiet=quiet, solve=solve, extra_meta=dict(study=f"sweep-{solver}"))
+                         quiet=quiet, solve=solve, extra_meta=dict(study=f"sweep-{solver}"),
+                         study_files=("meta.json", "sweep.csv"))
     rows = []
     for t, o in zip(tasks, outcomes):
         row = dict(run=t.name)
