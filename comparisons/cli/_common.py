@@ -30,3 +30,11 @@ def load_case(args) -> cases.Case:
         for text in case.warnings:
             print(f"note: {text}", file=sys.stderr)
     return case
+
+
+def study_exit(rows) -> int:
+    """1 if a run of the study failed (said on stderr, with --quiet too: it is an error), else 0."""
+    failed = [r for r in rows if r["status"] != "ok"]
+    if failed:
+        print(f"{len(failed)} of {len(rows)} runs failed", file=sys.stderr)
+    return 1 if failed else 0

@@ -15,7 +15,7 @@ from wearcheck.comparisons.studies.distributed import fmt
 from wearcheck.comparisons.studies.fretting_map import fretting_map
 from wearcheck.comparisons.studies.sweep import parse_vary
 
-from ._common import add_case_arguments, load_case
+from ._common import add_case_arguments, load_case, study_exit
 from .refine import add_cluster_arguments
 
 
@@ -47,7 +47,4 @@ def main(args) -> int:
         print(f"{r['run']:<56} {r['regime']:<13} {fmt(r['amplitude_over_u_star'], '.3g'):>7} "
               f"{fmt(r['wear_volume_per_cycle'], '.4g'):>12}  {r['status']}")
     print(f"-> {Path(out) / 'fretting_map.csv'}, {Path(out) / 'fretting_map.png'}")
-    failed = [r for r in rows if r["status"] != "ok"]
-    if failed:  # an error, shown with --quiet too
-        print(f"{len(failed)} of {len(rows)} runs failed", file=sys.stderr)
-    return 1 if failed else 0
+    return study_exit(rows)

@@ -16,7 +16,7 @@ from wearcheck.comparisons import registry
 
 from wearcheck.comparisons.studies.sweep import parse_vary, sweep
 
-from ._common import add_case_arguments, load_case
+from ._common import add_case_arguments, load_case, study_exit
 from .refine import add_cluster_arguments
 
 
@@ -52,7 +52,4 @@ def main(args) -> int:
               f"{fmt(r['final_s_hat'], '.4g'):>8} {fmt(r['final_F_over_F0'], '.4g'):>10}  "
               f"{r['status']}")
     print(f"-> {Path(out) / 'sweep.csv'} ({', '.join(names)})")
-    failed = [r for r in rows if r["status"] != "ok"]
-    if failed:  # an error, shown with --quiet too
-        print(f"{len(failed)} of {len(rows)} runs failed", file=sys.stderr)
-    return 1 if failed else 0
+    return study_exit(rows)
