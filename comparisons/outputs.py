@@ -82,9 +82,7 @@ def _marker_at(fd: int) -> dict | None:
 #: files up to this size are fingerprinted by content (SHA-256), larger ones by
 #: size and modification time: an edit that keeps both would pass for them
 HASH_MAX_BYTES = 64 << 20
-#: the nested outputs an output may hold, written later by another command:
-#: its own vtk/ and render/ (a comparison's also in each solver's folder), and
-#: a comparison's runs; anything else marked inside an output is foreign
+#: the parts an output may hold, written later by another command (:func:`_is_part`)
 _PARTS = ("vtk", "render")
 
 
@@ -114,12 +112,15 @@ def _same(now: list, recorded) -> bool:
     return now[1] == recorded[1]
 
 
-def _allowed_part(root_kind, depth: int, name: str, marker: dict) -> bool:
-    """Whether a complete output found inside a ``root_kind`` output is one of its parts."""
-    kind = marker.get("kind")
-    if kind in _PARTS and name == kind:
-        return depth == 1 or (depth == 2 and root_kind == "comparison")
-    return root_kind == "comparison" and kind == "run" and depth == 1
+def _is_part(outer, inner, depth: int, name: str) -> bool:
+    """Whether an ``inner`` output ``name``, ``depth`` levels inside an ``outer`` one, is
+    one of its parts: a run's (or a comparison's, also in its solver folders)
+    ``vtk/`` and ``render/``, and a study's runs. Anything else inside is foreign.
+    """
+    if inner in _PARTS and name == inner:
+        return outer in ("run", "comparison", "legacy") and \
+            (depth == 1 or (depth == 2 and outer == "comparison"))
+    return outer == "study" and inner in ("run", "comparison") and depth == 1
 
 
 def _walk(fd: int, prefix: str, files: dict, nested: list, root_kind=None,
@@ -150,7 +151,7 @@ def _walk(fd: int, prefix: str, files: dict, nested: list, root_kind=None,
                 os.close(sub)
                 continue
             if marker is not None and marker.get("complete", True) \
-                    and _allowed_part(root_kind, depth, e.name, marker):
+                    and _is_part(root_kind, marker.get("kind"), depth, e.name):
                 nested.append((rel, sub))
                 continue
             try:
@@ -343,13 +344,6 @@ def check_output(path, kind: str) -> Path:
     return path
 
 
-#: what may be written inside a complete wearcheck output: (its kind, the kind
-#: written, whether only as its child named after the kind)
-_NESTED = {("run", "vtk"): True, ("run", "render"): True, ("comparison", "vtk"): True,
-           ("comparison", "render"): True, ("legacy", "vtk"): True, ("legacy", "render"): True,
-           ("study", "run"): False, ("study", "comparison"): False}
-
-
 def _inside_output(path: Path, kind: str) -> str | None:
     """Why ``path`` may not be written where it lies: inside another wearcheck output.
 
@@ -367,10 +361,7 @@ def _inside_output(path: Path, kind: str) -> str | None:
                 return None      # this process's output being written (run --vtk)
             return (f"output '{path}' lies inside '{ancestor}', a wearcheck output being "
                     "written or left incomplete; choose a path outside it")
-        child_only = _NESTED.get((have, kind))
-        parents = (path.parent, path.parent.parent) if have == "comparison" else (path.parent,)
-        if child_only is not None and (not child_only or
-                                       (ancestor in parents and path.name == kind)):
+        if _is_part(have, kind, len(path.relative_to(ancestor).parts), path.name):
             return None
         return (f"output '{path}' lies inside the wearcheck {_kind_name(have)} '{ancestor}', "
                 "which a re-run replaces whole; choose a path outside it")
