@@ -524,7 +524,7 @@ def study_directory(path, runs=(), files=()) -> Path:
         raise OutputError(f"study '{path}' was written by an older wearcheck that kept no list "
                           "of its files, so it cannot tell whether you changed any; remove it "
                           "yourself or choose another output path")
-    for name in {*recorded, *files}:
+    for name in sorted({*recorded, *files}):
         if (path / name).exists() or (path / name).is_symlink():
             _check_study_file(path, name, recorded)
     for run in runs:

@@ -254,13 +254,13 @@ def test_study_files_and_runs_the_user_changed_are_kept(tmp_path):
         outputs.write_study_text(study, "cost.png", "png")
     assert target.read_text() == "precious"
     # a file of the user's under a name the study will write: refused before the work
+    (study / "sweep.csv").unlink()
     (study / "cost.png").unlink()
     (study / "cost.png").write_text("my plot")
     with pytest.raises(cases.CaseError, match="cost.png"):
         outputs.study_directory(study, files=["cost.png"])
     assert (study / "cost.png").read_text() == "my plot"
     # a run of the study with the user's notes: refused before the work, never removed
-    (study / "sweep.csv").unlink()
     (study / "cost.png").unlink()
     with outputs.atomic_directory(study / "r1") as tmp:
         (tmp / "history.csv").write_text("s\n")
