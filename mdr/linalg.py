@@ -72,10 +72,49 @@ def lu_nopivot(M: np.ndarray, block: int = 64) -> np.ndarray:
     return M
 
 
+def _cython_blas(name: str, signature):
+    """A BLAS routine from scipy.linalg.cython_blas as a ctypes function, or None.
+
+    scipy.linalg.blas's wrappers copy any array that is not contiguous, so a
+    leading block of a larger matrix costs a copy per call; BLAS itself takes
+    the block as it is (its leading dimension). The same capsules are what
+    numba reaches scipy's BLAS through.
+    """
+    import ctypes
+
+    try:
+        from scipy.linalg import cython_blas
+        capsule = cython_blas.__pyx_capi__[name]
+        api = ctypes.pythonapi
+        api.PyCapsule_GetName.restype = ctypes.c_char_p
+        api.PyCapsule_GetName.argtypes = [ctypes.py_object]
+        api.PyCapsule_GetPointer.restype = ctypes.c_void_p
+        api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
+        address = api.PyCapsule_GetPointer(capsule, api.PyCapsule_GetName(capsule))
+        return signature(address) if address else None
+    except Exception:     # another scipy build or Python: the packed path below
+        return None
+
+
+def _dtrsv():
+    import ctypes
+
+    p_int = ctypes.POINTER(ctypes.c_int)
+    return _cython_blas("dtrsv", ctypes.CFUNCTYPE(
+        None, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, p_int,
+        ctypes.c_void_p, p_int, ctypes.c_void_p, p_int))
+
+
+_DTRSV = _dtrsv()
+
+
 class NestedLU:
     """LU of a matrix whose leading blocks are solved as often as the whole.
 
-    ``solve(b)`` solves the leading len(b)×len(b) block.
+    ``solve(b)`` solves the leading len(b)×len(b) block: two triangular
+    solves (BLAS trsv) on the leading block of the factors, in place with
+    the factors' leading dimension, or, without access to BLAS's own entry
+    points, on packed copies of the factors (BLAS tpsv).
     """
 
     def __init__(self, M: np.ndarray):
@@ -85,17 +124,33 @@ class NestedLU:
         if np.any(piv != np.arange(len(piv))):
             lu = lu_nopivot(M)
         n = len(lu)
+        self.n = n
+        if not np.all(np.isfinite(lu)):
+            raise SolverError("implicit wear step: the contact matrix factorisation failed")
+        if _DTRSV is not None:
+            self.lu = np.asfortranarray(lu)
+            return
         r, c = np.tril_indices(n)           # ordered by r, then c
         # column-major packed upper storage of U and of Lᵀ: column j holds rows 0..j
+        self.lu = None
         self.U = np.ascontiguousarray(lu[c, r])
         self.Lt = np.ascontiguousarray(lu[r, c])
         self.Lt[np.cumsum(np.arange(1, n + 1)) - 1] = 1.0
-        self.n = n
-        if not (np.all(np.isfinite(self.U)) and np.all(np.isfinite(self.Lt))):
-            raise SolverError("implicit wear step: the contact matrix factorisation failed")
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         n = len(b)
+        if self.lu is not None:
+            import ctypes
+
+            x = np.array(b, dtype=float)     # a fresh contiguous copy, solved in place
+            if n:
+                size, lda, one = ctypes.c_int(n), ctypes.c_int(self.n), ctypes.c_int(1)
+                a, xp = self.lu.ctypes.data, x.ctypes.data
+                _DTRSV(b"L", b"N", b"U", ctypes.byref(size), a, ctypes.byref(lda), xp,
+                       ctypes.byref(one))
+                _DTRSV(b"U", b"N", b"N", ctypes.byref(size), a, ctypes.byref(lda), xp,
+                       ctypes.byref(one))
+            return x
         k = n * (n + 1) // 2
         y = dtpsv(n, self.Lt[:k], b, lower=0, trans=1, diag=1)
         return dtpsv(n, self.U[:k], y, lower=0)
@@ -137,6 +192,10 @@ def gmres(matvec, precond, b, x0=None, rtol=1e-11, restart=30, maxiter=10, stats
                 break
             V[j + 1] = w / H[j + 1, j]
         x = x + y @ Z[:len(y)]
+        if res <= rtol * bnorm:
+            # the Arnoldi residual is the true one (right preconditioning; MGS
+            # over at most `restart` vectors): no product spent to re-check it
+            break
     else:
         r = b - matvec(x)
         if np.linalg.norm(r) > rtol * bnorm * 10:

@@ -112,6 +112,19 @@ def abel_kernel_inverse(n: int) -> np.ndarray:
     return b
 
 
+@lru_cache(maxsize=4)
+def abel_kernel_inverse_sum(n: int) -> np.ndarray:
+    """Partial sums B[k] = b[0] + ... + b[k] of :func:`abel_kernel_inverse`.
+
+    A cumulative sum after a Toeplitz product is the Toeplitz product with
+    the summed kernel, so :func:`line_load` and :func:`from_1d_exact` are one
+    convolution each (B[k] ~ k^(-1/2): no growth, no cancellation).
+    """
+    B = np.cumsum(abel_kernel_inverse(n))
+    B.flags.writeable = False
+    return B
+
+
 @lru_cache(maxsize=8)
 def _eq3_kernels(n: int):
     """Product-integration weights of ∫ ψ(t) / sqrt(τ - t) dt for ψ linear per segment.
@@ -176,8 +189,8 @@ def from_1d_exact(g: np.ndarray) -> np.ndarray:
     f = np.full(n, g[0])
     if n > 1:
         s = (g[1:] - g[0]) / (2.0 * np.sqrt(np.arange(1, n)))
-        df = lower(_kernel(abel_kernel_inverse, n - 1), s, key="b")
-        f[1:] += np.cumsum(df)
+        # the cumulative sum of the increments, folded into the kernel
+        f[1:] += lower(_kernel(abel_kernel_inverse_sum, n - 1), s, key="B")
     return f
 
 
@@ -235,8 +248,8 @@ def line_load(p: np.ndarray, dt: float) -> np.ndarray:
     triangular, so the contact set's block is inverted on its own).
     """
     p = np.asarray(p, dtype=float)
-    dq = upper(_kernel(abel_kernel_inverse, len(p)), p, key="b") * (-0.5 * math.pi * math.sqrt(dt))
-    return -np.cumsum(dq[::-1])[::-1]
+    # q_i = -Σ_{k>=i} Δq_k, the sum folded into the kernel
+    return upper(_kernel(abel_kernel_inverse_sum, len(p)), p, key="B") * (0.5 * math.pi * math.sqrt(dt))
 
 
 def force(q: np.ndarray, dt: float) -> float:

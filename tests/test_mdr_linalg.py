@@ -1,13 +1,21 @@
 """Nested-block LU and GMRES of the implicit wear step, against numpy.linalg.solve."""
 
 import numpy as np
+import pytest
 
 from wearcheck.mdr import linalg, transforms
 
 
-def test_nested_lu_solves_every_leading_block():
+@pytest.mark.parametrize("blas", ["trsv in place", "packed tpsv"])
+def test_nested_lu_solves_every_leading_block(blas, monkeypatch):
     # the implicit step's matrix (compliance + wear compliance) and one that
-    # LAPACK would pivot (large sub-diagonal), which takes the unpivoted path
+    # LAPACK would pivot (large sub-diagonal), which takes the unpivoted path;
+    # both ways of solving the leading blocks (BLAS reached directly, or the
+    # packed copies used where it cannot be)
+    if blas == "packed tpsv":
+        monkeypatch.setattr(linalg, "_DTRSV", None)
+    else:
+        assert linalg._DTRSV is not None, "scipy's BLAS entry points are not reachable"
     rng = np.random.default_rng(3)
     A = transforms.compliance_matrix(150, 1e-10, 2e11)
     A[np.diag_indices(150)] += 0.05 * A[0, 0]
