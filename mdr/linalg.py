@@ -11,6 +11,7 @@ triangular form the leading block is a prefix of the storage (BLAS tpsv).
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import threading
 
 import numpy as np
@@ -80,8 +81,6 @@ def _cython_blas(name: str, signature):
     the block as it is (its leading dimension). The same capsules are what
     numba reaches scipy's BLAS through.
     """
-    import ctypes
-
     try:
         from scipy.linalg import cython_blas
         capsule = cython_blas.__pyx_capi__[name]
@@ -97,8 +96,6 @@ def _cython_blas(name: str, signature):
 
 
 def _dtrsv():
-    import ctypes
-
     p_int = ctypes.POINTER(ctypes.c_int)
     return _cython_blas("dtrsv", ctypes.CFUNCTYPE(
         None, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, p_int,
@@ -114,37 +111,69 @@ class NestedLU:
     ``solve(b)`` solves the leading len(b)×len(b) block: two triangular
     solves (BLAS trsv) on the leading block of the factors, in place with
     the factors' leading dimension, or, without access to BLAS's own entry
-    points, on packed copies of the factors (BLAS tpsv).
+    points, on packed copies of the factors (BLAS tpsv). ``extend`` grows
+    the factorisation to a larger leading block of the same matrix by
+    bordering, so it can start at the size needed now.
     """
 
     def __init__(self, M: np.ndarray):
+        self.n = 0
+        self.lu = np.zeros((0, 0), order="F")
+        self.extend(M[:0, :], M[:, :0], M)
+
+    @staticmethod
+    def _factor(M: np.ndarray) -> np.ndarray:
         # LAPACK's partial pivoting leaves these matrices (a compliance plus a
-        # positive diagonal) unpermuted in practice; use it when it does
+        # positive diagonal, or its Schur complements) unpermuted in practice;
+        # use it when it does
         lu, piv = lu_factor(M, check_finite=False)
         if np.any(piv != np.arange(len(piv))):
             lu = lu_nopivot(M)
-        n = len(lu)
-        self.n = n
-        if not np.all(np.isfinite(lu)):
+        return lu
+
+    def extend(self, A12: np.ndarray, A21: np.ndarray, A22: np.ndarray) -> None:
+        """Factor [[A11, A12], [A21, A22]] from the factors of A11 (the current matrix).
+
+        U12 = L11⁻¹ A12, L21 = A21 U11⁻¹, and the Schur complement A22 - L21 U12
+        factored: 2 n² k + k³ operations for k new rows, where factoring
+        afresh costs (n + k)³ (LU without pivoting: the leading factors stay).
+        """
+        n, k = self.n, len(A22)
+        m = n + k
+        lu = self.lu
+        if m > lu.shape[0]:
+            grown = np.zeros((m, m) if n == 0 else (int(1.25 * m) + 8,) * 2, order="F")
+            grown[:n, :n] = lu[:n, :n]
+            lu = grown
+        if n:
+            F11 = lu[:n, :n]          # L11 below the diagonal, U11 on and above
+            U12 = solve_triangular(F11, A12, lower=True, unit_diagonal=True, check_finite=False)
+            L21 = solve_triangular(F11, A21.T, trans="T", lower=False,
+                                   check_finite=False).T
+            S = A22 - L21 @ U12
+            lu[:n, n:m] = U12
+            lu[n:m, :n] = L21
+        else:
+            S = A22
+        lu[n:m, n:m] = self._factor(S)
+        if not np.all(np.isfinite(lu[n:m, :m])) or not np.all(np.isfinite(lu[:n, n:m])):
             raise SolverError("implicit wear step: the contact matrix factorisation failed")
-        if _DTRSV is not None:
-            self.lu = np.asfortranarray(lu)
-            return
-        r, c = np.tril_indices(n)           # ordered by r, then c
-        # column-major packed upper storage of U and of Lᵀ: column j holds rows 0..j
-        self.lu = None
-        self.U = np.ascontiguousarray(lu[c, r])
-        self.Lt = np.ascontiguousarray(lu[r, c])
-        self.Lt[np.cumsum(np.arange(1, n + 1)) - 1] = 1.0
+        self.lu, self.n = lu, m
+        if _DTRSV is None:
+            r, c = np.tril_indices(m)           # ordered by r, then c
+            # column-major packed upper storage of U and of Lᵀ: column j holds rows 0..j
+            self.U = np.ascontiguousarray(lu[c, r])
+            self.Lt = np.ascontiguousarray(lu[r, c])
+            self.Lt[np.cumsum(np.arange(1, m + 1)) - 1] = 1.0
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         n = len(b)
-        if self.lu is not None:
-            import ctypes
-
+        if n > self.n:
+            raise ValueError(f"NestedLU.solve: {n} unknowns, factored {self.n}")
+        if _DTRSV is not None:
             x = np.array(b, dtype=float)     # a fresh contiguous copy, solved in place
             if n:
-                size, lda, one = ctypes.c_int(n), ctypes.c_int(self.n), ctypes.c_int(1)
+                size, lda, one = ctypes.c_int(n), ctypes.c_int(self.lu.shape[0]), ctypes.c_int(1)
                 a, xp = self.lu.ctypes.data, x.ctypes.data
                 _DTRSV(b"L", b"N", b"U", ctypes.byref(size), a, ctypes.byref(lda), xp,
                        ctypes.byref(one))

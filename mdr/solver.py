@@ -45,6 +45,13 @@ ADAPTIVE_FIRST_STEP_HAT = 2.0 ** -7
 #: adaptive scheme: the step doubles when the error estimate is below this
 #: fraction of the tolerance (the estimate grows as h², fourfold per doubling)
 ADAPTIVE_GROW_BELOW = 0.2
+#: the half steps' edges are guessed from the shares of the full step's edge
+#: move they took of late when it moves at least this many nodes, else as its
+#: midpoint and end (paper case: N = 800, 639 contact iterations with
+#: midpoint and end, 677 with the shares always, 635 with this rule; N =
+#: 25600, 1175 contact and 7387 GMRES iterations with midpoint and end, 870
+#: and 5637 with the shares)
+SHARE_MOVE = 4
 #: which solution of a doubled step the adaptive scheme keeps (docs/time-stepping.md)
 ADAPTIVE_ACCEPT = "deferred"
 #: (Richardson's correction is carried everywhere but where it is negative on
@@ -192,7 +199,8 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
     systems: dict = {}
     m_prev = [state.m, state.m]
     p_prev = None     # the pressure one step back (on the current grid), for guesses
-    edge_share = [0.5, 0.5]   # the half steps' edge moves over the full step's, last step
+    edge_share = [0.5, 0.5]   # the half steps' edge moves over the full step's, of late
+    edge_moves = [0.0, 0.0, 0.0]   # their decaying sums (half, second half, full)
     edge_lead = 0             # the full step's edge ahead of the accepted one, last step
     h_last = None
 
@@ -207,8 +215,10 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
             if len(systems) >= 6:
                 systems.pop(next(iter(systems)))
             # depth control: the contact radius grows to about sqrt(2) a0, twice the
-            # nodes of the start in t = r² (the factorisation grows if needed)
-            grow_by = 1.3 if adaptive else 2.2
+            # nodes of the start in t = r². The factorisation grows by bordering
+            # where a contact set needs it, so an adaptive run's systems (each
+            # used over a part of the run) start at about the present contact
+            grow_by = 1.05 if adaptive else 2.2
             sys_ = wear.ImplicitSystem(model, hc, nodes=int(grow_by * (state.m + 1)) + 16)
         systems[hc] = sys_
         return sys_
@@ -330,8 +340,8 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
                 on_ladder = hn == h_cur
                 start = state if corr is None else dataclasses.replace(state, f=state.f + corr)
                 # the pressure extrapolated linearly in s starts the iterative
-                # solves of fine grids (GMRES iterations at N = 25600: 8-10 for
-                # the first pass from the step's start pressure, 4-5 from this)
+                # solves of fine grids (GMRES iterations of the full step's first
+                # pass at N = 25600: 8-10 from the step's start pressure, 5-7 from this)
                 p_guess = None if p_prev is None or not h_last else \
                     state.p + (state.p - p_prev) * (hn / h_last)
                 # the full step's edge runs ahead of the accepted (two half steps) one
@@ -341,19 +351,26 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
                                 p_guess=p_guess)
                 # the half steps: the full step's pressure (at their end, and half
                 # way), and edges as far along the full step's edge move as they
-                # were in the last step (backward Euler's edge runs ahead by O(h);
-                # contact iterations at N = 25600: 1676 with the midpoint and the
-                # full step's edge as guesses, 1074 with these)
+                # went of late (backward Euler's edge runs ahead by O(h); see
+                # SHARE_MOVE)
+                move = full.m - state.m
+                shared = abs(move) >= SHARE_MOVE
                 half = implicit(start, 0.5 * hn, exact=on_ladder,
-                                guess=state.m + round(edge_share[0] * (full.m - state.m)),
+                                guess=state.m + (round(edge_share[0] * move) if shared
+                                                 else move // 2),
                                 p_guess=0.5 * (state.p + full.p))
                 two = implicit(half, 0.5 * hn, exact=on_ladder,
-                               guess=half.m + round(edge_share[1] * (full.m - state.m)),
+                               guess=half.m + round(edge_share[1] * move) if shared else full.m,
                                p_guess=full.p)
                 edge_lead = full.m - two.m
-                if full.m != state.m:
-                    edge_share[:] = [(half.m - state.m) / (full.m - state.m),
-                                     (two.m - half.m) / (full.m - state.m)]
+                # shares as ratios of decaying sums: a move of a node or two
+                # (coarse grids) makes a single step's ratio noise
+                edge_moves[:] = [0.7 * a + b for a, b in
+                                 zip(edge_moves, (half.m - state.m, two.m - half.m,
+                                                  full.m - state.m))]
+                if edge_moves[2] > 0:
+                    edge_share[:] = [edge_moves[0] / edge_moves[2],
+                                     edge_moves[1] / edge_moves[2]]
                 err = error_of(two, full)
                 for st in (full, half, two):
                     for k in ("gmres_iterations", "contact_iterations"):
