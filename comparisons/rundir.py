@@ -215,6 +215,11 @@ class Run:
             raise cases.CaseError(f"'{self.path}' is an incomplete run directory (a .partial "
                                   "directory of a wearcheck process that was stopped or is "
                                   "still writing); use the complete run")
+        if not self.path.exists():
+            raise cases.CaseError(f"run directory '{self.path}' does not exist")
+        if not self.path.is_dir():
+            raise cases.CaseError(f"'{self.path}' is a file, not a run directory")
+        _refuse_other_output(self.path)
         meta = self.path / "meta.json"
         if not meta.is_file():
             raise cases.CaseError(f"'{self.path}' is not a complete run directory "
@@ -239,6 +244,26 @@ class Run:
     @property
     def solver(self) -> str:
         return self.meta["solver"]
+
+
+def _refuse_other_output(path: Path) -> None:
+    """A comparison or a study holds run directories but is none: say so, and name them.
+
+    Their ``meta.json`` (a study's) or ``metrics.json`` would otherwise be read
+    as a damaged run, which sends the user looking for damage that is not there.
+    """
+    from wearcheck.comparisons.outputs import read_marker
+    marker = read_marker(path)
+    kind = marker.get("kind") if marker else None
+    if kind in (None, "run", "legacy"):
+        return
+    runs = sorted(str(child) for child in path.iterdir()
+                  if child.is_dir() and not child.name.startswith(".")
+                  and (child / "meta.json").is_file())
+    shown = ", ".join(runs[:3]) + (f" (and {len(runs) - 3} more)" if len(runs) > 3 else "")
+    hint = f"; its runs: {shown}" if runs else ""
+    raise cases.CaseError(f"'{path}' is a wearcheck {kind} directory, not a run "
+                          f"directory{hint}")
 
 
 def _read_history(path: Path) -> dict:

@@ -172,3 +172,29 @@ def test_runs_past_the_caps_are_refused_before_solving(solver):
                          "sliding.distance": 200.0})  # ŝ = 6924: 6.9e6 steps of 1e-3
     with pytest.raises(cases.CaseError, match=r"sliding\.step_hat.*steps \(cap"):
         wearcheck.solve(fixed, solver)
+
+
+def test_a_comparison_or_study_is_named_as_such_not_as_a_damaged_run(tmp_path, capsys):
+    """``wearcheck export runs/paper`` right after ``compare`` (a reviewer's first try)
+    said "not a complete run directory (no meta.json)", and on a study "meta.json is
+    damaged": neither is damaged, they are not runs. The message names the runs inside."""
+    from wearcheck.comparisons.cli import main
+    from wearcheck.comparisons.outputs import atomic_directory, study_directory
+    result = wearcheck.solve(wearcheck.load_case("hertz", {"mdr.elements": 60}), "mdr")
+    with atomic_directory(tmp_path / "cmp", "comparison") as tmp:
+        result.write(tmp / "mdr")
+    study = study_directory(tmp_path / "study")
+    result.write(study / "mdr-elements-60")
+    (study / "meta.json").write_text('{"command": "wearcheck sweep"}')  # a study's own meta
+    for out, kind, run in [("cmp", "comparison", "mdr"), ("study", "study", "mdr-elements-60")]:
+        with pytest.raises(cases.CaseError, match=f"is a wearcheck {kind} directory, not a run"):
+            wearcheck.read_run(tmp_path / out)
+        for command in ("export", "render"):
+            assert main([command, str(tmp_path / out)]) == 2
+            err = capsys.readouterr().err
+            assert err.count("\n") == 1 and f"{kind} directory" in err
+            assert str(tmp_path / out / run) in err     # where the user should point instead
+        assert wearcheck.read_run(tmp_path / out / run).solver == "mdr"
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(cases.CaseError, match="is a file, not a run directory"):
+        wearcheck.read_run(tmp_path / "file")

@@ -512,7 +512,7 @@ def test_export_command(tmp_path, capsys):
     # the rest of the run directory is untouched
     assert Run(run.path).meta == run.meta
     assert main(["export", str(tmp_path / "nothing")]) != 0
-    assert "not a complete run directory" in capsys.readouterr().err
+    assert "does not exist" in capsys.readouterr().err
     assert main(["export", str(run.path), "--revolve", "2"]) != 0
     assert "at least 3 segments" in capsys.readouterr().err
 
