@@ -340,6 +340,12 @@ def check_output(path, kind: str) -> Path:
     why = _inside_output(path, kind) or refusal(path, kind)
     if why:
         raise OutputError(why)
+    if kind != "study" and not path.is_symlink() and path.is_dir() and os.path.ismount(path):
+        # a run or comparison is renamed into place whole, which a mount point cannot
+        # take (EBUSY, found only after the solve); a study is written into DIR in place
+        raise OutputError(f"output '{path}' is a mount point, which wearcheck cannot replace "
+                          f"by its finished output; give a directory inside it, e.g. "
+                          f"'{path / 'run'}'")
     _check_writable_ancestor(path)
     return path
 
@@ -477,6 +483,30 @@ def _install(tmp: Path, path: Path, kind: str) -> None:
             shutil.rmtree(graveyard, ignore_errors=True)
 
 
+def _directory_stat(path: Path):
+    """The stat of the directory at ``path`` that an output will replace, else None."""
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return None
+    return st if stat.S_ISDIR(st.st_mode) else None
+
+
+def _take_permissions(tmp: Path, occupant) -> None:
+    """Give the new output the permissions and group of the directory it replaces.
+
+    An output replaces a directory by renaming a new one onto it; without this,
+    an empty directory made ``chmod 700`` (or group-shared) for the results, or
+    an output the user restricted after the run, would come back with the
+    umask's mode, readable by everyone. The owner is left alone: the files
+    inside are this process's.
+    """
+    with contextlib.suppress(OSError):      # a group we are not in: keep ours
+        if occupant.st_gid != os.stat(tmp).st_gid:
+            os.chown(tmp, -1, occupant.st_gid)
+    os.chmod(tmp, stat.S_IMODE(occupant.st_mode))
+
+
 @contextlib.contextmanager
 def atomic_directory(path, kind: str = "run"):
     """Yield a fresh temporary directory that replaces ``path`` on success.
@@ -488,6 +518,7 @@ def atomic_directory(path, kind: str = "run"):
     if kind not in KINDS:
         raise ValueError(f"unknown output kind {kind!r}")
     path = check_output(path, kind)
+    occupant = _directory_stat(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     clean_stale(path.parent, path.name)
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
@@ -496,6 +527,8 @@ def atomic_directory(path, kind: str = "run"):
         write_marker(tmp, kind, complete=False)
         yield tmp
         write_marker(tmp, kind, complete=True, files=inventory(tmp, kind))
+        if occupant is not None:
+            _take_permissions(tmp, occupant)
         _install(tmp, path, kind)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)

@@ -8,6 +8,7 @@ used where the failure is a hang, a signal or a process limit.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import multiprocessing
 import os
@@ -749,3 +750,66 @@ def test_refine_interrupt_message_says_what_was_written(tmp_path, capsys, monkey
     line = _one_error_line(capsys.readouterr().err)
     assert (out / "refinement-mdr.json").is_file()
     assert "the summary was written" in line
+
+
+# -- an existing empty directory as --out (found by a new-user review) ------
+
+def test_an_empty_directory_keeps_its_permissions_and_group(tmp_path, capsys):
+    """``mkdir -m 700 results`` then ``--out results``: the output replaces the
+    directory by a new one, which came back 0755 and in the process's group,
+    readable by everyone. It now takes the mode and group of what it replaces,
+    at the first run and at a re-run after the user changed them."""
+    out = tmp_path / "results"
+    out.mkdir(mode=0o700)
+    os.chmod(out, 0o700)                 # whatever the umask
+    groups = [g for g in os.getgroups() if g != os.stat(out).st_gid]
+    gid = os.stat(out).st_gid
+    if groups:
+        with contextlib.suppress(OSError):
+            os.chown(out, -1, groups[0])
+            gid = groups[0]
+    assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(out), *SMALL]) == 0
+    assert (out / "meta.json").is_file() and (out / ".wearcheck-output").is_file()
+    assert stat.S_IMODE(out.stat().st_mode) == 0o700
+    assert out.stat().st_gid == gid
+    os.chmod(out, 0o750)
+    assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(out), *SMALL]) == 0
+    assert stat.S_IMODE(out.stat().st_mode) == 0o750
+    fresh = tmp_path / "fresh"           # a new path still gets the umask's mode
+    assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(fresh), *SMALL]) == 0
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE(fresh.stat().st_mode) == 0o777 & ~umask
+
+
+def test_a_mount_point_is_refused_before_solving(tmp_path, capsys, no_solve, monkeypatch):
+    """An empty mount point (a scratch disk) as --out failed with exit 4 and an
+    error about a '.partial' path after the whole solve: rename(2) cannot put
+    a directory onto a mount point (EBUSY). Now refused at once, naming a
+    directory inside it; a study, written into its directory in place, is fine."""
+    out = tmp_path / "scratch"
+    out.mkdir()
+    real = os.path.ismount
+    monkeypatch.setattr(os.path, "ismount", lambda p: str(p) == str(out) or real(p))
+    for argv in (["run", HERTZ, "--solver", "mdr"], ["compare", HERTZ]):
+        assert cli_main([*argv, "--out", str(out), *SMALL]) == 2
+        line = _one_error_line(capsys.readouterr().err)
+        assert "mount point" in line and str(out / "run") in line
+    assert list(out.iterdir()) == []
+    from wearcheck.comparisons.outputs import study_directory
+    assert study_directory(out) == out
+
+
+@pytest.mark.skipif(os.geteuid() != 0 or shutil.which("mount") is None,
+                    reason="mounting a tmpfs needs root")
+def test_a_real_mount_point_is_refused(tmp_path, capsys, no_solve):
+    out = tmp_path / "mnt"
+    out.mkdir()
+    if subprocess.run(["mount", "-t", "tmpfs", "none", str(out)],
+                      capture_output=True).returncode != 0:
+        pytest.skip("this container may not mount")
+    try:
+        assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(out), *SMALL]) == 2
+        assert "mount point" in _one_error_line(capsys.readouterr().err)
+    finally:
+        subprocess.run(["umount", str(out)], check=True)
