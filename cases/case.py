@@ -132,6 +132,7 @@ class Case:
             other = _OTHER_WAY.get((section, key)) if section == "fretting" else None
             if other and f"{section}.{other}" not in items:
                 raw[section].pop(other, None)
+        _drop_inapplicable(raw, {tuple(name.split(".")) for name in items})
         return from_dict(raw, source=self.source)
 
 
@@ -210,6 +211,35 @@ _OTHER_WAY = {("stages", "s_hat"): "cycles", ("stages", "cycles"): "s_hat",
               ("fretting", "force_amplitude"): "amplitude"}
 
 
+def _inapplicable(section: str, key: str, value) -> tuple[str, ...]:
+    """The keys of ``section`` that do not apply once the switch ``section.key`` is ``value``.
+
+    A case file gives only the keys of its choice (the depth of a depth-controlled
+    run, the moduli of an elastic body); an override that flips the choice makes
+    them wrong, and ``--set`` cannot remove a key, so they are dropped with it.
+    """
+    if (section, key) == ("loading", "control") and value in ("depth", "force"):
+        return ("force",) if value == "depth" else ("depth",)
+    if section in ("indenter", "counterface") and key == "rigid" and value is True:
+        return ("youngs_modulus", "poisson_ratio")
+    if (section, key) == ("indenter", "profile") and value in PROFILE_KEYS:
+        return tuple(sorted(set().union(*PROFILE_KEYS.values()) - PROFILE_KEYS[value]))
+    if (section, key) == ("sliding", "until") and isinstance(value, str):
+        return tuple(k for k in ("distance", "cycles")
+                     if (k, value) not in (("distance", "distance"), ("cycles", "cycles")))
+    return ()
+
+
+def _drop_inapplicable(raw: dict, changed) -> None:
+    """Drop from ``raw`` the keys a changed switch makes inapplicable, unless also changed."""
+    for section, key in list(changed):
+        table = raw.get(section)
+        if isinstance(table, dict) and key in table:
+            for other in _inapplicable(section, key, table[key]):
+                if (section, other) not in changed:
+                    table.pop(other, None)
+
+
 def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Case:
     """Read a case file, apply ``section.key=value`` overrides, validate."""
     path = Path(path)
@@ -236,6 +266,7 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
         other = _OTHER_WAY.get((section, k))
         if other and (section, other) not in overridden:
             raw[section].pop(other, None)
+    _drop_inapplicable(raw, overridden)
     for section in REQUIRED_SECTIONS:
         if section not in raw:
             raise CaseError(f"missing section [{section}]")

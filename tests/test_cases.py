@@ -211,6 +211,10 @@ BAD_CHANGES = [
 ]
 
 
+#: what the override of a choice removes with it (README, "--set")
+FLIPPED = {("indenter.rigid", "True"): ("youngs_modulus", "poisson_ratio")}
+
+
 @pytest.mark.parametrize("key, value", BAD_CHANGES, ids=[f"{k}={v!r}"[:40] for k, v in BAD_CHANGES])
 def test_derived_case_is_rejected_exactly_as_the_file(key, value):
     """``Case.derive`` (the Python way to change a case) says what the loader says."""
@@ -219,6 +223,9 @@ def test_derived_case_is_rejected_exactly_as_the_file(key, value):
     raw = {s: dict(v) for s, v in BASE.items()}
     if section:
         raw.setdefault(section, {})[name] = value
+        # an override that flips a choice drops the keys the file gave for the old one
+        for dropped in FLIPPED.get((key, repr(value)), ()):
+            raw[section].pop(dropped, None)
         with pytest.raises(CaseError) as from_file:
             cases.from_dict(raw)
     with pytest.raises(CaseError) as derived:
@@ -240,3 +247,43 @@ def test_replace_validates_whole_sections():
     with pytest.raises(CaseError, match=r"wear\.k.*> 0"):
         case.replace(wear=dataclasses.replace(case.wear, k=-1e-4))
     assert case.replace(wear=dataclasses.replace(case.wear, k=2e-4)).wear.k == 2e-4
+
+
+# -- an override that flips a choice (found by a new-user review) ----------
+
+@pytest.mark.parametrize("name, changes, check", [
+    # the paper's depth-controlled sphere under a held force instead
+    ("paper", {"loading.control": "force", "loading.force": 5.0, "sliding.until": "distance",
+               "sliding.distance": 0.01},
+     lambda c: c.loading.depth is None and c.loading.force == 5.0),
+    # the ball-on-flat test under a held depth, then stopped at a distance
+    ("ball_on_flat", {"loading.control": "depth", "loading.depth": 1e-7},
+     lambda c: c.loading.force is None and c.loading.depth == 1e-7),
+    ("ball_on_flat", {"sliding.until": "distance", "sliding.distance": 1.0},
+     lambda c: c.sliding.cycles is None and c.sliding.stroke == 1e-3),
+    # a rigid sphere on an elastic flat
+    ("paper", {"indenter.rigid": True, "counterface.rigid": False,
+               "counterface.youngs_modulus": 1e11, "counterface.poisson_ratio": 0.3},
+     lambda c: c.indenter.youngs_modulus is None and c.counterface.youngs_modulus == 1e11),
+    # the flat tip away: the plain paraboloid of the same radius
+    ("truncated", {"indenter.profile": "paraboloid"},
+     lambda c: c.indenter.flat_radius is None and c.indenter.radius == 0.01),
+])
+def test_an_override_that_flips_a_choice_drops_the_keys_of_the_old_one(name, changes, check):
+    """``--set loading.control=force --set loading.force=5`` on the paper case was refused
+    ("key 'loading.depth' given ... remove it"), and --set cannot remove a key: no
+    override could switch a shipped case's load control, body or profile."""
+    argv = [f"{k}={str(v).lower() if isinstance(v, bool) else v}" for k, v in changes.items()]
+    from_cli = cases.load(cases.shipped(name), argv)
+    from_api = cases.load(cases.shipped(name)).derive(changes)
+    assert check(from_cli) and from_cli == from_api
+
+
+def test_a_key_set_with_the_flipped_choice_is_still_refused():
+    """Only keys the file gave are dropped: one given in the same overrides is the
+    user's and still wrong."""
+    with pytest.raises(CaseError, match="loading.depth' given but loading.control"):
+        cases.load(cases.shipped("paper"), ["loading.control=force", "loading.force=1",
+                                            "loading.depth=1e-6"])
+    with pytest.raises(CaseError, match="missing key 'loading.force'"):
+        cases.load(cases.shipped("paper"), ["loading.control=force"])
