@@ -315,12 +315,21 @@ def _check_sphere_depth(case: Case) -> None:
 def _check_scales(case: Case) -> None:
     """The unworn contact must be computable: extreme (valid) numbers can underflow."""
     from . import reference
+    def usable(value):
+        return math.isfinite(value) and value > 0
     try:
         sc = reference.scales(case)
-        ok = all(math.isfinite(sc[k]) and sc[k] > 0 for k in ("a0", "d0", "F0", "p0",
-                                                                "s_hat_per_m"))
+        ok = all(usable(sc[k]) for k in ("a0", "d0", "F0", "p0"))
     except (ArithmeticError, ValueError, RuntimeError):  # RuntimeError: a root not found
         ok = False
+    if ok and not usable(sc["s_hat_per_m"]):
+        # the contact is fine: the wear keys put the sliding scale out of range
+        w = case.wear
+        raise CaseError(f"keys 'wear.k' = {w.k!r}, 'wear.mu' = {w.mu!r}, 'wear.hardness' = "
+                        f"{w.hardness!r}: the sliding scale k μ E*/(σ0 a0) comes out "
+                        f"{sc['s_hat_per_m']!r} per metre (E* = {sc['E_star']:.4g} Pa, a0 = "
+                        f"{sc['a0']:.4g} m), not a positive finite number; check their "
+                        "magnitudes (σ0 in Pa)")
     if not ok:
         control = case.loading.control
         raise CaseError(f"key 'loading.{control}' = {getattr(case.loading, control)!r}: the "

@@ -287,3 +287,14 @@ def test_a_key_set_with_the_flipped_choice_is_still_refused():
                                             "loading.depth=1e-6"])
     with pytest.raises(CaseError, match="missing key 'loading.force'"):
         cases.load(cases.shipped("paper"), ["loading.control=force"])
+
+
+@pytest.mark.parametrize("key, value", [("wear.hardness", 1e-300), ("wear.k", 1e-320)])
+def test_a_sliding_scale_out_of_range_names_the_wear_keys(key, value):
+    """k μ E*/(σ0 a0) = 1e-4·0.3·2.3e11/(1e-300·1e-4) overflows (and 1e-320·... underflows
+    to 0) while the contact itself is fine: the message named 'loading.depth' = 1e-06
+    and "the unworn contact", sending the user to the one key that was right."""
+    with pytest.raises(CaseError) as err:
+        cases.load(cases.shipped("paper"), [f"{key}={value}"])
+    text = str(err.value)
+    assert f"'{key}' = {value!r}" in text and "loading.depth" not in text
