@@ -17,7 +17,9 @@ import importlib
 from dataclasses import dataclass, field
 from typing import Callable
 
-from wearcheck.cases import Case, CaseError, RunResult
+import numpy as np
+
+from wearcheck.cases import Case, CaseError, RunResult, SolverError
 from wearcheck.comparisons.layout import Item
 
 
@@ -75,7 +77,17 @@ class Solver:
         if reason is not None:
             raise CaseError(f"solver '{self.name}' cannot run this case: {reason}")
         fn = self.solve_function or self._package().solve
-        result = fn(case, progress=progress)
+        try:
+            result = fn(case, progress=progress)
+        except (ArithmeticError, np.linalg.LinAlgError) as exc:
+            # a float overflow, a NaN in an integer, a factorisation or least-squares
+            # solve that broke down: the numbers went out of range, a numerical
+            # failure (exit 3) rather than a bug (exit 70)
+            text = str(exc).splitlines()[0] if str(exc) else ""
+            raise SolverError(f"solver '{self.name}': numerical failure ({type(exc).__name__}"
+                              f"{': ' + text if text else ''}); the case's numbers (moduli, "
+                              "load, wear keys) may lie outside what it can represent") \
+                from exc
         if not isinstance(result, RunResult):
             raise TypeError(f"solver '{self.name}' returned {type(result).__name__}, "
                             "not a wearcheck RunResult")

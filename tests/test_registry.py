@@ -118,3 +118,29 @@ def test_registering_twice_is_refused(toy):
         registry.register(toy)
     with pytest.raises(ValueError, match="module or solve_function"):
         registry.register(registry.Solver(name="empty", title="Empty"))
+
+
+@pytest.mark.parametrize("failure", [
+    np.linalg.LinAlgError("SVD did not converge in Linear Least Squares"),
+    OverflowError("cannot convert float infinity to integer"),
+    FloatingPointError("overflow encountered in multiply"),
+])
+def test_a_solver_whose_numbers_break_down_is_a_numerical_failure(tmp_path, capsys, failure):
+    """``wearcheck run paper --solver mdr --set indenter.youngs_modulus=1e300`` (and
+    1e-300) ended as exit 70, "internal error ... (a bug in wearcheck)": an SVD in the
+    GMRES least squares, and int(inf), broke down on numbers out of range. A breakdown
+    of the arithmetic is a numerical failure (README: exit 3, one line), not a bug."""
+    def breaks(case, progress=None):
+        raise failure
+    registry.register(registry.Solver(name="brittle", title="Brittle", solve_function=breaks))
+    try:
+        with pytest.raises(cases.SolverError, match="brittle.*numerical failure"):
+            wearcheck.solve(cases.load(HERTZ), "brittle")
+        out = tmp_path / "run"
+        assert cli_main(["run", str(HERTZ), "--solver", "brittle", "--out", str(out),
+                         "--quiet"]) == 3
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and type(failure).__name__ in err
+        assert not out.exists()
+    finally:
+        registry.unregister("brittle")
