@@ -719,6 +719,9 @@ def check_output_file(path, kind: str = "mesh") -> Path:
 
 def check_output_path_common(path) -> Path:
     raw = str(path)
+    if raw.endswith(os.sep) and raw.strip(os.sep):
+        raise OutputError(f"output '{raw}' ends with '{os.sep}', a directory; give the path "
+                          f"of the file, e.g. '{raw}sphere.msh'")
     if not raw or Path(raw).name in ("", ".", "..") or raw.endswith(os.sep):
         raise OutputError(f"output '{raw}': name a file of its own")
     path = Path(raw).absolute()
@@ -741,6 +744,8 @@ def write_file(path, source: Path, kind: str = "mesh") -> Path:
         sfd, stmp = tempfile.mkstemp(prefix=f".{path.name}.marker-", dir=path.parent)
         with os.fdopen(sfd, "w", encoding="utf-8") as fh:
             fh.write(json.dumps(side) + "\n")
+        # mkstemp makes 0600: others sharing the file could not read that wearcheck wrote it
+        os.chmod(stmp, 0o666 & ~_umask())
         os.replace(stmp, _sidecar(path))
     except BaseException:
         with contextlib.suppress(FileNotFoundError):

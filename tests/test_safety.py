@@ -813,3 +813,21 @@ def test_a_real_mount_point_is_refused(tmp_path, capsys, no_solve):
         assert "mount point" in _one_error_line(capsys.readouterr().err)
     finally:
         subprocess.run(["umount", str(out)], check=True)
+
+
+def test_mesh_out_with_a_trailing_slash_is_not_written_as_a_file(tmp_path, monkeypatch,
+                                                                capsys):
+    """``wearcheck mesh paper --out meshes/`` wrote a FILE named ``meshes`` (argparse's
+    Path dropped the slash): the user asked for a directory. Refused, naming a file path.
+    The side marker is readable like the file (mkstemp made it 0600, so another user
+    sharing the mesh could not tell that wearcheck wrote it)."""
+    monkeypatch.setenv("WEARCHECK_CACHE", str(tmp_path / "cache"))
+    argv = ["mesh", HERTZ, "--set", "fem.contact_nodes=11", "--quiet", "--out"]
+    assert cli_main([*argv, str(tmp_path / "meshes") + os.sep]) == 2
+    assert "meshes/sphere.msh" in _one_error_line(capsys.readouterr().err)
+    assert not (tmp_path / "meshes").exists()
+    assert cli_main([*argv, str(tmp_path / "sphere.msh")]) == 0
+    umask = os.umask(0)
+    os.umask(umask)
+    for name in ("sphere.msh", ".sphere.msh.wearcheck-output"):
+        assert stat.S_IMODE((tmp_path / name).stat().st_mode) == 0o666 & ~umask

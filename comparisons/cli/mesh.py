@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import sys
-from pathlib import Path
-
 from ._common import add_case_arguments, load_case
 
 
@@ -12,7 +10,8 @@ def add_parser(sub):
     p = sub.add_parser("mesh", help="generate (or fetch from the cache) the FEM mesh of a case",
                        description=__doc__)
     add_case_arguments(p)
-    p.add_argument("--out", type=Path, default=None, metavar="FILE.msh",
+    # a str, not a Path: Path drops a trailing "/", which says the user meant a directory
+    p.add_argument("--out", default=None, metavar="FILE.msh",
                    help="also copy the gmsh .msh file here")
     return p
 
