@@ -122,3 +122,37 @@ def test_a_value_its_key_cannot_take_is_refused_before_the_cluster(tmp_path, cap
     key, _, values = vary.partition("=")
     assert len(err) == 1 and f"key '{key}'" in err[0]
     assert not out.exists()
+
+
+@pytest.mark.parametrize("argv", [
+    ["refine", "ellipsoid", "--solver", "fem", "--levels", "16,32"],
+    ["sweep", "ellipsoid", "--solver", "fem", "--vary", "wear.k=1e-5,1e-4"],
+])
+def test_a_solver_that_cannot_run_the_case_is_refused_before_the_cluster(tmp_path, capsys,
+                                                                         monkeypatch, argv):
+    """The FEM cannot run the ellipsoid (it is axisymmetric), at any resolution or wear
+    coefficient: refine and sweep started the cluster, wrote a study of error rows and
+    ended with exit 1. Now refused like ``run``: one line with the reason, exit 2, no
+    directory."""
+    from wearcheck.comparisons.cli import main as cli_main
+    from wearcheck.comparisons.studies import refine as refine_mod, sweep as sweep_mod
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("the cluster started")
+    for module in (sweep_mod, refine_mod):
+        monkeypatch.setattr(module, "run_cases", no_cluster)
+    out = tmp_path / "out"
+    assert cli_main([*argv, "--out", str(out), "--quiet"]) == 2
+    err = [l for l in capsys.readouterr().err.splitlines() if not l.startswith("note:")]
+    assert len(err) == 1 and "solver 'fem' cannot run this case" in err[0]
+    assert "axisymmetric" in err[0]
+    assert not out.exists()
+
+
+def test_a_sweep_holding_some_cases_the_solver_can_run_still_runs(cluster, tmp_path):
+    """Varying the profile from the ellipsoid to a paraboloid: the FEM can run the
+    paraboloid, so the sweep is not refused (the stand-in solver runs both)."""
+    rows = sweep(cases.shipped("ellipsoid"), [], ["indenter.profile=ellipsoid,paraboloid"],
+                 "fem", tmp_path / "s", scheduler=cluster, quiet=True, solve=fake_solve)
+    assert {r["indenter.profile"]: r["status"] for r in rows} == {"ellipsoid": "ok",
+                                                                   "paraboloid": "ok"}

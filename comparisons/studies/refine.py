@@ -19,6 +19,7 @@ from wearcheck import cases
 from wearcheck.comparisons import registry
 from wearcheck.comparisons.analysis import convergence as rf
 from wearcheck.comparisons.studies.distributed import Task, fmt as _fmt, record_study, run_cases
+from wearcheck.comparisons.studies.sweep import refuse_unsupported
 from wearcheck.comparisons.outputs import write_study_text
 from wearcheck.comparisons.present.study_figures import FIGURES
 from wearcheck.comparisons.rundir import jsonable, provenance
@@ -39,6 +40,7 @@ def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolera
     lvls = rf.levels(solver, levels, steps)
     for lv in lvls:  # a level the case cannot take is refused before any run starts
         case.derive(list(lv.overrides))
+    refuse_unsupported(case, solver, [lv.overrides for lv in lvls], every=True)
     varied = rf.refined_parameter(lvls)
     tasks = [Task(lv.name, solver, lv.overrides) for lv in lvls]
     out = Path(out)

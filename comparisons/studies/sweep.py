@@ -69,6 +69,33 @@ def check_varied(varied, overrides, case=None) -> list[str]:
     return names
 
 
+def refuse_unsupported(case, solver: str, runs, every: bool = False) -> None:
+    """Refuse, before the cluster starts, a study whose solver cannot run its cases.
+
+    ``runs`` are the override lists of the study's runs. Refused when none of
+    them is supported (a sweep over several profiles may hold some the solver
+    cannot run: those become error rows) or, with ``every``, when any is not
+    (a refinement varies only the resolution, which never makes a case
+    supported). A combination the case rejects is left to its row.
+    """
+    from wearcheck.comparisons import registry
+    entry = registry.get(solver)
+    reasons = []
+    for overrides in runs:
+        try:
+            reason = entry.supports(case.derive(list(overrides)))
+        except cases.CaseError:
+            continue
+        if reason is None and not every:
+            return
+        if reason is not None:
+            reasons.append(reason)
+            if every:
+                break
+    if reasons:
+        raise cases.CaseError(f"solver '{solver}' cannot run this case: {reasons[0]}")
+
+
 def parse_vary(text: str) -> tuple[str, list[str]]:
     """``section.key=v1,v2`` -> (``section.key``, [``v1``, ``v2``]), checked like ``--set``."""
     if "=" not in text:
@@ -102,6 +129,7 @@ def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=No
     for combo in itertools.product(*(vals for _, vals in varied)):
         run = "-".join([solver] + [f"{n}-{_dir_part(v)}" for n, v in zip(names, combo)])
         tasks.append(Task(run, solver, tuple(f"{n}={v}" for n, v in zip(names, combo))))
+    refuse_unsupported(case, solver, [t.overrides for t in tasks])
     if len({t.name for t in tasks}) != len(tasks):
         tasks = [Task(f"{t.name}-{i}", t.solver, t.overrides) for i, t in enumerate(tasks)]
     prov = provenance()
