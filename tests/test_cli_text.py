@@ -61,3 +61,15 @@ def test_the_similarity_note_is_printed_once_per_command(argv, tmp_path, capsys)
     assert _note_count(capsys.readouterr().err) == 1
     cli_main(argv + ["--out", str(tmp_path / "out"), "--quiet"])
     assert _note_count(capsys.readouterr().err) == 0
+
+
+def test_set_with_a_space_for_the_equals_sign_gets_the_spelling_that_works(capsys):
+    """``--set wear.mu 0.5`` said "wearcheck: error: unrecognized arguments: 0.5 (see
+    wearcheck --help)": neither the subcommand nor what was wrong."""
+    from wearcheck.comparisons.cli import main
+    with pytest.raises(SystemExit) as exit_:
+        main(["run", "paper", "--set", "wear.mu", "0.5", "--quiet"])
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("wearcheck run: error:")
+    assert "--set wear.mu=0.5" in err and "wearcheck run --help" in err

@@ -65,6 +65,22 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {_one_line(message)} (see {self.prog} --help)\n")
 
 
+def _unrecognized(command: str, argv: list, extra: list) -> None:
+    """Unknown arguments, named with the subcommand; ``--set key value`` (a space for
+    the "=") gets the spelling that works."""
+    hint = ""
+    for i, token in enumerate(argv[:-2]):
+        if token in ("--set", "--vary") and "=" not in argv[i + 1] \
+                and argv[i + 2] == extra[0]:
+            hint = (f"; {token} takes one word, section.key=value: "
+                    f"{token} {argv[i + 1]}={extra[0]}")
+            break
+    prog = f"wearcheck {command}"
+    sys.stderr.write(f"{prog}: error: unrecognized arguments: {' '.join(extra)}{hint} "
+                     f"(see {prog} --help)\n")
+    raise SystemExit(2)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog="wearcheck",
@@ -90,7 +106,9 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv=None) -> int:
     parser = build_parser()
     argv = sys.argv[1:] if argv is None else list(argv)
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        _unrecognized(args.command, argv, extra)
     from wearcheck.comparisons.rundir import set_command
     set_command(["wearcheck", *argv])
     name = f"wearcheck {args.command}"
