@@ -82,3 +82,11 @@ def test_sphere_sweep_refuses_profiles_without_a_radius():
                               "indenter.radius=0.01"])
     with pytest.raises(cases.CaseError, match="sphere-sweep"):
         sphere_mod.sphere_sweep(case, (0.01,), solve=stand_in())
+
+
+def test_shipped_cases_at_the_same_ratio_share_one_mark_in_the_sphere_figure():
+    """hertz.toml and paper.toml both sit at a0/R = 0.01: finite_sphere.png printed
+    their names over each other (an unreadable 'baper'). Marks within 2 % merge."""
+    from wearcheck.comparisons.present.figures import group_marks
+    marks = [(0.01, "hertz"), (0.0106, "truncated"), (0.01 * (1 + 1e-12), "paper")]
+    assert group_marks(marks) == [(0.01, "hertz, paper"), (0.0106, "truncated")]

@@ -162,6 +162,19 @@ def edge_study_figure(stem, panels, formats=("png",)) -> list[Path]:
 OUTER_PLOT = 0.7
 
 
+def group_marks(marks, rel=0.02):
+    """(x, label) pairs with x within ``rel`` of each other merged into one mark
+    whose label lists them ("paper, fretting"): their labels were printed over
+    each other."""
+    groups = []
+    for x, label in sorted(marks):
+        if groups and abs(x - groups[-1][0]) <= rel * abs(groups[-1][0]):
+            groups[-1][1].append(label)
+        else:
+            groups.append((x, [label]))
+    return [(x, ", ".join(labels)) for x, labels in groups]
+
+
 def sphere_sweep_figure(stem, ratio, rel_force, *, tolerance, shipped=(),
                         formats=("png",)) -> list[Path]:
     """FEM force / half-space force - 1 against a0/R, with the tolerance band."""
@@ -170,7 +183,7 @@ def sphere_sweep_figure(stem, ratio, rel_force, *, tolerance, shipped=(),
     ax.plot(ratio, 100 * np.asarray(rel_force), "o-", color="C3", label="FEM vs half-space")
     ax.axhspan(-100 * tolerance, 100 * tolerance, color="C2", alpha=0.15,
                label="force tolerance")
-    for x, label in shipped:
+    for x, label in group_marks(shipped):
         ax.axvline(x, color="0.4", ls=":", lw=0.9)
         ax.annotate(label, (x, 0), rotation=90, fontsize=7, va="bottom")
     ax.set_xscale("log")
