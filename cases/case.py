@@ -367,6 +367,8 @@ def _check_indenter(built, base: Path):
 def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
     """Read a tabulated profile: two columns r, f in metres."""
     name = "indenter.file"
+    if file.is_dir():
+        raise CaseError(f"key '{name}' = \"{file}\": is a directory, not a CSV file")
     if not file.is_file():
         raise CaseError(f"key '{name}' = \"{file}\": file does not exist")
     rows = []
@@ -388,8 +390,12 @@ def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
         except ValueError:
             if not rows and lineno == 1:
                 continue  # header line
+            other = next((sep for sep in (";", "\t", " ") if len(row) == 1 and sep in row[0]),
+                         None)
+            said = {";": "semicolons", "\t": "tabs", " ": "spaces"}
+            hint = f" (columns are separated by commas, not {said[other]})" if other else ""
             raise CaseError(f"key '{name}' = \"{file}\": line {lineno} is not two numbers: "
-                            f"{','.join(row)}") from None
+                            f"{','.join(row)}{hint}") from None
         if len(values) != 2:
             raise CaseError(f"key '{name}' = \"{file}\": line {lineno} has {len(values)} "
                             "columns; expected 2 (r, f)")

@@ -148,6 +148,10 @@ def test_table_profile_reads_relative_to_case(tmp_path):
     ("1e-5,0\n1e-4,1e-7\n2e-4,1e-6\n", r"indenter\.file.*first radius must be 0"),
     ("0,0\n1e-4,abc\n2e-4,1e-6\n", r"indenter\.file.*line 2"),
     ("0,0\n1e-4\n2e-4,1e-6\n", r"indenter\.file.*line 2 has 1 columns"),
+    # a spreadsheet's export with another separator: say which (found by a review)
+    ("0;0\n1e-4;1e-7\n2e-4;1e-6\n", r"line 2 is not two numbers.*by commas, not semicolons"),
+    ("0\t0\n1e-4\t1e-7\n2e-4\t1e-6\n", r"by commas, not tabs"),
+    ("0 0\n1e-4 1e-7\n2e-4 1e-6\n", r"by commas, not spaces"),
 ])
 def test_bad_table_profile(tmp_path, text, pattern):
     with pytest.raises(CaseError, match=pattern):
@@ -298,3 +302,10 @@ def test_a_sliding_scale_out_of_range_names_the_wear_keys(key, value):
         cases.load(cases.shipped("paper"), [f"{key}={value}"])
     text = str(err.value)
     assert f"'{key}' = {value!r}" in text and "loading.depth" not in text
+
+
+def test_a_directory_as_the_profile_table_is_named_as_one(tmp_path):
+    """It said "file does not exist" of a directory that exists."""
+    (tmp_path / "profile.csv").mkdir()
+    with pytest.raises(CaseError, match=r"indenter\.file.*is a directory, not a CSV file"):
+        cases.load(write_table_case(tmp_path, None))
