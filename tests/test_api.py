@@ -198,3 +198,13 @@ def test_a_comparison_or_study_is_named_as_such_not_as_a_damaged_run(tmp_path, c
     (tmp_path / "file").write_text("x")
     with pytest.raises(cases.CaseError, match="is a file, not a run directory"):
         wearcheck.read_run(tmp_path / "file")
+
+
+def test_compare_takes_solvers_as_the_command_line_writes_them(tmp_path):
+    """``solvers="mdr,fem"`` (as ``--solvers mdr,fem``) was one solver named 'mdr,fem'."""
+    with pytest.raises(cases.CaseError, match="solver 'nonsense': must be one of"):
+        wearcheck.compare("hertz", tmp_path / "a", solvers="mdr, nonsense")
+    metrics = wearcheck.compare(wearcheck.load_case("hertz", {"mdr.elements": 100,
+                                                              "fem.contact_nodes": 40}),
+                                tmp_path / "b", solvers="mdr,fem", render=False)
+    assert metrics["solvers"] == ["mdr", "fem"]

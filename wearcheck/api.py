@@ -215,7 +215,8 @@ def compare(case: str | Path | Case, out: str | Path, *, solvers: Iterable[str] 
     """
     from wearcheck.comparisons.studies.compare import compare as _compare
     if isinstance(solvers, str):
-        solvers = [solvers]
+        # "mdr,fem" as on the command line (--solvers)
+        solvers = [name.strip() for name in solvers.split(",") if name.strip()] or [solvers]
     elif solvers is not None:
         solvers = list(solvers)
         if not solvers:
