@@ -406,6 +406,10 @@ def convert(name: str, f: dataclasses.Field, value: Any):
     want = " or ".join(_type_name(t) for t in allowed)
     if float in allowed and str in allowed:
         want = 'a number or "auto"'
+    unit = meta.get("unit") or ""
+    if isinstance(value, str) and (float in allowed or int in allowed) and unit not in ("", "1"):
+        # "2 GPa", "1 um": the unit goes with the key, the file holds the number alone
+        want += f" in {unit} (case files are SI; write the number alone, without a unit)"
     raise CaseError(f"key '{name}' = {format_value(value)}: must be {want}")
 
 

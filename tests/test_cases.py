@@ -309,3 +309,13 @@ def test_a_directory_as_the_profile_table_is_named_as_one(tmp_path):
     (tmp_path / "profile.csv").mkdir()
     with pytest.raises(CaseError, match=r"indenter\.file.*is a directory, not a CSV file"):
         cases.load(write_table_case(tmp_path, None))
+
+
+@pytest.mark.parametrize("key, value, unit", [("wear.hardness", "2 GPa", "Pa"),
+                                              ("loading.depth", "1 um", "m")])
+def test_a_number_written_with_its_unit_says_the_file_is_si(key, value, unit):
+    """``hardness = "2 GPa"`` said only "must be a number", which a user who wrote a
+    number reads as a riddle: the message names the key's unit and that files are SI."""
+    with pytest.raises(CaseError) as err:
+        cases.load(cases.shipped("paper"), [f'{key}="{value}"'])
+    assert f"must be a number in {unit} (case files are SI" in str(err.value)
