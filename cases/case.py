@@ -322,6 +322,14 @@ def _check_scales(case: Case) -> None:
         ok = all(usable(sc[k]) for k in ("a0", "d0", "F0", "p0"))
     except (ArithmeticError, ValueError, RuntimeError):  # RuntimeError: a root not found
         ok = False
+    ind, ld = case.indenter, case.loading
+    if ok and ind.profile == "sphere" and ld.control == "force" and sc["d0"] >= ind.radius:
+        # as a depth past the radius (_check_sphere_depth): no surface there to touch
+        raise CaseError(f"key 'loading.force' = {ld.force!r}: presses the sphere deeper than "
+                        f"its radius (depth d0 = {sc['d0']:.4g} m >= indenter.radius = "
+                        f"{ind.radius!r} m), where it has no surface; the force must be far "
+                        f"smaller (half-space theory wants a0/R <= 0.1, here a0/R = "
+                        f"{sc['a0'] / ind.radius:.3g})")
     if ok and not usable(sc["s_hat_per_m"]):
         # the contact is fine: the wear keys put the sliding scale out of range
         w = case.wear

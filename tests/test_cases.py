@@ -319,3 +319,17 @@ def test_a_number_written_with_its_unit_says_the_file_is_si(key, value, unit):
     with pytest.raises(CaseError) as err:
         cases.load(cases.shipped("paper"), [f'{key}="{value}"'])
     assert f"must be a number in {unit} (case files are SI" in str(err.value)
+
+
+def test_a_force_that_presses_a_sphere_past_its_radius_is_bad_input():
+    """ball_on_flat (R = 5 mm, E* = 231 GPa) at F = 1e7 N: even Hertz's paraboloid goes
+    (3FR/4E*)^(2/3)/R = 6.1 mm > R deep. The MDR ran into its domain's edge ("raise
+    mdr.domain_factor", exit 3), the BEM said "the profile does not rise to the depth
+    within 10^6 a0". Like a depth past the radius, it is the case's fault: the key."""
+    case = cases.load(cases.shipped("ball_on_flat"))
+    R, E = case.indenter.radius, case.E_star
+    assert (3 * 1e7 * R / (4 * E)) ** (2 / 3) / R > R
+    with pytest.raises(CaseError, match=r"'loading.force' = 10000000.0: presses the sphere "
+                                        r"deeper than its radius"):
+        case.derive({"loading.force": 1e7})
+    assert case.derive({"loading.force": 1e5}).loading.force == 1e5  # a0/R = 0.23: allowed
