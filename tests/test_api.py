@@ -208,3 +208,12 @@ def test_compare_takes_solvers_as_the_command_line_writes_them(tmp_path):
                                                               "fem.contact_nodes": 40}),
                                 tmp_path / "b", solvers="mdr,fem", render=False)
     assert metrics["solvers"] == ["mdr", "fem"]
+
+
+def test_a_reference_that_cannot_run_the_case_says_why(tmp_path):
+    """``compare ellipsoid --reference fem`` said only "not among the compared solvers
+    (mdr, bem)"; the FEM is left out because it is axisymmetric, which is the answer."""
+    with pytest.raises(cases.CaseError, match="not among the compared solvers.*it cannot "
+                                              "run this case: .*axisymmetric"):
+        wearcheck.compare("ellipsoid", tmp_path / "c", reference_solver="fem")
+    assert not (tmp_path / "c").exists()

@@ -57,8 +57,11 @@ def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tupl
                                if chosen else DEFAULT_REFERENCE)
     registry.get(ref)
     if ref not in chosen:
+        # the reason first when it is the case (the ellipsoid with --reference fem)
+        reason = registry.get(ref).supports(case)
         raise cases.CaseError(f"reference solver '{ref}': not among the compared solvers "
-                              f"({', '.join(chosen) or 'none'})")
+                              f"({', '.join(chosen) or 'none'})"
+                              + (f"; it cannot run this case: {reason}" if reason else ""))
     if len(chosen) < 2:
         why = "; ".join(f"{n}: {registry.get(n).supports(case) or 'not selected'}"
                         for n in registry.names() if n not in chosen)
