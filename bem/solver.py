@@ -122,8 +122,10 @@ def supports(case) -> str | None:
     not fretting (partial slip).
     """
     if getattr(case, "fretting", None) is not None:
-        return ("fretting (partial slip) needs the tangential contact problem, which the BEM "
-                "does not solve (normal contact, gross slip only); use the MDR")
+        return ("the BEM's wear run is gross slip only: its partial-slip solver "
+                "(bem.tangential) solves a fretting cycle on a given profile without wear "
+                "(benchmarks/bench_fretting_3d.py compares it with the MDR); for a fretting "
+                "wear run use the MDR")
     return None
 
 

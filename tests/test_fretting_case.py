@@ -200,3 +200,14 @@ def test_an_override_switches_the_tangential_loading_between_displacement_and_fo
     with pytest.raises(cases.CaseError, match="exactly one"):
         cases.load(cases.shipped("fretting"), ["fretting.force_amplitude=4.5",
                                                "fretting.amplitude=1e-7"])
+
+
+def test_the_bem_refusal_of_fretting_does_not_deny_its_tangential_solver():
+    """It said the BEM "does not solve" the tangential contact problem, while
+    bem.tangential does (one fretting cycle, without wear): what is missing is a
+    fretting wear run."""
+    import importlib
+    from wearcheck.comparisons import registry
+    assert hasattr(importlib.import_module("wearcheck.bem.tangential"), "__file__")
+    reason = registry.get("bem").supports(cases.load(cases.shipped("fretting")))
+    assert "bem.tangential" in reason and "does not solve" not in reason and "MDR" in reason
