@@ -80,6 +80,11 @@ class RunResult:
         K, M = len(self.stage_s), len(self.r)
         for name in ("f", "p"):
             shape = np.shape(getattr(self, name))
+            if K == 0 and len(shape) >= 1 and shape[0] == 0:
+                # no stage reached (every requested one lies after the run's end): any
+                # empty array is the empty (0, M) table
+                setattr(self, name, np.zeros((0, M)))
+                continue
             if shape != (K, M):
                 raise ValueError(f"{name} has shape {shape}, expected {(K, M)}")
         for name, arr in (self.stage_extra or {}).items():

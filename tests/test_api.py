@@ -217,3 +217,19 @@ def test_a_reference_that_cannot_run_the_case_says_why(tmp_path):
                                               "run this case: .*axisymmetric"):
         wearcheck.compare("ellipsoid", tmp_path / "c", reference_solver="fem")
     assert not (tmp_path / "c").exists()
+
+
+@pytest.mark.parametrize("solver", ["mdr", "fem"])
+def test_a_run_that_reaches_no_stage_is_a_result_with_none(tmp_path, solver):
+    """The paper case ends once F < 1 % F0, at ŝ ≈ 11.25: stages at ŝ = 20 and 30 are
+    never reached. The MDR returned its empty stage table as (0, 0) and the run ended
+    as exit 70 ("f has shape (0, 0), expected (0, 801)", a bug); now a run with no
+    stage, as the FEM's and BEM's are, said in its warnings."""
+    case = wearcheck.load_case("paper", {"mdr.elements": 100, "fem.contact_nodes": 40,
+                                         "stages.s_hat": [20.0, 30.0]})
+    result = wearcheck.solve(case, solver)
+    assert result.stages["f"].shape == (0, len(result.stages["r"]))
+    assert result.stages["p"].shape == result.stages["f"].shape
+    assert any("ŝ = 20" in w for w in result.warnings)
+    back = wearcheck.read_run(result.write(tmp_path / solver))
+    assert back.stages["f"].shape[0] == 0 and back.meta["stages_reached"] == 0
