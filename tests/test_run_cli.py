@@ -168,3 +168,14 @@ def test_revolve_below_three_segments_is_bad_input_before_solving(tmp_path):
     code = cli_main(["run", str(cases.shipped("hertz")), "--revolve", "2", "--quiet",
                      "--out", str(tmp_path / "x")])
     assert code == 2 and not (tmp_path / "x").exists()
+
+
+def test_run_says_which_requested_stages_it_did_not_reach(tmp_path, capsys):
+    """The paper case stops once F < 1 % F0 (ŝ ≈ 11.25): a stage at ŝ = 20 cannot be
+    stored. The Python API warned; ``wearcheck run`` said only "1 stages"."""
+    from wearcheck.comparisons.cli import main
+    out = tmp_path / "run"
+    assert main(["run", "paper", "--solver", "mdr", "--set", "mdr.elements=100",
+                 "--set", "stages.s_hat=[0.0, 20.0]", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "the run ended before the stages at ŝ = 20 (it stops once F < 0.01 F0)" in err
