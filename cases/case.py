@@ -106,7 +106,12 @@ class Case:
         """
         items = {}
         if isinstance(changes, dict):
-            items.update(changes)
+            for name, value in changes.items():
+                if name in SECTIONS and isinstance(value, dict):
+                    # {"wear": {"mu": 0.5}}, the shape of the TOML file, is {"wear.mu": 0.5}
+                    items.update({f"{name}.{k}": v for k, v in value.items()})
+                else:
+                    items[name] = value
         elif changes is not None:
             for text in [changes] if isinstance(changes, str) else list(changes):
                 section, key, value = parse_override(text)

@@ -1,6 +1,8 @@
 """The Python API as a notebook uses it: what it accepts, what it refuses, and that it
 says so (found by a reviewer trying it as a new user)."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -233,3 +235,38 @@ def test_a_run_that_reaches_no_stage_is_a_result_with_none(tmp_path, solver):
     assert any("ŝ = 20" in w for w in result.warnings)
     back = wearcheck.read_run(result.write(tmp_path / solver))
     assert back.stages["f"].shape[0] == 0 and back.meta["stages_reached"] == 0
+
+
+def test_changes_in_the_shape_of_the_case_file_are_taken():
+    """``{"wear": {"mu": 0.5}}`` (a TOML table as Python reads it) said "key 'wear': must be
+    section.key": it is the same change as {"wear.mu": 0.5}."""
+    case = wearcheck.load_case("paper", {"wear": {"mu": 0.5, "k": 2e-4}})
+    assert (case.wear.mu, case.wear.k) == (0.5, 2e-4)
+    with pytest.raises(cases.CaseError, match="unknown key 'wear.muu'"):
+        wearcheck.load_case("paper", {"wear": {"muu": 0.5}})
+
+
+def test_studies_take_their_arguments_as_the_command_line_writes_them(tmp_path, monkeypatch):
+    """``sweep(case, "wear.mu=0.2,0.3", out)`` was an AttributeError, ``refine(...,
+    levels="50,100")`` a ValueError, and ``sweep(case, {}, out)`` started a cluster."""
+    from wearcheck.comparisons.studies import refine as refine_mod, sweep as sweep_mod
+    seen = {}
+
+    def no_cluster(case_path, overrides, tasks, out, **kwargs):
+        seen[Path(out).name] = [t.overrides for t in tasks]
+        raise KeyboardInterrupt   # stop here: the tasks are what is checked
+    for module in (sweep_mod, refine_mod):
+        monkeypatch.setattr(module, "run_cases", no_cluster)
+    for name, call in (("s", lambda o: wearcheck.sweep("hertz", "wear.mu=0.2,0.3", o)),
+                       ("t", lambda o: wearcheck.sweep("hertz", ["wear.mu=0.2", "wear.k=1e-5"], o)),
+                       ("r", lambda o: wearcheck.refine("hertz", o, "mdr", levels="50,100"))):
+        with pytest.raises(KeyboardInterrupt):
+            call(tmp_path / name)
+    assert seen["s"] == [("wear.mu=0.2",), ("wear.mu=0.3",)]
+    assert seen["t"] == [("wear.mu=0.2", "wear.k=1e-05")]
+    assert sorted(seen["r"]) == [("mdr.elements=100",), ("mdr.elements=50",)]
+    for vary in ({}, 5):
+        with pytest.raises(cases.CaseError, match="vary"):
+            wearcheck.sweep("hertz", vary, tmp_path / "x")
+    with pytest.raises(cases.CaseError, match="levels = '50,abc'"):
+        wearcheck.refine("hertz", tmp_path / "y", "mdr", levels="50,abc")

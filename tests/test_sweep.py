@@ -156,3 +156,24 @@ def test_a_sweep_holding_some_cases_the_solver_can_run_still_runs(cluster, tmp_p
                  "fem", tmp_path / "s", scheduler=cluster, quiet=True, solve=fake_solve)
     assert {r["indenter.profile"]: r["status"] for r in rows} == {"ellipsoid": "ok",
                                                                    "paraboloid": "ok"}
+
+
+def test_a_value_is_judged_with_the_other_varied_keys(tmp_path, monkeypatch):
+    """``--vary loading.control=force --vary loading.force=1,2`` on a depth-controlled
+    case was refused ("loading.force given but loading.control = depth"): the force is
+    fine beside the varied control. A value wrong in every combination still is not."""
+    from wearcheck.comparisons.studies import sweep as sweep_mod
+    seen = []
+
+    def no_cluster(case_path, overrides, tasks, out, **kwargs):
+        seen.extend(t.overrides for t in tasks)
+        raise KeyboardInterrupt
+    monkeypatch.setattr(sweep_mod, "run_cases", no_cluster)
+    with pytest.raises(KeyboardInterrupt):
+        sweep(cases.shipped("hertz"), [], ["loading.control=force", "loading.force=1,2"],
+              "mdr", tmp_path / "s", quiet=True)
+    assert seen == [("loading.control=force", "loading.force=1"),
+                    ("loading.control=force", "loading.force=2")]
+    with pytest.raises(cases.CaseError, match="--vary loading.force: key 'loading.force' = -1"):
+        sweep(cases.shipped("hertz"), [], ["loading.control=force", "loading.force=1,-1"],
+              "mdr", tmp_path / "t", quiet=True)

@@ -235,8 +235,8 @@ def refine(case: str | Path | Case, out: str | Path, solver: str = "mdr", *,
     Richardson's estimate, coarsest converged level); run directories go to ``out``."""
     from wearcheck.comparisons.studies.refine import refine as _refine
     case = load_case(case)
-    levels = None if levels is None else [_plain(v) for v in np.ravel(levels)]
-    steps = None if steps is None else [_plain(v) for v in np.ravel(steps)]
+    levels = None if levels is None else [_plain(v) for v in _listed(levels, "levels")]
+    steps = None if steps is None else [_plain(v) for v in _listed(steps, "steps")]
     return _refine(case, (), solver, out, levels=levels, steps=steps, tolerance=tolerance,
                    scheduler=scheduler, workers=workers, quiet=quiet, case=case)
 
@@ -251,6 +251,20 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
     from wearcheck.comparisons.studies.sweep import sweep as _sweep
     case = load_case(case)
     registry.get(solver)
+    if isinstance(vary, str):
+        vary = [vary]
+    if not isinstance(vary, Mapping):
+        # "wear.mu=0.2,0.3" as on the command line (--vary), or a list of such
+        from wearcheck.comparisons.studies.sweep import parse_vary
+        try:
+            vary = dict(parse_vary(text) for text in vary)
+        except TypeError:
+            raise CaseError(f"vary = {vary!r}: give a mapping such as {{\"wear.mu\": [0.2, "
+                            "0.3]}, or \"section.key=v1,v2\" strings") from None
+        vary = {k: [_parsed(k, v) for v in vals] for k, vals in vary.items()}
+    if not vary:
+        raise CaseError("vary is empty: name at least one key and its values, e.g. "
+                        "{\"wear.mu\": [0.2, 0.3]}")
     values = {}
     for key, vals in vary.items():
         if isinstance(vals, (str, bytes)) or np.ndim(vals) == 0:
@@ -258,8 +272,8 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
         values[key] = [_plain(v) for v in vals]
         if not values[key]:
             raise CaseError(f"vary '{key}': no values")
-        for v in values[key]:  # every value is checked before any run starts
-            case.derive({key: v})
+        # a value its key can never take fails before any run, in the study's own
+        # check (as --vary: a value is judged with the other keys' values)
     texts = [f"{key}=" + ",".join(_toml_value(v) for v in vals) for key, vals in values.items()]
     rows = _sweep(case, (), texts, solver, out, scheduler=scheduler, workers=workers,
                   quiet=quiet, case=case)
@@ -270,6 +284,24 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
             if match:
                 row[key] = match[0]
     return rows
+
+
+def _listed(values, name: str) -> list:
+    """Levels or steps as a sequence, or as the command line writes them: "50,100"."""
+    if isinstance(values, str):
+        try:
+            return [float(v) if any(c in v for c in ".eE") else int(v)
+                    for v in values.split(",") if v.strip()]
+        except ValueError:
+            raise CaseError(f"{name} = {values!r}: give numbers, e.g. [50, 100] or "
+                            "\"50,100\"") from None
+    return list(np.ravel(values))
+
+
+def _parsed(key: str, text: str):
+    """A --vary value as TOML reads it, a bare word as itself (as --set does)."""
+    from wearcheck.cases.case import parse_override
+    return parse_override(f"{key}={text}")[2]
 
 
 def _plain(v):

@@ -59,13 +59,24 @@ def check_varied(varied, overrides, case=None) -> list[str]:
     if both:
         raise cases.CaseError(f"key {sorted(both)[0]} is both in --set and --vary")
     if case is not None:
-        for name, values in varied:
-            for v in values:
-                try:
-                    case.derive([f"{name}={v}"])
-                except cases.CaseError as exc:
-                    if f"key '{name}'" in str(exc):
-                        raise cases.CaseError(f"--vary {name}: {exc}") from None
+        # a value is refused when every combination holding it fails on its own key
+        # (loading.force=1 alone fails on a depth-controlled case, but not beside
+        # --vary loading.control=force); the product is validation only, ms each
+        refused = {}
+        fine = set()
+        for combo in itertools.product(*([(n, v) for v in vals] for n, vals in varied)):
+            try:
+                case.derive([f"{n}={v}" for n, v in combo])
+                fine.update(combo)
+            except cases.CaseError as exc:
+                for n, v in combo:
+                    if f"key '{n}'" in str(exc):
+                        refused.setdefault((n, v), exc)
+                    else:
+                        fine.add((n, v))
+        for (name, v), exc in refused.items():
+            if (name, v) not in fine:
+                raise cases.CaseError(f"--vary {name}: {exc}")
     return names
 
 
