@@ -831,3 +831,18 @@ def test_mesh_out_with_a_trailing_slash_is_not_written_as_a_file(tmp_path, monke
     os.umask(umask)
     for name in ("sphere.msh", ".sphere.msh.wearcheck-output"):
         assert stat.S_IMODE((tmp_path / name).stat().st_mode) == 0o666 & ~umask
+
+
+def test_a_study_that_never_reached_its_scheduler_leaves_no_study_behind(tmp_path, capsys):
+    """``sweep --scheduler`` with a bad address ended (exit 1) leaving DIR as an empty
+    directory marked a study, which then refused a ``run`` there ("is a wearcheck study
+    directory"). The marker, and a directory the study made, go when nothing ran."""
+    new, empty = tmp_path / "new", tmp_path / "empty"
+    empty.mkdir()
+    for out in (new, empty):
+        assert cli_main(["sweep", HERTZ, "--vary", "wear.mu=0.2", "--scheduler", "nonsense",
+                         "--out", str(out), "--quiet"]) == 1
+        assert "scheduler" in _one_error_line(capsys.readouterr().err)
+    assert not new.exists()
+    assert empty.is_dir() and list(empty.iterdir()) == []
+    assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(empty), *SMALL]) == 0

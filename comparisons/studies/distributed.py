@@ -318,6 +318,18 @@ class _Reporter:
         self.bar.close()
 
 
+def _unclaim(out: Path, remove_directory: bool) -> None:
+    """Remove the study marker of ``out`` (and ``out``) if it holds nothing else."""
+    from wearcheck.comparisons.outputs import OUTPUT_MARKER
+    try:
+        if [p.name for p in out.iterdir()] == [OUTPUT_MARKER]:
+            (out / OUTPUT_MARKER).unlink()
+            if remove_directory:
+                out.rmdir()
+    except OSError:
+        pass
+
+
 def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Task], out: str | Path, *,
               scheduler: str | None = None, workers: int | None = None, quiet: bool = False,
               solve=None, extra_meta: dict | None = None,
@@ -342,14 +354,23 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
         raw = read_raw(Path(source))  # as cases.load reads it (a BOM, errors)
     check_workers(scheduler, workers)
     from wearcheck.comparisons.outputs import study_directory
-    out = study_directory(out, runs=[t.name for t in tasks], files=study_files)
     names = [t.name for t in tasks]
     if len(set(names)) != len(names):
         raise cases.CaseError("two runs would share a directory: " + ", ".join(names))
+    existed = Path(out).is_dir()
+    was_empty = not existed or not any(Path(out).iterdir())
+    out = study_directory(out, runs=[t.name for t in tasks], files=study_files)
     reporter = _Reporter(tasks[0].solver if tasks else "", names, quiet)
     topic = f"wearcheck-progress-{uuid.uuid4().hex}"
     outcomes: dict[str, Outcome] = {}
-    conn = _Client(scheduler, workers, len(tasks))
+    try:
+        conn = _Client(scheduler, workers, len(tasks))
+    except BaseException:
+        # no cluster, no run: take back the marker (and the directory) this study made,
+        # which would otherwise claim the path as a study holding nothing
+        if was_empty:
+            _unclaim(out, remove_directory=not existed)
+        raise
     state = {"watchdog": None}
     try:
         client = conn.client
