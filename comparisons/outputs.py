@@ -765,3 +765,11 @@ def _check_writable_ancestor(path: Path) -> None:
     if not os.access(ancestor, os.W_OK | os.X_OK):
         raise OutputError(f"output '{path}': directory '{ancestor}' is not writable "
                           "(permissions or a read-only file system)")
+    # access() answers for the permission bits only: root passes them everywhere, and
+    # /proc, /sys or a file system that refuses new entries fail only when written,
+    # after the solve. A directory made and removed at once asks the file system.
+    try:
+        os.rmdir(tempfile.mkdtemp(prefix=".wearcheck-probe-", dir=ancestor))
+    except OSError as exc:
+        raise OutputError(f"output '{path}': nothing can be created in '{ancestor}' "
+                          f"({exc.strerror or exc})") from None

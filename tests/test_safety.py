@@ -846,3 +846,19 @@ def test_a_study_that_never_reached_its_scheduler_leaves_no_study_behind(tmp_pat
     assert not new.exists()
     assert empty.is_dir() and list(empty.iterdir()) == []
     assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(empty), *SMALL]) == 0
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs Linux's /proc")
+def test_a_place_that_takes_no_new_entry_is_refused_before_solving(tmp_path, capsys,
+                                                                   no_solve):
+    """``--out /proc/x`` passed the permission check (access() looks at the mode bits,
+    and root passes them anywhere) and failed with exit 4 after the solve. The check
+    now asks the file system itself, before any work."""
+    for argv in (["run", HERTZ, "--solver", "mdr"], ["mesh", HERTZ]):
+        out = "/proc/wearcheck-out" + (".msh" if argv[0] == "mesh" else "")
+        assert cli_main([*argv, "--out", out, *SMALL]) == 2
+        assert "nothing can be created in '/proc'" in _one_error_line(capsys.readouterr().err)
+    # an ordinary directory is probed and left as it was
+    from wearcheck.comparisons.outputs import check_output
+    assert check_output(tmp_path / "r", "run") == tmp_path / "r"
+    assert list(tmp_path.iterdir()) == []
