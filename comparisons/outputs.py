@@ -340,6 +340,8 @@ def check_output(path, kind: str) -> Path:
     why = _inside_output(path, kind) or refusal(path, kind)
     if why:
         raise OutputError(why)
+    if kind != "study" and not path.is_symlink() and path.is_dir():
+        _refuse_working_directory(path)
     if kind != "study" and not path.is_symlink() and path.is_dir() and os.path.ismount(path):
         # a run or comparison is renamed into place whole, which a mount point cannot
         # take (EBUSY, found only after the solve); a study is written into DIR in place
@@ -348,6 +350,25 @@ def check_output(path, kind: str) -> Path:
                           f"'{path / 'run'}'")
     _check_writable_ancestor(path)
     return path
+
+
+def _refuse_working_directory(path: Path) -> None:
+    """An output replaces its directory by a new one: never the one this shell is in.
+
+    ``--out "$PWD"`` (``.`` is refused by name) wrote the run, but the shell it
+    was typed in stayed in the replaced, deleted directory, where ``ls`` shows
+    nothing and ``wearcheck export .`` fails.
+    """
+    try:
+        cwd = Path(os.getcwd()).resolve()
+    except OSError:
+        return
+    real = path.resolve()
+    if cwd == real or real in cwd.parents:
+        raise OutputError(f"output '{path}' is the working directory (or holds it); "
+                          "wearcheck replaces its output directory by a new one, which would "
+                          "leave this shell in a deleted directory: give a directory of its "
+                          "own, e.g. 'runs/NAME'")
 
 
 def _inside_output(path: Path, kind: str) -> str | None:

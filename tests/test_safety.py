@@ -862,3 +862,25 @@ def test_a_place_that_takes_no_new_entry_is_refused_before_solving(tmp_path, cap
     from wearcheck.comparisons.outputs import check_output
     assert check_output(tmp_path / "r", "run") == tmp_path / "r"
     assert list(tmp_path.iterdir()) == []
+
+
+def test_the_working_directory_is_not_replaced_under_the_shell(tmp_path, monkeypatch,
+                                                                capsys):
+    """``mkdir results; cd results; wearcheck run ... --out "$PWD"``: the run replaced the
+    directory by a new one and the shell stayed in the deleted one (``ls`` empty,
+    ``export .`` failing). Refused, like ``--out .``, also from inside an earlier run
+    (its ``vtk/``); a study, written in place, is not."""
+    here = tmp_path / "results"
+    here.mkdir()
+    monkeypatch.chdir(here)
+    assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(here), *SMALL]) == 2
+    assert "is the working directory" in _one_error_line(capsys.readouterr().err)
+    assert list(here.iterdir()) == []
+    run = tmp_path / "run"
+    assert cli_main(["run", HERTZ, "--solver", "mdr", "--vtk", "--out", str(run), *SMALL]) == 0
+    monkeypatch.chdir(run / "vtk")
+    assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(run), *SMALL]) == 2
+    assert "(or holds it)" in _one_error_line(capsys.readouterr().err)
+    from wearcheck.comparisons.outputs import study_directory
+    monkeypatch.chdir(here)
+    assert study_directory(here) == here
