@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .errors import CaseError
-from .schema import (BEMSettings, OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED,
+from .schema import (BEMSettings, did_you_mean, OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED,
                      REQUIRED_SECTIONS,
                      SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
                      Loading,
@@ -81,7 +81,8 @@ class Case:
         """
         unknown = sorted(set(sections) - set(SECTIONS))
         if unknown:
-            raise CaseError(f"unknown section '{unknown[0]}'; allowed: " + ", ".join(SECTIONS))
+            raise CaseError(f"unknown section '{unknown[0]}'{did_you_mean(unknown[0], SECTIONS)}"
+                            "; allowed: " + ", ".join(SECTIONS))
         raw = to_dict(self)
         for name, obj in sections.items():
             raw[name] = _section_dict(obj)
@@ -180,7 +181,8 @@ def parse_override(text: str) -> tuple[str, str, Any]:
         raise CaseError(f"override '{text}': the key must be section.key, e.g. loading.depth")
     section, k = name.split(".")
     if section not in SECTIONS:
-        raise CaseError(f"override '{text}': unknown section '{section}'; allowed: "
+        raise CaseError(f"override '{text}': unknown section '{section}'"
+                        f"{did_you_mean(section, SECTIONS)}; allowed: "
                         + ", ".join(SECTIONS))
     value = value.strip()
     try:
@@ -257,7 +259,8 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     raw = {k: (dict(v) if isinstance(v, dict) else v) for k, v in raw.items()}
     unknown = sorted(set(raw) - set(SECTIONS))
     if unknown:
-        raise CaseError(f"unknown section [{unknown[0]}]; allowed: " + ", ".join(SECTIONS))
+        raise CaseError(f"unknown section [{unknown[0]}]{did_you_mean(unknown[0], SECTIONS)}; "
+                        "allowed: " + ", ".join(SECTIONS))
     overridden = set()
     for text in overrides:
         section, k, value = parse_override(text)

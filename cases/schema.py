@@ -413,6 +413,13 @@ def convert(name: str, f: dataclasses.Field, value: Any):
     raise CaseError(f"key '{name}' = {format_value(value)}: must be {want}")
 
 
+def did_you_mean(name: str, allowed) -> str:
+    """" (did you mean 'mu'?)" for a near miss of one of ``allowed``, else ""."""
+    import difflib
+    close = difflib.get_close_matches(str(name), list(allowed), n=1, cutoff=0.6)
+    return f" (did you mean '{close[0]}'?)" if close else ""
+
+
 def build_section(section: str, raw: dict) -> Any:
     """Build one section from its raw TOML table; unknown and missing keys are errors."""
     cls = SECTIONS[section]
@@ -421,7 +428,13 @@ def build_section(section: str, raw: dict) -> Any:
         raise CaseError(f"'{section}' must be a table [{section}], got {format_value(raw)}")
     unknown = sorted(set(raw) - set(fields))
     if unknown:
-        raise CaseError(f"unknown key '{section}.{unknown[0]}'; allowed in [{section}]: "
+        hint = did_you_mean(unknown[0], fields)
+        elsewhere = [other for other, c in SECTIONS.items() if other != section
+                     and unknown[0] in {f.name for f in dataclasses.fields(c)}]
+        if elsewhere and not hint:     # mu under [sliding]: a key of another section
+            hint = f" ('{unknown[0]}' is a key of [{elsewhere[0]}])"
+        raise CaseError(f"unknown key '{section}.{unknown[0]}'"
+                        f"{hint}; allowed in [{section}]: "
                         + ", ".join(fields))
     values = {}
     for name, f in fields.items():

@@ -333,3 +333,17 @@ def test_a_force_that_presses_a_sphere_past_its_radius_is_bad_input():
                                         r"deeper than its radius"):
         case.derive({"loading.force": 1e7})
     assert case.derive({"loading.force": 1e5}).loading.force == 1e5  # a0/R = 0.23: allowed
+
+
+@pytest.mark.parametrize("override, hint", [
+    ("wear.muu=0.3", "(did you mean 'mu'?)"),
+    ("sliding.schme=\"bdf2\"", "(did you mean 'scheme'?)"),
+    ("sliding.mu=0.3", "('mu' is a key of [wear])"),
+    ("wera.mu=0.3", "(did you mean 'wear'?)"),
+])
+def test_a_misspelt_or_misplaced_key_gets_the_near_one(override, hint):
+    """A typo was answered with the list of allowed keys only; the near miss is named
+    (difflib), and a key put in the wrong section names the section that has it."""
+    with pytest.raises(CaseError) as err:
+        cases.load(cases.shipped("paper"), [override])
+    assert hint in str(err.value)

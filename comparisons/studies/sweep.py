@@ -119,7 +119,10 @@ def parse_vary(text: str) -> tuple[str, list[str]]:
     for v in values:
         section, key, _ = parse_override(f"{name}={v}")
     if key not in {n for n, _ in section_fields(section)}:
-        raise cases.CaseError(f"--vary '{text}': unknown key '{name}'; allowed in [{section}]: "
+        from wearcheck.cases.schema import did_you_mean
+        names = [n for n, _ in section_fields(section)]
+        raise cases.CaseError(f"--vary '{text}': unknown key '{name}'{did_you_mean(key, names)}"
+                              f"; allowed in [{section}]: "
                               + ", ".join(n for n, _ in section_fields(section)))
     return name, values
 
