@@ -105,6 +105,31 @@ def _dtrsv():
 _DTRSV = _dtrsv()
 
 
+def _dtrsm():
+    p_int, p_dbl = ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_double)
+    return _cython_blas("dtrsm", ctypes.CFUNCTYPE(
+        None, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, p_int, p_int,
+        p_dbl, ctypes.c_void_p, p_int, ctypes.c_void_p, p_int))
+
+
+_DTRSM = _dtrsm() if _DTRSV is not None else None
+
+
+def _trsm_in_place(side: bytes, uplo: bytes, diag: bytes, a: np.ndarray, rows: int,
+                   cols: int, b_offset: int) -> None:
+    """B := op(A)⁻¹ B (side L) or B A⁻¹ (side R), all blocks inside one Fortran array.
+
+    A is the array's leading block, B the rows×cols block starting at flat
+    (column-major) element ``b_offset``; no copies (scipy's wrappers copy
+    every strided block).
+    """
+    lda = ctypes.c_int(a.shape[0])
+    one = ctypes.c_double(1.0)
+    _DTRSM(side, uplo, b"N", diag, ctypes.byref(ctypes.c_int(rows)),
+           ctypes.byref(ctypes.c_int(cols)), ctypes.byref(one), a.ctypes.data,
+           ctypes.byref(lda), a.ctypes.data + 8 * b_offset, ctypes.byref(lda))
+
+
 class NestedLU:
     """LU of a matrix whose leading blocks are solved as often as the whole.
 
@@ -145,7 +170,15 @@ class NestedLU:
             grown = np.zeros((m, m) if n == 0 else (int(1.25 * m) + 8,) * 2, order="F")
             grown[:n, :n] = lu[:n, :n]
             lu = grown
-        if n:
+        if n and _DTRSM is not None:
+            lu[:n, n:m] = A12
+            lu[n:m, :n] = A21
+            ld = lu.shape[0]
+            # U12 = L11⁻¹ A12 and L21 = A21 U11⁻¹, in place in the factors' storage
+            _trsm_in_place(b"L", b"L", b"U", lu, n, k, n * ld)
+            _trsm_in_place(b"R", b"U", b"N", lu, k, n, n)
+            S = A22 - lu[n:m, :n] @ lu[:n, n:m]
+        elif n:
             F11 = lu[:n, :n]          # L11 below the diagonal, U11 on and above
             U12 = solve_triangular(F11, A12, lower=True, unit_diagonal=True, check_finite=False)
             L21 = solve_triangular(F11, A21.T, trans="T", lower=False,
