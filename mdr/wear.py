@@ -15,10 +15,12 @@ by a f_n + b f_{n-1} and h by c h (:func:`bdf2_coefficients`).
 
 T⁻¹ and P⁻¹ are triangular, so on the contact set only their leading blocks
 enter: up to DENSE_MAX nodes one LU factorisation without
-pivoting serves every contact set (its factors' leading blocks); finer grids
+pivoting serves every contact set (its factors' leading blocks), started at
+the present contact and grown by bordering as the contact grows; finer grids
 apply each operator as one FFT convolution and solve by GMRES with a
 coarse-grid preconditioner (a handful of iterations whatever the grid: the
-operator's condition number is about 1 + 2.4/Δŝ).
+operator's condition number is about 1 + 2.4/Δŝ), each contact iteration
+starting from the last one's pressure.
 """
 
 from __future__ import annotations
