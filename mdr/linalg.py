@@ -4,8 +4,10 @@ The implicit step's matrix on the contact nodes 0..n-1 is the leading n×n
 block of one matrix of the whole grid, because its factors T⁻¹ (lower) and
 P⁻¹ (upper) are triangular. An LU factorisation without pivoting has the
 same nesting: the factors of a leading block are the leading blocks of the
-factors. So one factorisation serves every contact set, and stored in packed
-triangular form the leading block is a prefix of the storage (BLAS tpsv).
+factors. So one factorisation serves every contact set: BLAS solves the
+leading block in place through its leading dimension (or, where scipy's
+BLAS entry points are not reachable, a prefix of packed copies), and a
+factorisation grows to a larger contact by bordering.
 """
 
 from __future__ import annotations
