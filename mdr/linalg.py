@@ -143,20 +143,27 @@ class NestedLU:
     bordering, so it can start at the size needed now.
     """
 
-    def __init__(self, M: np.ndarray):
+    def __init__(self, M: np.ndarray, limit: int | None = None):
         self.n = 0
+        self.limit = limit          # the largest size it may grow to (storage is capped there)
         self.lu = np.zeros((0, 0), order="F")
         self.extend(M[:0, :], M[:, :0], M)
 
     @staticmethod
-    def _factor(M: np.ndarray) -> np.ndarray:
+    def _factor(M: np.ndarray, out: np.ndarray) -> None:
+        """LU of M without pivoting, written to ``out`` (a Fortran-ordered block)."""
         # LAPACK's partial pivoting leaves these matrices (a compliance plus a
         # positive diagonal, or its Schur complements) unpermuted in practice;
-        # use it when it does
-        lu, piv = lu_factor(M, check_finite=False)
+        # use it when it does. In place where ``out`` is a whole array: the
+        # first factorisation of a system is its largest matrix
+        whole = out.flags.f_contiguous and out.base is None
+        if whole:
+            out[...] = M
+        lu, piv = lu_factor(out if whole else M, overwrite_a=whole, check_finite=False)
         if np.any(piv != np.arange(len(piv))):
             lu = lu_nopivot(M)
-        return lu
+        if lu is not out:
+            out[...] = lu
 
     def extend(self, A12: np.ndarray, A21: np.ndarray, A22: np.ndarray) -> None:
         """Factor [[A11, A12], [A21, A22]] from the factors of A11 (the current matrix).
@@ -169,7 +176,10 @@ class NestedLU:
         m = n + k
         lu = self.lu
         if m > lu.shape[0]:
-            grown = np.zeros((m, m) if n == 0 else (int(1.25 * m) + 8,) * 2, order="F")
+            size = m if n == 0 else int(1.25 * m) + 8
+            if self.limit is not None:
+                size = max(m, min(size, self.limit))
+            grown = np.empty((size, size), order="F")
             grown[:n, :n] = lu[:n, :n]
             lu = grown
         if n and _DTRSM is not None:
@@ -190,7 +200,7 @@ class NestedLU:
             lu[n:m, :n] = L21
         else:
             S = A22
-        lu[n:m, n:m] = self._factor(S)
+        self._factor(S, lu if m == lu.shape[0] and n == 0 else lu[n:m, n:m])
         if not np.all(np.isfinite(lu[n:m, :m])) or not np.all(np.isfinite(lu[:n, n:m])):
             raise SolverError("implicit wear step: the contact matrix factorisation failed")
         self.lu, self.n = lu, m

@@ -196,7 +196,7 @@ class ImplicitSystem:
         A = compliance_block(self.model, n)
         A[np.diag_indices(n)] += self.sigma
         if self.lu is None:
-            self.lu = linalg.NestedLU(A)
+            self.lu = linalg.NestedLU(A, limit=self.N + 1)
         else:
             # bordering: the factors of the smaller block stay (the paper case
             # at N = 800 factored 1.52e9 n³-units sized ahead and refactoring,
