@@ -156,6 +156,26 @@ def _force_weights(n: int) -> np.ndarray:
     return w
 
 
+@lru_cache(maxsize=4)
+def _node_roots(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """2 sqrt(i) and 1/(2 sqrt(i)), i = 1..n-1 (computed per call, they cost as much
+    as a small transform)."""
+    r = 2.0 * np.sqrt(np.arange(1, n, dtype=float))
+    inv = 1.0 / r
+    r.flags.writeable = inv.flags.writeable = False
+    return r, inv
+
+
+def _two_sqrt(n: int) -> np.ndarray:
+    """2 sqrt(i) for i = 1..n-1."""
+    return _node_roots(1 << max(int(n - 1).bit_length(), 6))[0][:n - 1]
+
+
+def _half_rsqrt(n: int) -> np.ndarray:
+    """1/(2 sqrt(i)) for i = 1..n-1."""
+    return _node_roots(1 << max(int(n - 1).bit_length(), 6))[1][:n - 1]
+
+
 def _kernel(fn, n: int) -> np.ndarray:
     """A cached kernel with at least n terms (lengths rounded up to powers of 2)."""
     return fn(1 << max(int(n - 1).bit_length(), 6))
@@ -174,7 +194,7 @@ def to_1d(f: np.ndarray) -> np.ndarray:
     g = np.full(n, f[0])
     if n > 1:
         s = lower(_kernel(abel_kernel, n - 1), np.diff(f), key="c")
-        g[1:] += 2.0 * np.sqrt(np.arange(1, n)) * s
+        g[1:] += _two_sqrt(n) * s
     return g
 
 
@@ -188,7 +208,7 @@ def from_1d_exact(g: np.ndarray) -> np.ndarray:
     n = len(g)
     f = np.full(n, g[0])
     if n > 1:
-        s = (g[1:] - g[0]) / (2.0 * np.sqrt(np.arange(1, n)))
+        s = (g[1:] - g[0]) * _half_rsqrt(n)
         # the cumulative sum of the increments, folded into the kernel
         f[1:] += lower(_kernel(abel_kernel_inverse_sum, n - 1), s, key="B")
     return f
