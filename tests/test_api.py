@@ -229,7 +229,8 @@ def test_a_run_that_reaches_no_stage_is_a_result_with_none(tmp_path, solver):
     stage, as the FEM's and BEM's are, said in its warnings."""
     case = wearcheck.load_case("paper", {"mdr.elements": 100, "fem.contact_nodes": 40,
                                          "stages.s_hat": [20.0, 30.0]})
-    result = wearcheck.solve(case, solver)
+    with pytest.warns(UserWarning, match="ŝ = 20, 30"):
+        result = wearcheck.solve(case, solver)
     assert result.stages["f"].shape == (0, len(result.stages["r"]))
     assert result.stages["p"].shape == result.stages["f"].shape
     assert any("ŝ = 20" in w for w in result.warnings)
