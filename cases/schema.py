@@ -377,7 +377,13 @@ def convert(name: str, f: dataclasses.Field, value: Any):
     origin = [typing.get_origin(t) for t in allowed]
     if tuple in origin:  # list of numbers
         if not isinstance(value, (list, tuple)) or not value:
-            raise CaseError(f"key '{name}' = {format_value(value)}: must be a non-empty list of numbers")
+            hint = ""
+            if isinstance(value, str) and "," in value:    # --set stages.s_hat=0,1
+                hint = f", written in brackets: [{value.strip('[]() ').replace(',', ', ')}]"
+            elif isinstance(value, (int, float)) and not isinstance(value, bool):
+                hint = f", written in brackets: [{format_value(value)}]"
+            raise CaseError(f"key '{name}' = {format_value(value)}: must be a non-empty list of "
+                            f"numbers{hint}")
         out = []
         for v in value:
             if isinstance(v, bool) or not isinstance(v, (int, float)):

@@ -347,3 +347,12 @@ def test_a_misspelt_or_misplaced_key_gets_the_near_one(override, hint):
     with pytest.raises(CaseError) as err:
         cases.load(cases.shipped("paper"), [override])
     assert hint in str(err.value)
+
+
+def test_a_list_written_without_brackets_is_shown_with_them():
+    """``--set stages.s_hat=0,1`` said "must be a non-empty list of numbers", to a user
+    who gave two numbers: the message shows the TOML spelling."""
+    with pytest.raises(CaseError, match=r"written in brackets: \[0, 1\]"):
+        cases.load(cases.shipped("paper"), ["stages.s_hat=0,1"])
+    # and the spelling it shows is read
+    assert cases.load(cases.shipped("paper"), ["stages.s_hat=[0, 1]"]).stages.s_hat == (0, 1)
