@@ -290,17 +290,33 @@ def volume(w: np.ndarray, dt: float) -> float:
     return float(math.pi * dt * (w.sum() - 0.5 * (w[0] + w[-1])))
 
 
-def compliance_matrix(n: int, dt: float, E_star: float) -> np.ndarray:
+#: up to this size the compliance matrix is the product of its two dense
+#: triangular factors (BLAS trmm; 5.7 ms against 8.5 ms by FFT at n = 632,
+#: single-threaded), beyond it the FFT's O(n² log n) wins (46 against 38 ms at 1300)
+DENSE_PRODUCT_MAX = 1000
+
+
+def compliance_matrix(n: int, dt: float, E_star: float, method: str | None = None) -> np.ndarray:
     """Dense n×n matrix of p -> T⁻¹[P⁻¹ p]/E*: 3D surface displacement from pressure.
 
     The exact composition of :func:`line_load` and :func:`from_1d_exact` on
     nodes 0..n-1 (contact ending at node n), built from their Toeplitz
     kernels. Its leading blocks are the same map on smaller contact sets.
+    ``method``: "product" (the triangular factors multiplied) or "fft" (T⁻¹
+    applied to P⁻¹'s columns by FFT); by default the faster for n.
     """
     from scipy.linalg import toeplitz
 
     B = np.cumsum(_kernel(abel_kernel_inverse, n)[:n])          # kernel of both triangular maps
     Q = toeplitz(np.r_[B[0], np.zeros(n - 1)], B) * (0.5 * math.pi * math.sqrt(dt))
+    if (method or ("product" if n <= DENSE_PRODUCT_MAX else "fft")) == "product":
+        from scipy.linalg.blas import dtrmm
+
+        # T⁻¹ as a matrix: f_i = g_0 + Σ_{1<=j<=i} B[i-j] (g_j - g_0)/(2 sqrt j)
+        L = toeplitz(B, np.zeros(n))
+        L *= np.r_[0.0, 1.0 / (2.0 * np.sqrt(np.arange(1, n)))]
+        L[:, 0] = 1.0 - L.sum(axis=1)
+        return dtrmm(1.0 / E_star, L, Q, lower=1, overwrite_b=1)
     # T⁻¹ = [[1, 0], [1 - L d, L D]] with L lower Toeplitz (kernel B) and
     # D = diag(d), d_i = 1/(2 sqrt i); applied to Q through one 2D FFT along
     # the rows (O(n² log n), where the dense product was O(n³))
