@@ -61,6 +61,14 @@ NORMAL_RESOLVE = 1e-7
 #: (depth control) from one recorded cycle to the next: wear only removes
 #: material, so either would mean the explicit wear went unstable
 MONOTONE_TOLERANCE = 1e-6
+#: largest increment wear number (k/σ0) μ E* |Δslip|/Δr a run may reach: the
+#: explicit wear turns unstable between 3.4 and 3.9 (docs/fretting.md, §5;
+#: benchmarks/bench_fretting_increments.py); below 3 the increments' error in
+#: the worn profile stays under 0.4 % of the wear
+WEAR_NUMBER_LIMIT = 3.0
+#: largest growth of that number from the first cycles to the run's end (measured
+#: 1.26 to 1.5): the increments a refusal proposes allow for it
+WEAR_NUMBER_GROWTH = 1.5
 
 
 @dataclass
@@ -83,6 +91,8 @@ class Model:
         self.t = self.x**2
         self.dt = float(self.t[-1] / (len(self.x) - 1))
         self.weights = transforms.force_weights(len(self.x) - 1, self.dt)
+        # node spacing in r (the last node repeats its segment's)
+        self.h = np.diff(self.x, append=2 * self.x[-1] - self.x[-2])
 
 
 @dataclass
@@ -170,6 +180,15 @@ def increment(model: Model, st: State, target: float, acc: dict) -> None:
     acc["energy_1d"] += float(model.weights[:n] @ (np.abs(model.G_star * v_new[:n])
                                                    * np.abs(slip[:n])))
     df = model.k_over_hardness * work
+    worn = work > 0.0
+    if worn.any():
+        acc["largest_wear"] = max(acc["largest_wear"], float(np.max(df)))
+        # the wear of the increment over the elastic indentation of one grid cell
+        # under the local pressure, Δf E*/(p Δr) = (k/σ0) μ E* |Δslip|/Δr where the
+        # surface slides (τ = μp): the explicit wear's stability number
+        acc["wear_number"] = max(acc["wear_number"], model.k_over_hardness * model.mu
+                                 * model.E_star * float(np.max(np.abs(s3[worn])
+                                                               / model.h[:n][worn])))
     st.f = st.f.copy()
     st.f[:n] += df
     acc["wear"][:n] += df
@@ -188,7 +207,7 @@ def targets(model: Model, start: float, end: float, n: int) -> np.ndarray:
 def run_path(model: Model, st: State, path: np.ndarray, loop: bool = False) -> dict:
     """Drive the indenter through the targets of ``path``; the cycle's sums."""
     acc = dict(energy=0.0, energy_1d=0.0, slide=0.0, wear=np.zeros_like(st.f),
-               slipped=np.zeros(len(st.f), dtype=bool))
+               slipped=np.zeros(len(st.f), dtype=bool), largest_wear=0.0, wear_number=0.0)
     us, Qs = [st.u], [st.Q]
     u_lo = u_hi = st.u
     Q_amp = abs(st.Q)
@@ -253,7 +272,7 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
     stage_set = sorted(set(int(c) for c in stage_cycles if c <= cycles))
     totals = dict(cycles=0, s=0.0, energy=0.0, energy_1d=0.0)
     counters = dict(simulated_cycles=0, total_increments=0, jumps=0, rejected_jumps=0,
-                    largest_jump=1)
+                    largest_jump=1, largest_wear_per_increment=0.0, increment_wear_number=0.0)
 
     def record(acc, ramp=False):
         n = st.normal
@@ -294,6 +313,7 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
 
     acc = run_path(model, st, ramp_path(model))
     counters["total_increments"] += model.increments // 4
+    _check_resolution(model, acc, counters)
     add(acc)
     record(acc, ramp=True)
     path = cycle_path(model)
@@ -306,6 +326,7 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
         acc = run_path(model, st, path, loop=want_loop)
         counters["simulated_cycles"] += 1
         counters["total_increments"] += model.increments
+        _check_resolution(model, acc, counters)
         if counters["simulated_cycles"] > MAX_SIMULATED_CYCLES:
             raise SolverError(f"the fretting run simulated more than {MAX_SIMULATED_CYCLES} "
                               "cycles; raise fretting.jump_tolerance or lower fretting.cycles")
@@ -358,6 +379,31 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
     return dict(history={k: np.asarray(v, dtype=float) for k, v in hist.items()},
                 stages={k: np.asarray(v) for k, v in stages.items()},
                 loops=loops, counters=counters)
+
+
+def _check_resolution(model, acc, counters):
+    """SolverError if the increments do not resolve the wear (docs/fretting.md, §5).
+
+    The increment wear number Λ = (k/σ0) μ E* |Δslip|/Δr (largest over the
+    nodes worn in an increment) is the wear of an increment over the elastic
+    indentation p Δr/E* of one grid cell: the explicit wear goes unstable
+    at a grid-scale near Λ = 3.5 (measured at N = 200 to 800, u0 = 0.2 to
+    0.8 u*, force and depth control), and Λ falls as 1/increments.
+    """
+    counters["largest_wear_per_increment"] = max(counters["largest_wear_per_increment"],
+                                                 acc["largest_wear"])
+    number = acc["wear_number"]
+    counters["increment_wear_number"] = max(counters["increment_wear_number"], number)
+    if number > WEAR_NUMBER_LIMIT:
+        n = model.increments
+        # Λ ∝ 1/increments; it grows by up to 1.5x over a run (the first
+        # cycle against the run's largest, measured), and the check fires early
+        need = 4 * math.ceil(WEAR_NUMBER_GROWTH * n * number / WEAR_NUMBER_LIMIT / 4)
+        raise SolverError(
+            f"fretting.increments = {n} does not resolve the wear within a cycle: the "
+            f"increment wear number (k/σ0)·μE*·|Δslip|/Δr reached {number:.3g}, past "
+            f"{WEAR_NUMBER_LIMIT:g}, where the explicit wear turns unstable on this grid; "
+            f"fretting.increments = {need} would do (or lower wear.k or mdr.elements)")
 
 
 def _check_monotone(model, hist, normal, cycle):

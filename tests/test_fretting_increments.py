@@ -1,0 +1,95 @@
+"""The resolution check of the fretting increments (docs/fretting.md, §5).
+
+The explicit wear of an increment turns unstable at the grid scale once the
+increment wear number Λ = (k/σ0) μ E* |Δslip|/Δr passes about 3.5; the
+solver refuses a run whose Λ exceeds WEAR_NUMBER_LIMIT = 3 with a
+SolverError naming fretting.increments and a value that would do. These
+tests check the refusal against the thing it stands for: the error of the
+run against one with 4x the increments (an independent, converged solution
+in time), large for a refused run, small for the run the message proposes.
+N = 200 and k = 4 (4·10^4 times the paper's) put Λ past the limit at 20
+increments per cycle; 20 cycles (k·n = 80) reach the limiting state.
+"""
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from test_fretting_mdr import make
+from wearcheck.cases import SolverError
+from wearcheck.mdr import fretting
+
+N, K, CYCLES = 200, 4.0, 20
+LIMIT = fretting.WEAR_NUMBER_LIMIT   # before a test switches the check off
+
+
+def _case(control, increments):
+    case, _, _ = make(N=N, amplitude=0.5, cycles=CYCLES, k=K, control=control,
+                      jump_tolerance=0.02, increments=increments, stage_cycles=[0, CYCLES])
+    return case
+
+
+def _wear(res):
+    return res.f[-1] - res.f[0]
+
+
+def _profile_error(res, ref):
+    w, wr = _wear(res), _wear(ref)
+    return float(np.max(np.abs(w - wr)) / np.max(np.abs(wr)))
+
+
+@pytest.fixture
+def unchecked(monkeypatch):
+    monkeypatch.setattr(fretting, "WEAR_NUMBER_LIMIT", math.inf)
+
+
+@pytest.mark.parametrize("control", ["force", "depth"])
+def test_under_resolved_increments_are_refused_and_the_proposal_is_resolved(control):
+    with pytest.raises(SolverError, match=r"fretting\.increments = 20 does not resolve") as err:
+        fretting.solve(_case(control, 20))
+    proposed = int(re.search(r"fretting\.increments = (\d+) would do", str(err.value)).group(1))
+    assert proposed % 4 == 0 and proposed > 20
+    res = fretting.solve(_case(control, proposed))
+    # the proposal resolves the whole run, not just its first cycles
+    assert res.info["increment_wear_number"] <= fretting.WEAR_NUMBER_LIMIT
+    # against a run with 4x its increments (Λ four times smaller): the
+    # calibration's returned runs at N = 200 stay within 5.1e-3 of the wear
+    # (profile) and 6.4e-3 (volume) at Λ up to 3 (first order in 1/increments,
+    # measured 3.6e-3 and 4.5e-3 here); 1e-2 is half the jump tolerance, the
+    # loosest of the run's other tolerances
+    ref = fretting.solve(_case(control, 4 * proposed))
+    assert _profile_error(res, ref) < 1e-2
+    assert abs(res.history["wear_volume"][-1] / ref.history["wear_volume"][-1] - 1) < 1e-2
+
+
+def test_a_refused_run_is_wrong_beyond_the_runs_other_tolerances(unchecked):
+    # what the check refuses, run anyway: its worn profile is off by more
+    # than the jump tolerance (0.02 of the wear per cycle, the loosest of the
+    # run's own tolerances) against a run with 4x the increments; measured
+    # 8e-2 at N = 200, Λ = 4.4 (benchmarks/bench_fretting_increments.py)
+    res = fretting.solve(_case("force", 20))
+    ref = fretting.solve(_case("force", 80))
+    assert res.info["increment_wear_number"] > LIMIT
+    assert ref.info["increment_wear_number"] <= LIMIT
+    assert _profile_error(res, ref) > 0.02
+
+
+def test_wear_number_scales_with_k_and_the_increments():
+    # Λ = (k/σ0) μ E* |Δslip|/Δr: in the first cycle at a wear coefficient
+    # this small the slip path does not feel the wear, so Λ is linear in k
+    # (to 1e-6: the profile changed by 1e-9 of the depth), and the slip per
+    # increment is the indenter's increment where the annulus slides, so
+    # doubling the increments halves Λ (up to the increment in which a
+    # spring starts to slide: within 10 %)
+    def number(k, increments):
+        case, _, _ = make(N=N, cycles=1, k=k, increments=increments)
+        return fretting.solve(case).info["increment_wear_number"]
+
+    base = number(1e-6, 20)
+    assert number(2e-6, 20) == pytest.approx(2 * base, rel=1e-6)
+    assert number(1e-6, 40) == pytest.approx(base / 2, rel=0.1)
+    # and the paper's wear coefficient is far inside the limit at any grid up to
+    # N = 3200 (Λ grows as N: Δr at the contact edge falls as 1/N)
+    assert number(1e-4, 20) * 3200 / N < 0.1 * fretting.WEAR_NUMBER_LIMIT
