@@ -1,6 +1,6 @@
 """Resolution of the fretting increments (docs/fretting.md, §5). Prints tables.
 
-    python benchmarks/bench_fretting_increments.py [--quick] [--sections 1,2]
+    python benchmarks/bench_fretting_increments.py [--quick] [--sections 1,2,3]
 
 Each row runs one case twice, with ``fretting.increments`` = 20 and with 4x
 as many (80), and gives the difference of the first against the second at
@@ -21,9 +21,14 @@ Measures of the run with 20 increments (largest over all increments):
    k = 1e-4 (the paper's) to 1, N = 200, 400, 800, normal force and depth
    control; 80/k cycles (at most 10^5: the paper's k reaches k·n = 10, the
    others the limiting state), jump tolerance 0.02.
-2. Onset: k chosen so that Λ (estimated from a run at k = 0.2) is 2 to
-   5, for several grids, amplitudes and controls, including a tangential
-   force amplitude (fretting.force_amplitude, same Q* as u0 = 0.5 u*).
+2. Onset: k chosen so that Λ (estimated from a resolved run) is 1 to 4,
+   for several grids, amplitudes and controls, including a tangential
+   force amplitude (fretting.force_amplitude, same Q* as u0 = 0.5 u*) and
+   gross slip (u0 = 2u*, k·n = 0.5; there Δc/c0 means nothing).
+3. The linear stability limit: the largest eigenvalue β_max of
+   (Δr/E*)·(−∂p/∂f) (the pressure's response to the height of the worn
+   profile, on the nodes in contact, depth held) on the unworn contact;
+   forward Euler in the wear is stable at the grid scale while Λ β_max <= 2.
 
 The machine these numbers were taken on is shared (2 cores, several
 users); the CPU seconds are indicative only.
@@ -49,7 +54,7 @@ INCREMENTS = 20
 
 
 def make_case(N, k, frac, normal="force", tangential="displacement", increments=INCREMENTS,
-              cycles=None):
+              cycles=None, kn=80.0):
     """The paper's sphere as a paraboloid at u0 = frac·u*; (case, u0, c0)."""
     E_star = 210e9 / (1 - 0.3**2)
     a = ref.hertz(E_star, R, force=FORCE)["contact_radius"]
@@ -62,7 +67,7 @@ def make_case(N, k, frac, normal="force", tangential="displacement", increments=
     u0 = frac * u_star
     loading = (dict(control="force", force=FORCE) if normal == "force"
                else dict(control="depth", depth=a * a / R))
-    cycles = cycles or int(min(round(80 / k), 100_000))
+    cycles = cycles or int(min(max(round(kn / k), 1), 100_000))
     fr = dict(cycles=cycles, jump_tolerance=0.02, increments=increments,
               stage_cycles=[0, cycles])
     if tangential == "displacement":
@@ -98,10 +103,11 @@ HEADER = (f"{'N':>5} {'k':>7} {'u0/u*':>5} {'normal':>6} {'tang.':>5} {'Λ':>6} 
           f"{'check':>7} {'cpu s':>6}")
 
 
-def row(N, k, frac, normal="force", tangential="displacement"):
+def row(N, k, frac, normal="force", tangential="displacement", kn=80.0):
     """Run the pair, print its row; the numbers as a dict."""
-    case, u0, c0 = make_case(N, k, frac, normal, tangential)
-    ref_case, _, _ = make_case(N, k, frac, normal, tangential, increments=4 * INCREMENTS)
+    case, u0, c0 = make_case(N, k, frac, normal, tangential, kn=kn)
+    c0 = c0 if c0 > 0.0 else math.nan      # gross slip: no stick zone
+    ref_case, _, _ = make_case(N, k, frac, normal, tangential, increments=4 * INCREMENTS, kn=kn)
     (res, t1), (good, t2) = solve(case), solve(ref_case)
     head = f"{N:5d} {k:7.3g} {frac:5.2f} {normal:>6} {tangential[:5]:>5}"
     if isinstance(good, Exception):
@@ -166,30 +172,58 @@ def calibration(quick):
 
 
 def onset(quick):
-    print("\n2. Onset of the explicit wear's instability: k set for Λ ≈ 2 ... 5 "
-          "(from a run at k = 0.2)")
+    print("\n2. Onset of the explicit wear's instability: k set for Λ ≈ 1 ... 4 "
+          "(from a resolved run)")
     print(HEADER)
-    setups = [(800, 0.5, "force", "displacement"), (800, 0.2, "force", "displacement"),
-              (800, 0.8, "force", "displacement"), (800, 0.5, "depth", "displacement"),
-              (800, 0.5, "force", "force"), (400, 0.5, "force", "displacement"),
-              (200, 0.5, "force", "displacement")]
+    # (N, u0/u*, normal, tangential, k·n): gross slip (u0 = 2u*) over k·n = 0.5,
+    # where the wear of a cycle is already 13-19 % of the depth
+    setups = [(800, 0.5, "force", "displacement", 80), (800, 0.2, "force", "displacement", 80),
+              (800, 0.8, "force", "displacement", 80), (800, 0.5, "depth", "displacement", 80),
+              (800, 0.5, "force", "force", 80), (400, 0.5, "force", "displacement", 80),
+              (200, 0.5, "force", "displacement", 80), (200, 2.0, "force", "displacement", 0.5)]
     if quick:
-        setups = setups[-2:]
+        setups = setups[-3:]
     rows = []
-    for N, frac, normal, tangential in setups:
-        # Λ ∝ k along the same path in k·n: a resolved probe (k = 0.2) gives Λ per unit k
-        probe, _, _ = make_case(N, 0.2, frac, normal, tangential)
+    for N, frac, normal, tangential, kn in setups:
+        # Λ ∝ k along the same path in k·n: a resolved probe gives Λ per unit k
+        k_probe = 0.2 if frac < 1 else 0.02
+        probe, _, _ = make_case(N, k_probe, frac, normal, tangential, kn=kn)
         res, _ = solve(probe)
-        per_k = res.info["increment_wear_number"] / 0.2
-        for target in (2.0, 2.5, 3.0, 3.5, 4.0, 5.0):
-            rows.append(row(N, round(target / per_k, 3), frac, normal, tangential))
+        per_k = res.info["increment_wear_number"] / k_probe
+        for target in (1.0, 1.5, 2.0, 2.5, 3.0, 4.0):
+            rows.append(row(N, round(target / per_k, 4), frac, normal, tangential, kn=kn))
     summary(rows)
+
+
+def linear_limit():
+    from wearcheck.mdr import transforms
+    print("\n3. Linear stability of the explicit wear: β_max = largest eigenvalue of "
+          "(Δr/E*)·(−∂p/∂f) on the contact")
+    print(f"{'N':>5} {'u0/u*':>5} {'nodes':>5} {'β_max':>7} {'slip annulus':>12} {'2/β_max':>8}")
+    for N in (200, 400, 800):
+        for frac in (0.2, 0.5, 0.8):
+            case, _, c0 = make_case(N, 0.1, frac, cycles=1)
+            model, _ = fretting.build_model(case)
+            st = fretting.initial_state(model)
+            loaded = np.flatnonzero(st.normal["q"] > 0.0)
+            n = loaded[-1] + 1
+            # ∂p/∂f column by column: unit height at node j -> g -> q = E*(d - g) -> p
+            S = np.empty((n, n))
+            for j in range(n):
+                e = np.zeros(n)
+                e[j] = 1.0
+                S[:, j] = transforms.pressure(model.E_star * transforms.to_1d(e), model.dt)
+            A = (model.h[:n, None] / model.E_star) * S
+            beta = float(np.max(np.linalg.eigvals(A).real))
+            ann = np.flatnonzero(model.x[:n] > c0)
+            beta_ann = float(np.max(np.linalg.eigvals(A[np.ix_(ann, ann)]).real))
+            print(f"{N:5d} {frac:5.1f} {n:5d} {beta:7.4f} {beta_ann:12.4f} {2 / beta:8.4f}")
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="N = 200 and 400 only")
-    ap.add_argument("--sections", default="1,2")
+    ap.add_argument("--sections", default="1,2,3")
     args = ap.parse_args(argv)
     sections = {int(v) for v in args.sections.split(",")}
     print("note: shared machine (2 cores, several users); CPU seconds are indicative only")
@@ -198,6 +232,8 @@ def main(argv=None):
         calibration(args.quick)
     if 2 in sections:
         onset(args.quick)
+    if 3 in sections:
+        linear_limit()
 
 
 if __name__ == "__main__":
