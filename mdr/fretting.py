@@ -21,7 +21,11 @@ wears; with |τ||Δslip| that noise seeded a growing grid-scale mode in the
 limiting state. The energy dissipated is accumulated as ∫ (τ·Δslip)₊ dA with
 the same quadrature as the worn volume, so V = (k/σ0) W holds to round-off.
 A depth that falls under force control (a force that rises under depth
-control) is a SolverError: wear only removes material.
+control) is a SolverError: wear only removes material. So is an increment
+wear number Λ = (k/σ0) μ E* |Δslip|/Δr (the wear of an increment over the
+elastic indentation of one grid cell) past WEAR_NUMBER_LIMIT, the explicit
+wear's stability limit (docs/fretting.md §5): the increments per cycle do
+not resolve the wear, and the error names the number that would.
 
 Cycle jumping: one cycle (+U -> -U -> +U) is simulated increment by
 increment, giving the profile change per cycle W_k; the profile is then
