@@ -68,7 +68,7 @@ MONOTONE_TOLERANCE = 1e-6
 #: largest increment wear number (k/σ0) μ E* |Δslip|/Δr a run may reach: the
 #: wear within a cycle is forward Euler, stable at the grid scale while
 #: Λ β_max <= 2, β_max = 1.47 the largest eigenvalue of (Δr/E*) ∂p/∂f on the
-#: grid (any N, any amplitude), so Λ <= 1.36; the damage sets in at 1.5-2.2 in
+#: grid (any N, any amplitude), so Λ <= 1.36; the damage sets in at 2.0-2.4 in
 #: gross slip and at 2.5-4 in partial slip (docs/fretting.md, §5;
 #: benchmarks/bench_fretting_increments.py)
 WEAR_NUMBER_LIMIT = 1.3
