@@ -412,7 +412,7 @@ def _check_resolution(model, acc, counters):
         need = 4 * math.ceil(WEAR_NUMBER_GROWTH * n * number / WEAR_NUMBER_LIMIT / 4)
         raise SolverError(
             f"fretting.increments = {n} does not resolve the wear within a cycle: the "
-            f"increment wear number (k/σ0)·μE*·|Δslip|/Δr reached {number:.3g}, past "
+            f"increment wear number (k/σ0)·μE*·|Δslip|/Δr reached {number:.4g}, past "
             f"{WEAR_NUMBER_LIMIT:g}, the stability limit of the explicit wear on this grid; "
             f"fretting.increments = {need} would do (or lower wear.k or mdr.elements)")
 
@@ -487,6 +487,9 @@ def solve(case, progress=None) -> RunResult:
     the stages (at +U, the end of the stage's cycle); ``fields`` the loops
     Q(u_x) of the simulated cycles at the stage cycles (``loop_cycles`` (L,),
     ``loop_displacement`` and ``loop_tangential_force`` (L, increments + 1)).
+    ``info["increment_wear_number"]`` is the largest Λ of the run (at most
+    WEAR_NUMBER_LIMIT, else SolverError), ``info["largest_wear_per_increment"]``
+    the largest wear of one increment [m].
     """
     with linalg.single_threaded_blas():
         return _solve(case, progress)
