@@ -4,8 +4,10 @@ The implicit step's matrix on the contact nodes 0..n-1 is the leading n×n
 block of one matrix of the whole grid, because its factors T⁻¹ (lower) and
 P⁻¹ (upper) are triangular. An LU factorisation without pivoting has the
 same nesting: the factors of a leading block are the leading blocks of the
-factors. So one factorisation serves every contact set, and stored in packed
-triangular form the leading block is a prefix of the storage (BLAS tpsv).
+factors. So one factorisation serves every contact set: BLAS solves the
+leading block in place through its leading dimension (or, where scipy's
+BLAS entry points are not reachable, a prefix of packed copies), and a
+factorisation grows to a larger contact by bordering.
 """
 
 from __future__ import annotations
@@ -105,6 +107,31 @@ def _dtrsv():
 _DTRSV = _dtrsv()
 
 
+def _dtrsm():
+    p_int, p_dbl = ctypes.POINTER(ctypes.c_int), ctypes.POINTER(ctypes.c_double)
+    return _cython_blas("dtrsm", ctypes.CFUNCTYPE(
+        None, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, p_int, p_int,
+        p_dbl, ctypes.c_void_p, p_int, ctypes.c_void_p, p_int))
+
+
+_DTRSM = _dtrsm() if _DTRSV is not None else None
+
+
+def _trsm_in_place(side: bytes, uplo: bytes, diag: bytes, a: np.ndarray, rows: int,
+                   cols: int, b_offset: int) -> None:
+    """B := op(A)⁻¹ B (side L) or B A⁻¹ (side R), all blocks inside one Fortran array.
+
+    A is the array's leading block, B the rows×cols block starting at flat
+    (column-major) element ``b_offset``; no copies (scipy's wrappers copy
+    every strided block).
+    """
+    lda = ctypes.c_int(a.shape[0])
+    one = ctypes.c_double(1.0)
+    _DTRSM(side, uplo, b"N", diag, ctypes.byref(ctypes.c_int(rows)),
+           ctypes.byref(ctypes.c_int(cols)), ctypes.byref(one), a.ctypes.data,
+           ctypes.byref(lda), a.ctypes.data + 8 * b_offset, ctypes.byref(lda))
+
+
 class NestedLU:
     """LU of a matrix whose leading blocks are solved as often as the whole.
 
@@ -116,20 +143,27 @@ class NestedLU:
     bordering, so it can start at the size needed now.
     """
 
-    def __init__(self, M: np.ndarray):
+    def __init__(self, M: np.ndarray, limit: int | None = None):
         self.n = 0
+        self.limit = limit          # the largest size it may grow to (storage is capped there)
         self.lu = np.zeros((0, 0), order="F")
         self.extend(M[:0, :], M[:, :0], M)
 
     @staticmethod
-    def _factor(M: np.ndarray) -> np.ndarray:
+    def _factor(M: np.ndarray, out: np.ndarray) -> None:
+        """LU of M without pivoting, written to ``out`` (a Fortran-ordered block)."""
         # LAPACK's partial pivoting leaves these matrices (a compliance plus a
         # positive diagonal, or its Schur complements) unpermuted in practice;
-        # use it when it does
-        lu, piv = lu_factor(M, check_finite=False)
+        # use it when it does. In place where ``out`` is a whole array: the
+        # first factorisation of a system is its largest matrix
+        whole = out.flags.f_contiguous and out.base is None
+        if whole:
+            out[...] = M
+        lu, piv = lu_factor(out if whole else M, overwrite_a=whole, check_finite=False)
         if np.any(piv != np.arange(len(piv))):
             lu = lu_nopivot(M)
-        return lu
+        if lu is not out:
+            out[...] = lu
 
     def extend(self, A12: np.ndarray, A21: np.ndarray, A22: np.ndarray) -> None:
         """Factor [[A11, A12], [A21, A22]] from the factors of A11 (the current matrix).
@@ -142,10 +176,21 @@ class NestedLU:
         m = n + k
         lu = self.lu
         if m > lu.shape[0]:
-            grown = np.zeros((m, m) if n == 0 else (int(1.25 * m) + 8,) * 2, order="F")
+            size = m if n == 0 else int(1.25 * m) + 8
+            if self.limit is not None:
+                size = max(m, min(size, self.limit))
+            grown = np.empty((size, size), order="F")
             grown[:n, :n] = lu[:n, :n]
             lu = grown
-        if n:
+        if n and _DTRSM is not None:
+            lu[:n, n:m] = A12
+            lu[n:m, :n] = A21
+            ld = lu.shape[0]
+            # U12 = L11⁻¹ A12 and L21 = A21 U11⁻¹, in place in the factors' storage
+            _trsm_in_place(b"L", b"L", b"U", lu, n, k, n * ld)
+            _trsm_in_place(b"R", b"U", b"N", lu, k, n, n)
+            S = A22 - lu[n:m, :n] @ lu[:n, n:m]
+        elif n:
             F11 = lu[:n, :n]          # L11 below the diagonal, U11 on and above
             U12 = solve_triangular(F11, A12, lower=True, unit_diagonal=True, check_finite=False)
             L21 = solve_triangular(F11, A21.T, trans="T", lower=False,
@@ -155,7 +200,7 @@ class NestedLU:
             lu[n:m, :n] = L21
         else:
             S = A22
-        lu[n:m, n:m] = self._factor(S)
+        self._factor(S, lu if m == lu.shape[0] and n == 0 else lu[n:m, n:m])
         if not np.all(np.isfinite(lu[n:m, :m])) or not np.all(np.isfinite(lu[:n, n:m])):
             raise SolverError("implicit wear step: the contact matrix factorisation failed")
         self.lu, self.n = lu, m

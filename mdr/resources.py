@@ -10,15 +10,19 @@ _DENSE_MAX = 2048
 
 #: dense N x N matrices a run keeps at once, by time scheme (nested LU factors
 #: of the implicit step; adaptive stepping keeps several step sizes' factors)
-DENSE_MATRICES = {"adaptive": 12.0, "implicit": 4.0, "bdf2": 3.0, "explicit": 1.0}
+DENSE_MATRICES = {"adaptive": 8.0, "implicit": 8.0, "bdf2": 8.0, "explicit": 1.0}
 
 
 def memory_bytes(case, elements: int | None = None) -> float:
     """Peak memory [bytes] of an MDR run of ``case`` (with ``elements`` springs if given).
 
-    Measured on paper.toml at N = 1500 (numpy's allocations, tracemalloc):
-    adaptive 193 MB (10.7 N² doubles; 11.4 at N = 1000), implicit 65 MB
-    (3.6 N²), bdf2 38 MB (2.1 N²); past the dense limit (N > 2048: FFT and
+    Measured on paper.toml at N = 1500 (numpy's allocations, tracemalloc, in
+    a fresh process: the first run also builds the unit compliance matrix,
+    whose FFTs are its largest transient): adaptive 70 MB (3.9 N² doubles;
+    its factorisations start at the contact and grow by bordering; 193 MB,
+    10.7 N², when they were sized ahead and packed), implicit and bdf2
+    127 MB (7.0 N²: one factorisation of the whole grid, built while the
+    compliance's transient is alive); past the dense limit (N > 2048: FFT and
     GMRES, O(N)) 10.5 MB at N = 3000. The model bounds these: 40 MB fixed,
     DENSE_MATRICES[scheme] N² doubles up to the dense limit, 2 kB per node,
     and the stored stages (profile and pressure, 16 bytes per node and stage).

@@ -15,10 +15,12 @@ by a f_n + b f_{n-1} and h by c h (:func:`bdf2_coefficients`).
 
 T⁻¹ and P⁻¹ are triangular, so on the contact set only their leading blocks
 enter: up to DENSE_MAX nodes one LU factorisation without
-pivoting serves every contact set (its factors' leading blocks); finer grids
+pivoting serves every contact set (its factors' leading blocks), started at
+the present contact and grown by bordering as the contact grows; finer grids
 apply each operator as one FFT convolution and solve by GMRES with a
 coarse-grid preconditioner (a handful of iterations whatever the grid: the
-operator's condition number is about 1 + 2.4/Δŝ).
+operator's condition number is about 1 + 2.4/Δŝ), each contact iteration
+starting from the last one's pressure.
 """
 
 from __future__ import annotations
@@ -194,7 +196,7 @@ class ImplicitSystem:
         A = compliance_block(self.model, n)
         A[np.diag_indices(n)] += self.sigma
         if self.lu is None:
-            self.lu = linalg.NestedLU(A)
+            self.lu = linalg.NestedLU(A, limit=self.N + 1)
         else:
             # bordering: the factors of the smaller block stay (the paper case
             # at N = 800 factored 1.52e9 n³-units sized ahead and refactoring,
@@ -221,13 +223,15 @@ class ImplicitSystem:
         return self._coarse[1]
 
     def _transfer(self, n: int):
-        """Restriction (coarse × fine) and prolongation (fine × coarse) for a contact of n nodes.
+        """Interpolation from a coarse grid to a contact of n nodes, and its transpose.
 
-        Linear interpolation in t between the fine nodes and a coarse grid
-        spanning the same contact, as sparse matrices cached per contact set
-        (forming them per GMRES iteration, with the products, took 1.3 ms of
-        each preconditioning at N = 102400; the sparse products take 0.2 ms),
-        shared by every system of the grid.
+        Linear interpolation in t between the fine nodes and a coarse grid of
+        COARSE_NODES + 1 nodes spanning the same contact (the last one, the
+        contact edge, carries no pressure), as sparse matrices built directly
+        in compressed form and cached per contact set: forming them with
+        bincounts per GMRES iteration took 1.3 ms of each preconditioning at
+        N = 102400, through COO conversions 3 ms per set; the sparse products
+        take 0.2 ms.
         """
         cache = _TRANSFERS
         out = cache.get((n, COARSE_NODES))
@@ -238,26 +242,26 @@ class ImplicitSystem:
             xi = np.arange(n) * (nc / n)          # fine node -> coarse coordinate
             j = xi.astype(np.int64)
             w1 = xi - j
-            fine = np.arange(n)
-            # the pressure vanishes at the contact edge: coarse node nc is dropped
-            P = sparse.csr_matrix((np.r_[1.0 - w1, w1], (np.r_[fine, fine], np.r_[j, j + 1])),
-                                  shape=(n, nc + 1))[:, :nc].tocsr()
-            R = (P.T * (nc / n)).tocsr()
+            P = sparse.csr_matrix((np.column_stack([1.0 - w1, w1]).ravel(),
+                                   np.column_stack([j, j + 1]).ravel(),
+                                   np.arange(0, 2 * n + 1, 2)), shape=(n, nc + 1))
             if len(cache) >= 4:
                 # the contact set of one GMRES solve is fixed; a few suffice, and
                 # each holds 4n numbers (kept per system, they took 250 MB at N = 102400)
                 cache.clear()     # (atomic: solves may run in threads)
-            out = cache[(n, COARSE_NODES)] = (R, P)
+            out = cache[(n, COARSE_NODES)] = (P.T.tocsr(), P)
         return out
 
     def _twolevel(self, r: np.ndarray, sigma: float) -> np.ndarray:
         # the coarse solve where the coarse grid resolves r, 1/σ (the wear
         # compliance, dominant at grid scale) on the rest:
-        # P A_c⁻¹ R r + (r - P R r)/σ
-        R, P = self._transfer(len(r))
-        rc = R @ r
-        ec = lu_solve(self._coarse_lu(len(r), sigma), rc, check_finite=False)
-        return r / sigma + P @ (ec - rc / sigma)
+        # P A_c⁻¹ R r + (r - P R r)/σ, R = Pᵀ nc/n
+        n, nc = len(r), COARSE_NODES
+        Pt, P = self._transfer(n)
+        rc = (Pt @ r)[:nc] * (nc / n)
+        ec = lu_solve(self._coarse_lu(n, sigma), rc, check_finite=False)
+        # the pressure vanishes at the contact edge: coarse node nc carries none
+        return r / sigma + P @ np.r_[ec - rc / sigma, 0.0]
 
     def unit_response(self, n, sigma, stats, rtol):
         """The solution p1 for a unit right-hand side on nodes 0..n-1 and its force F1.
@@ -452,13 +456,20 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
         q = None      # the line load, formed only where more than its edge value is needed
         # its edge value exactly: the triangular P⁻¹ has b[0] = 1 on its diagonal
         q_edge = 0.5 * math.pi * math.sqrt(model.dt) * p[m]
-        f = base.copy()
-        f[:n] += sigma * p
-        g = transforms.to_1d(f)
-        below = np.flatnonzero(d - g[n:] > tol * d)
-        if below.size:
+        tension = q_edge < -tol * E * d
+        if tension and marginal != m:
+            # too large a set: shrink it, without the 1D profile of the whole
+            # grid (a full transform; at N = 102400 a third of the contact
+            # iterations shrink)
+            below = ()
+        else:
+            f = base.copy()
+            f[:n] += sigma * p
+            g = transforms.to_1d(f)
+            below = np.flatnonzero(d - g[n:] > tol * d)
+        if len(below):
             m_new = n + int(below[-1])
-        elif q_edge < -tol * E * d:
+        elif tension:
             q = transforms.line_load(p, model.dt)
             pos = np.flatnonzero(q > 0.0)
             m_new = int(pos[-1]) if pos.size else 0
@@ -503,7 +514,17 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
                                   f"(nodes {m} <-> {m_new}); reduce sliding.step_hat")
         m = m_new
     qq = np.zeros(N + 1)
-    qq[:n] = np.maximum(transforms.line_load(p, model.dt), 0.0)
+    if system.exact(sigma):
+        # a direct solve: the springs' line load is q = E*(d - g) in contact
+        # (the solve's equation under T: g = T f = d - q/E* there), from the 1D
+        # profile at hand, equal to P⁻¹ p to round-off (measured 1e-12 of max q,
+        # paper case N = 800), one transform fewer per step
+        qq[:n] = np.maximum(E * (d - g[:n]), 0.0)
+    else:
+        # iterative: P⁻¹ p, the line load of the pressure found (the 1D gap
+        # differs from it by T of the solve's residual, ~1e-6 of max q late
+        # in a run)
+        qq[:n] = np.maximum(transforms.line_load(p, model.dt), 0.0)
     pp = np.zeros(N + 1)
     pp[:n] = p
     return State(f=f, depth=float(d), q=qq, p=pp, force=transforms.force(qq, model.dt),

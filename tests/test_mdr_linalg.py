@@ -14,6 +14,7 @@ def test_nested_lu_solves_every_leading_block(blas, monkeypatch):
     # packed copies used where it cannot be)
     if blas == "packed tpsv":
         monkeypatch.setattr(linalg, "_DTRSV", None)
+        monkeypatch.setattr(linalg, "_DTRSM", None)
     else:
         assert linalg._DTRSV is not None, "scipy's BLAS entry points are not reachable"
     rng = np.random.default_rng(3)
@@ -47,3 +48,25 @@ def test_gmres_reaches_its_tolerance():
     d = 1.0 / np.diag(M)
     x = linalg.gmres(lambda v: M @ v, lambda v: d * v, b, rtol=1e-10, restart=10, maxiter=50)
     assert np.linalg.norm(M @ x - b) <= 1e-10 * np.linalg.norm(b) * 1.0001
+
+
+@pytest.mark.parametrize("blas", ["trsm in place", "copies"])
+def test_nested_lu_grown_by_bordering_solves_every_leading_block(blas, monkeypatch):
+    # factored in pieces (100, then +30, +1, +119, +50 rows and columns), the
+    # factors must solve every leading block as numpy does: the bordering is
+    # an exact identity (LU without pivoting), so to round-off
+    if blas == "copies":
+        monkeypatch.setattr(linalg, "_DTRSM", None)
+    rng = np.random.default_rng(6)
+    A = transforms.compliance_matrix(300, 1e-10, 2e11)
+    A[np.diag_indices(300)] += 0.05 * A[0, 0]
+    lu = linalg.NestedLU(A[:100, :100])
+    for n1 in (130, 131, 250, 300):
+        n0 = lu.n
+        lu.extend(A[:n0, n0:n1], A[n0:n1, :n0], A[n0:n1, n0:n1])
+        for n in (n1, 129, 77, 1):
+            b = rng.random(n)
+            np.testing.assert_allclose(lu.solve(b), np.linalg.solve(A[:n, :n], b),
+                                       rtol=1e-10, atol=1e-12 * np.max(np.abs(b)))
+    with pytest.raises(ValueError):
+        lu.solve(np.ones(301))

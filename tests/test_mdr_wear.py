@@ -234,3 +234,42 @@ def test_progress_is_reported():
     mdr.solve(make(N=100, step_hat=0.2), progress=lambda f, text="": calls.append(f))
     assert calls and calls[-1] == 1.0
     assert all(0.0 <= f <= 1.0 for f in calls) and calls == sorted(calls)
+
+
+@pytest.mark.parametrize("direct", [True, False])
+def test_implicit_step_state_satisfies_its_contact_problem(direct, monkeypatch):
+    # one backward-Euler step from a worn start, solved directly (nested LU,
+    # bordered as the contact grows) or by GMRES (the coarse-grid path, forced
+    # on this small grid): the state must solve T⁻¹[q/E*] + σ p = d − f_n on
+    # the contact (checked with the transforms themselves, not the solver's
+    # matrix), its line load must be P⁻¹ p (the direct step takes it from the
+    # 1D gap instead) and its force Eq. 12 of that line load
+    if not direct:
+        monkeypatch.setattr(wear, "DENSE_MAX", 100)
+    from wearcheck.mdr import transforms
+    case = make(N=400)
+    model, sc = solver.build_model(case)
+    st = wear.contact_state(model, model.f0.copy())
+    h = 0.3 / sc["s_hat_per_m"]
+    st = wear.implicit_step(model, st, h)                  # a worn start
+    system = wear.ImplicitSystem(model, h, nodes=st.m // 2)   # grows by bordering
+    assert not direct or system.lu.n < st.m
+    assert system.nested == direct
+    new = wear.implicit_step(model, st, h, system=system)
+    n = new.m + 1
+    p = new.p[:n]
+    sigma = h * model.wear_rate
+    lhs = transforms.from_1d_exact(transforms.line_load(p, model.dt)) / model.E_star + sigma * p
+    # the solve's tolerance: round-off of a direct solve, GMRES's 1e-9 residual
+    np.testing.assert_allclose(lhs, new.depth - st.f[:n], rtol=0,
+                               atol=(1e-12 if direct else 1e-8) * new.depth)
+    q = np.maximum(transforms.line_load(p, model.dt), 0.0)
+    # the line load of the recorded state to 1e-9 of its largest value (a
+    # direct solve's two routes differ by round-off, measured 1e-12)
+    np.testing.assert_allclose(new.q[:n], q, rtol=0, atol=1e-9 * q.max())
+    assert new.force == pytest.approx(transforms.force(np.r_[q, np.zeros(len(new.q) - n)],
+                                                       model.dt), rel=1e-9)
+    # nothing penetrates outside the contact, no tension inside
+    g = transforms.to_1d(new.f)
+    assert np.all(new.depth - g[n:] <= wear.EDGE_TOL * new.depth)
+    assert q[-1] >= 0.0
