@@ -256,7 +256,10 @@ class Fretting:
     cycles: int = key(unit="1", minimum=1, doc="number of fretting cycles (+U -> -U -> +U)")
     increments: int = key(40, unit="1", minimum=4,
                           doc="load increments per cycle, a multiple of 4 (the first "
-                              "quarter cycle from 0 to +U takes a quarter of them)")
+                              "quarter cycle from 0 to +U takes a quarter of them); a run "
+                              "they do not resolve (increment wear number past 1.3, "
+                              "docs/fretting.md §5) is refused, naming the number that "
+                              "would do")
     jump_tolerance: float = key(0.02, unit="1", minimum=0.0, maximum=1.0, open_maximum=True,
                                 doc="cycle jumping: a jump over many cycles is accepted when "
                                     "the wear per cycle changed by at most 2·jump_tolerance "

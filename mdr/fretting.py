@@ -21,7 +21,11 @@ wears; with |τ||Δslip| that noise seeded a growing grid-scale mode in the
 limiting state. The energy dissipated is accumulated as ∫ (τ·Δslip)₊ dA with
 the same quadrature as the worn volume, so V = (k/σ0) W holds to round-off.
 A depth that falls under force control (a force that rises under depth
-control) is a SolverError: wear only removes material.
+control) is a SolverError: wear only removes material. So is an increment
+wear number Λ = (k/σ0) μ E* |Δslip|/Δr (the wear of an increment over the
+elastic indentation of one grid cell) past WEAR_NUMBER_LIMIT, the explicit
+wear's stability limit (docs/fretting.md §5): the increments per cycle do
+not resolve the wear, and the error names the number that would.
 
 Cycle jumping: one cycle (+U -> -U -> +U) is simulated increment by
 increment, giving the profile change per cycle W_k; the profile is then
@@ -61,6 +65,17 @@ NORMAL_RESOLVE = 1e-7
 #: (depth control) from one recorded cycle to the next: wear only removes
 #: material, so either would mean the explicit wear went unstable
 MONOTONE_TOLERANCE = 1e-6
+#: largest increment wear number (k/σ0) μ E* |Δslip|/Δr a run may reach: the
+#: wear within a cycle is forward Euler, stable at the grid scale while
+#: Λ β_max <= 2, β_max = 1.47 the largest eigenvalue of (Δr/E*) ∂p/∂f on the
+#: grid (any N, any amplitude), so Λ <= 1.36; the damage sets in at 2.0-2.4 in
+#: gross slip and at 2.5-4 in partial slip (docs/fretting.md, §5;
+#: benchmarks/bench_fretting_increments.py)
+WEAR_NUMBER_LIMIT = 1.3
+#: margin of the increments a refusal proposes: Λ grows by up to 1.5x from the
+#: first cycles (where the check fires) to the run's end, and Λ·increments is
+#: constant to 5 % (the first increment after a cycle jump is not counted)
+WEAR_NUMBER_GROWTH = 1.6
 
 
 @dataclass
@@ -83,6 +98,8 @@ class Model:
         self.t = self.x**2
         self.dt = float(self.t[-1] / (len(self.x) - 1))
         self.weights = transforms.force_weights(len(self.x) - 1, self.dt)
+        # node spacing in r (the last node repeats its segment's)
+        self.h = np.diff(self.x, append=2 * self.x[-1] - self.x[-2])
 
 
 @dataclass
@@ -96,6 +113,7 @@ class State:
     normal: dict = field(default_factory=dict)
     L: np.ndarray | None = None     # spring limits μ q_z / G*
     unsolved: float = 0.0           # largest wear since the last normal solve [m]
+    jumped: bool = False            # a cycle jump since the last increment
 
     def copy(self) -> "State":
         return replace(self, f=self.f.copy(), v=self.v.copy(), normal=dict(self.normal),
@@ -152,6 +170,10 @@ def increment(model: Model, st: State, target: float, acc: dict) -> None:
     else:
         du = tangential.displacement_for_force(st.v, st.L, target, model.G_star, model.weights)
     v_new, slip = tangential.step(st.v, st.L, du)
+    # the first increment after a cycle jump re-clips the springs to the limits
+    # the jump's wear lowered: that slip is the jumped cycles', not the increment's
+    resolving = not st.jumped
+    st.jumped = False
     st.v, st.u = v_new, st.u + du
     st.Q = tangential.force(v_new, model.G_star, model.weights)
     acc["slide"] += abs(du)
@@ -170,6 +192,15 @@ def increment(model: Model, st: State, target: float, acc: dict) -> None:
     acc["energy_1d"] += float(model.weights[:n] @ (np.abs(model.G_star * v_new[:n])
                                                    * np.abs(slip[:n])))
     df = model.k_over_hardness * work
+    worn = work > 0.0
+    if worn.any() and resolving:
+        acc["largest_wear"] = max(acc["largest_wear"], float(np.max(df)))
+        # the wear of the increment over the elastic indentation of one grid cell
+        # under the local pressure, Δf E*/(p Δr) = (k/σ0) μ E* |Δslip|/Δr where the
+        # surface slides (τ = μp): the explicit wear's stability number
+        acc["wear_number"] = max(acc["wear_number"], model.k_over_hardness * model.mu
+                                 * model.E_star * float(np.max(np.abs(s3[worn])
+                                                               / model.h[:n][worn])))
     st.f = st.f.copy()
     st.f[:n] += df
     acc["wear"][:n] += df
@@ -188,7 +219,7 @@ def targets(model: Model, start: float, end: float, n: int) -> np.ndarray:
 def run_path(model: Model, st: State, path: np.ndarray, loop: bool = False) -> dict:
     """Drive the indenter through the targets of ``path``; the cycle's sums."""
     acc = dict(energy=0.0, energy_1d=0.0, slide=0.0, wear=np.zeros_like(st.f),
-               slipped=np.zeros(len(st.f), dtype=bool))
+               slipped=np.zeros(len(st.f), dtype=bool), largest_wear=0.0, wear_number=0.0)
     us, Qs = [st.u], [st.Q]
     u_lo = u_hi = st.u
     Q_amp = abs(st.Q)
@@ -253,7 +284,7 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
     stage_set = sorted(set(int(c) for c in stage_cycles if c <= cycles))
     totals = dict(cycles=0, s=0.0, energy=0.0, energy_1d=0.0)
     counters = dict(simulated_cycles=0, total_increments=0, jumps=0, rejected_jumps=0,
-                    largest_jump=1)
+                    largest_jump=1, largest_wear_per_increment=0.0, increment_wear_number=0.0)
 
     def record(acc, ramp=False):
         n = st.normal
@@ -294,6 +325,7 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
 
     acc = run_path(model, st, ramp_path(model))
     counters["total_increments"] += model.increments // 4
+    _check_resolution(model, acc, counters)
     add(acc)
     record(acc, ramp=True)
     path = cycle_path(model)
@@ -306,6 +338,7 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
         acc = run_path(model, st, path, loop=want_loop)
         counters["simulated_cycles"] += 1
         counters["total_increments"] += model.increments
+        _check_resolution(model, acc, counters)
         if counters["simulated_cycles"] > MAX_SIMULATED_CYCLES:
             raise SolverError(f"the fretting run simulated more than {MAX_SIMULATED_CYCLES} "
                               "cycles; raise fretting.jump_tolerance or lower fretting.cycles")
@@ -360,6 +393,30 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
                 loops=loops, counters=counters)
 
 
+def _check_resolution(model, acc, counters):
+    """SolverError if the increments do not resolve the wear (docs/fretting.md, §5).
+
+    The increment wear number Λ = (k/σ0) μ E* |Δslip|/Δr (largest over the
+    nodes worn in an increment) is the wear of an increment over the elastic
+    indentation p Δr/E* of one grid cell under the local pressure: the
+    explicit wear's stability number, proportional to k, to the slip per
+    increment (1/increments) and to N (Δr at the contact edge).
+    """
+    counters["largest_wear_per_increment"] = max(counters["largest_wear_per_increment"],
+                                                 acc["largest_wear"])
+    number = acc["wear_number"]
+    counters["increment_wear_number"] = max(counters["increment_wear_number"], number)
+    if number > WEAR_NUMBER_LIMIT:
+        n = model.increments
+        # Λ ∝ 1/increments, with the margin for its growth over the run
+        need = 4 * math.ceil(WEAR_NUMBER_GROWTH * n * number / WEAR_NUMBER_LIMIT / 4)
+        raise SolverError(
+            f"fretting.increments = {n} does not resolve the wear within a cycle: the "
+            f"increment wear number (k/σ0)·μE*·|Δslip|/Δr reached {number:.4g}, past "
+            f"{WEAR_NUMBER_LIMIT:g}, the stability limit of the explicit wear on this grid; "
+            f"fretting.increments = {need} would do (or lower wear.k or mdr.elements)")
+
+
 def _check_monotone(model, hist, normal, cycle):
     """SolverError if the normal load moved against the wear (docs/fretting.md, §3).
 
@@ -384,6 +441,7 @@ def _extrapolate(model, st, totals, W, sums, jump):
     """Advance over jump - 1 further cycles at the wear per cycle W (forward Euler)."""
     n = jump - 1
     st.f = st.f + n * W
+    st.jumped = True
     totals["cycles"] += n
     totals["s"] += n * sums["slide"]
     totals["energy"] += n * sums["energy"]
@@ -429,6 +487,9 @@ def solve(case, progress=None) -> RunResult:
     the stages (at +U, the end of the stage's cycle); ``fields`` the loops
     Q(u_x) of the simulated cycles at the stage cycles (``loop_cycles`` (L,),
     ``loop_displacement`` and ``loop_tangential_force`` (L, increments + 1)).
+    ``info["increment_wear_number"]`` is the largest Λ of the run (at most
+    WEAR_NUMBER_LIMIT, else SolverError), ``info["largest_wear_per_increment"]``
+    the largest wear of one increment [m].
     """
     with linalg.single_threaded_blas():
         return _solve(case, progress)
