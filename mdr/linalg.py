@@ -236,6 +236,9 @@ def gmres(matvec, precond, b, x0=None, rtol=1e-11, restart=30, maxiter=10, stats
     Returns x with |b - A x| <= rtol |b|; raises SolverError otherwise.
     """
     bnorm = np.linalg.norm(b)
+    if not np.isfinite(bnorm):
+        raise SolverError("implicit wear step: non-finite right-hand side; the case's numbers "
+                          "may lie outside what it can represent")
     if bnorm == 0.0:
         return np.zeros_like(b)
     x = precond(b) if x0 is None else x0.copy()
@@ -256,6 +259,11 @@ def gmres(matvec, precond, b, x0=None, rtol=1e-11, restart=30, maxiter=10, stats
             its += 1
             Z[j] = precond(V[j])
             w = matvec(Z[j])
+            if not np.all(np.isfinite(w)):
+                # (LAPACK's least squares would print its own complaint first)
+                raise SolverError("implicit wear step: non-finite values in the iterative "
+                                  "solve; the case's numbers may lie outside what it can "
+                                  "represent")
             for i in range(j + 1):
                 H[i, j] = w @ V[i]
                 w -= H[i, j] * V[i]

@@ -145,10 +145,13 @@ class _Recorder:
             self.stages.append((s, model.x.copy(), st.f.copy(), st.p.copy()))
             self.stage_s.pop(0)
 
-    def stage_arrays(self, profile):
-        """Stages on one grid: the union of the stage grids (each exact on it)."""
+    def stage_arrays(self, profile, x):
+        """Stages on one grid: the union of the stage grids (each exact on it).
+
+        ``x``: the grid of a run that reached no stage (its arrays are 0 × len(x)).
+        """
         if not self.stages:
-            return np.zeros(0), np.zeros((0, 0)), np.zeros((0, 0)), np.zeros(0)
+            return np.zeros(0), x.copy(), np.zeros((0, len(x))), np.zeros((0, len(x)))
         grids = [x for _, x, _, _ in self.stages]
         if all(len(x) == len(grids[0]) and np.array_equal(x, grids[0]) for x in grids):
             r = grids[0]
@@ -445,9 +448,10 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
         counters["time_error"] = time_error
         counters["local_error_sum"] = error_sum
     stage_s_out, r, f, p = rec.stage_arrays(profile if profile is not None
-                                            else (lambda x: np.interp(x, model.x, model.f0)))
+                                            else (lambda x: np.interp(x, model.x, model.f0)),
+                                            model.x)
     return dict(history={k: np.asarray(v) for k, v in rec.hist.items()},
-                stage_s=stage_s_out, r=r if len(r) else model.x.copy(), f=f, p=p,
+                stage_s=stage_s_out, r=r, f=f, p=p,
                 counters=counters)
 
 

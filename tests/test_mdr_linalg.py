@@ -70,3 +70,15 @@ def test_nested_lu_grown_by_bordering_solves_every_leading_block(blas, monkeypat
                                        rtol=1e-10, atol=1e-12 * np.max(np.abs(b)))
     with pytest.raises(ValueError):
         lu.solve(np.ones(301))
+
+
+def test_gmres_reports_non_finite_products_itself(capfd):
+    # an operator that overflows (youngs_modulus = 1e300 in a case) must end in
+    # one SolverError, before LAPACK's least squares prints its own complaint
+    from wearcheck.cases import SolverError
+    b = np.ones(50)
+    with pytest.raises(SolverError, match="non-finite"):
+        linalg.gmres(lambda v: np.full_like(v, np.nan), lambda v: v, b)
+    with pytest.raises(SolverError, match="non-finite"):
+        linalg.gmres(lambda v: v, lambda v: v, np.full(5, np.inf))
+    assert "DLASCL" not in capfd.readouterr().err

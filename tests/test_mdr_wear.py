@@ -273,3 +273,12 @@ def test_implicit_step_state_satisfies_its_contact_problem(direct, monkeypatch):
     g = transforms.to_1d(new.f)
     assert np.all(new.depth - g[n:] <= wear.EDGE_TOL * new.depth)
     assert q[-1] >= 0.0
+
+
+def test_a_run_that_reaches_no_stage_keeps_its_grid():
+    # every stage past the end of the run: no stage rows, but the arrays keep
+    # the shape (stages x nodes) every result has, on the run's grid
+    case = make(N=200, s_hat=0.5, stages=(20.0, 30.0), step_hat=0.1)
+    res = mdr.solve(case)
+    assert len(res.stage_s) == 0
+    assert res.f.shape == res.p.shape == (0, len(res.r)) and len(res.r) == 201
