@@ -515,7 +515,8 @@ def _solve(case, progress=None) -> RunResult:
     info = dict(solver="mdr", mode="fretting", N=case.mdr.elements, domain=float(model.x[-1]),
                 grid="uniform in r^2", increments=fr.increments,
                 jump_tolerance=fr.jump_tolerance, stage_cycles=stg["cycles"].tolist(),
-                gross_slip_displacement_unworn=u_star, **out["counters"])
+                gross_slip_displacement_unworn=u_star,
+                increment_wear_number_limit=WEAR_NUMBER_LIMIT, **out["counters"])
     loops = out["loops"]
     fields = None
     if loops["cycles"]:

@@ -83,4 +83,9 @@ def test_force_controlled_tangential_loading_is_checked_too(tmp_path):
     assert checks["displacement_amplitude_difference"] < 1e-3
     text = (path / "report.md").read_text()
     assert "u0_CM" in text and "c_CM/a" in text and "W_MD" in text
+    # the increment wear number the run reached, and the limit it was held to
+    from wearcheck.mdr import fretting
+    assert "increment wear number" in text
+    assert f"refused above {fretting.WEAR_NUMBER_LIMIT}" in text
+    assert 0.0 < result.info["increment_wear_number"] <= fretting.WEAR_NUMBER_LIMIT
     assert (path / "fretting_loops.png").stat().st_size > 1000

@@ -151,6 +151,13 @@ def write(directory, case, result) -> list[Path]:
                      + (f" ({checks['regime']})." if "regime" in checks else "."))]
     rows = [["energy–wear identity max |V − (k/σ0)W| / max V", fmt(
         checks["energy_wear_identity"]), "to round-off"]]
+    if "increment_wear_number" in result.info:
+        # the explicit wear within a cycle (docs/fretting.md §5): a run past its
+        # limit is refused, so a report shows how close this one came
+        rows += [["increment wear number (k/σ0)·μE*·|Δslip|/Δr",
+                  fmt(result.info["increment_wear_number"]),
+                  f"refused above {result.info.get('increment_wear_number_limit', '?')}; "
+                  "more fretting.increments lower it"]]
     if "stick_radius_difference" in checks:
         rows += [["first cycle: |c − c_CM| / a", fmt(checks["stick_radius_difference"]),
                   f"c_CM/a = {checks['stick_radius_closed_form'] / checks['contact_radius']:.4f}"],
