@@ -169,6 +169,54 @@ class _Recorder:
         return np.array([st[0] for st in self.stages]), r, np.array(F), np.array(P)
 
 
+class _EdgeGuess:
+    """Guesses of the contact edge (last node) of an adaptive step's three solves.
+
+    Each wrong guess costs a contact iteration (a solve). The extrapolation
+    from the accepted states (``base``) misses the full step's edge, which
+    runs ahead of the accepted (two half steps) ones by O(h): where the edge
+    moves several nodes a step, the recent miss per unit step corrects it,
+    and the half steps take the shares of the full step's move they took of
+    late (paper case, N = 51200: 814 contact iterations, 1022 with the last
+    step's lead of the full step's edge over the accepted one); where it moves
+    a node or two (coarse grids), that lead, the midpoint and the full step's
+    end do better (N = 800: 637 against 649; see SHARE_MOVE).
+    """
+
+    def __init__(self):
+        self.share = [0.5, 0.5]      # the half steps' moves over the full step's, of late
+        self.moves = [0.0, 0.0, 0.0]  # their decaying sums (half, second half, full)
+        self.reset()
+
+    def reset(self):
+        """Forget the leads (the grid changed: nodes mean other radii)."""
+        self.miss = 0.0              # the full step's edge beyond ``base``, per metre
+        self.lead = 0                # the full step's edge beyond the accepted one, last step
+
+    def full(self, m, base, h, h_last):
+        if abs(base - m) >= SHARE_MOVE:
+            return base + round(self.miss * h)
+        return base + (round(self.lead * h / h_last) if h_last else 0)
+
+    def half(self, m, full_m):
+        move = full_m - m
+        return m + (round(self.share[0] * move) if abs(move) >= SHARE_MOVE else move // 2)
+
+    def two(self, m, half_m, full_m):
+        move = full_m - m
+        return half_m + round(self.share[1] * move) if abs(move) >= SHARE_MOVE else full_m
+
+    def update(self, m, base, h, h_last, full_m, half_m, two_m):
+        if h_last:
+            self.miss = 0.7 * self.miss + 0.3 * (full_m - base) / h
+        self.lead = full_m - two_m
+        # ratios of decaying sums: a move of a node or two makes one step's ratio noise
+        self.moves = [0.7 * a + b for a, b in zip(self.moves, (half_m - m, two_m - half_m,
+                                                               full_m - m))]
+        if self.moves[2] > 0:
+            self.share = [self.moves[0] / self.moves[2], self.moves[1] / self.moves[2]]
+
+
 def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: float,
         force_fraction: float, progress=None, check_oscillation: bool = True, *,
         tolerance: float | None = None, scales: dict | None = None, profile=None,
@@ -202,10 +250,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
     systems: dict = {}
     m_prev = [state.m, state.m]
     p_prev = None     # the pressure one step back (on the current grid), for guesses
-    edge_share = [0.5, 0.5]   # the half steps' edge moves over the full step's, of late
-    edge_moves = [0.0, 0.0, 0.0]   # their decaying sums (half, second half, full)
-    edge_lead = 0.0           # the full step's edge beyond the extrapolated one, per metre
-    last_lead = 0             # the full step's edge beyond the accepted one, last step
+    edges = _EdgeGuess()
     h_last = None
 
     def system_for(hc, exact=True):
@@ -269,7 +314,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
     max_steps = ADAPTIVE_MAX_STEPS if adaptive else MAX_STEPS
 
     def grow():
-        nonlocal model, state, previous, systems, corr, p_prev, edge_lead, last_lead
+        nonlocal model, state, previous, systems, corr, p_prev
         if profile is None:
             raise SolverError("the contact has reached the edge of the MDR domain; raise "
                               "mdr.domain_factor")
@@ -282,7 +327,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
             previous = (f_prev, previous[1])
         systems = {}
         p_prev = None
-        edge_lead, last_lead = 0.0, 0
+        edges.reset()
         if h_sys is not None:
             system_for(h_sys)
         m_prev[:] = [state.m, state.m]
@@ -348,39 +393,16 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
                 # pass at N = 25600: 8-10 from the step's start pressure, 5-7 from this)
                 p_guess = None if p_prev is None or not h_last else \
                     state.p + (state.p - p_prev) * (hn / h_last)
-                # the full step's edge runs ahead of the accepted (two half steps)
-                # ones by O(h): the extrapolation's recent miss per unit step
-                # corrects it where the edge moves several nodes a step (paper
-                # case, N = 51200: 814 contact iterations, 1022 with the last
-                # step's lead of the full step's edge over the accepted one), that
-                # lead where it moves a node or two (N = 800: 637, 649 with the miss)
-                lead = round(edge_lead * hn) if abs(guess - state.m) >= SHARE_MOVE else \
-                    round(last_lead * hn / h_last) if h_last else 0
-                full = implicit(start, hn, exact=on_ladder, guess=guess + lead, p_guess=p_guess)
-                # the half steps: the full step's pressure (at their end, and half
-                # way), and edges as far along the full step's edge move as they
-                # went of late (backward Euler's edge runs ahead by O(h); see
-                # SHARE_MOVE)
-                move = full.m - state.m
-                shared = abs(move) >= SHARE_MOVE
+                full = implicit(start, hn, exact=on_ladder,
+                                guess=edges.full(state.m, guess, hn, h_last), p_guess=p_guess)
+                # the half steps start from the full step's pressure (at their
+                # end, and half way)
                 half = implicit(start, 0.5 * hn, exact=on_ladder,
-                                guess=state.m + (round(edge_share[0] * move) if shared
-                                                 else move // 2),
+                                guess=edges.half(state.m, full.m),
                                 p_guess=0.5 * (state.p + full.p))
                 two = implicit(half, 0.5 * hn, exact=on_ladder,
-                               guess=half.m + round(edge_share[1] * move) if shared else full.m,
-                               p_guess=full.p)
-                if h_last:
-                    edge_lead = 0.7 * edge_lead + 0.3 * (full.m - guess) / hn
-                last_lead = full.m - two.m
-                # shares as ratios of decaying sums: a move of a node or two
-                # (coarse grids) makes a single step's ratio noise
-                edge_moves[:] = [0.7 * a + b for a, b in
-                                 zip(edge_moves, (half.m - state.m, two.m - half.m,
-                                                  full.m - state.m))]
-                if edge_moves[2] > 0:
-                    edge_share[:] = [edge_moves[0] / edge_moves[2],
-                                     edge_moves[1] / edge_moves[2]]
+                               guess=edges.two(state.m, half.m, full.m), p_guess=full.p)
+                edges.update(state.m, guess, hn, h_last, full.m, half.m, two.m)
                 err = error_of(two, full)
                 for st in (full, half, two):
                     for k in ("gmres_iterations", "contact_iterations"):
