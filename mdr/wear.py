@@ -125,16 +125,14 @@ def bdf2_coefficients(h: float, h_prev: float | None) -> tuple[float, float, flo
 DENSE_MAX = 2048
 #: relative tolerance of the contact conditions (gap and line load, times d)
 EDGE_TOL = 1e-9
-#: GMRES tolerance of the solution (far below the spatial error: 2e-5 of F0
-#: at N = 800, falling as N^-1.5)
+#: GMRES tolerance of every pass of the contact iteration (far below the
+#: spatial error: 2e-5 of F0 at N = 800, falling as N^-1.5). Each pass starts
+#: from the last iterate, so a loose pass while the set is found saves little
+#: and, deciding the marginal edge node differently, costs extra passes: paper
+#: case at N = 25600, 6388 GMRES iterations, 2166 contact iterations, 10.5 s
+#: with loose passes at 1e-5; 5228, 1396, 7.3 s at 1e-7; 5634, 887, 6.9 s with
+#: every pass at this tolerance
 ACCURATE_RTOL = 1e-9
-#: GMRES tolerance while the contact set is being found. Each pass starts from
-#: the last iterate, so a loose first pass saves little and, deciding the
-#: marginal edge node differently from the accurate one, costs extra passes:
-#: paper case at N = 25600, 6388 GMRES iterations, 2166 contact iterations,
-#: 10.5 s at 1e-5; 5228, 1396, 7.3 s at 1e-7; 5634, 887, 6.9 s with every
-#: pass accurate (this value: no loose pass)
-LOOSE_RTOL = 1e-9
 #: a nested LU too small for a contact set grows to at least this factor
 NESTED_GROWTH = 1.1
 #: nodes of the coarse grid that preconditions GMRES on finer grids
@@ -418,9 +416,6 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
     seen = set()
     tried = []
     tol = EDGE_TOL
-    # GMRES solves loosely while the contact set is being found, then
-    # accurately (warm-started) from the set found on, checking it again
-    accurate = False
     marginal = None
     x0 = p_guess[:m + 1]
     d_last = state.depth
@@ -437,9 +432,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
             # (from the step's start pressure instead, each GMRES pass took
             # 8-10 iterations at N = 25600, now about half that)
             x0 = np.r_[x0[:n], np.full(max(n - len(x0), 0), x0[-1] if len(x0) else 0.0)]
-        # the nested LU of the regular step is exact: no loose pass to redo
-        accurate = accurate or system.exact(sigma) or LOOSE_RTOL <= ACCURATE_RTOL
-        rtol = ACCURATE_RTOL if accurate else LOOSE_RTOL
+        rtol = ACCURATE_RTOL
         if model.force is None:
             d = model.depth
             p = system.solve(d - base[:n], sigma, x0, stats, rtol)
@@ -473,19 +466,13 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
             q = transforms.line_load(p, model.dt)
             pos = np.flatnonzero(q > 0.0)
             m_new = int(pos[-1]) if pos.size else 0
-        elif accurate:
-            break
         else:
-            accurate, x0 = True, p
-            continue
+            break
         if marginal == m and m_new == m - 1 and \
                 -q_edge < 1e-3 * np.max(transforms.line_load(p, model.dt) if q is None else q):
             # the marginal node: slightly tensile in contact, slightly
             # penetrating out of it; keep it in, its line load clipped to 0
-            if accurate:
-                break
-            accurate, x0 = True, p
-            continue
+            break
         # the edge iteration m -> m_new contracts geometrically: Aitken's
         # extrapolation of the last three iterates jumps close to its limit
         tried.append(m)
@@ -498,14 +485,10 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
                         max(m1, m2) >= jump >= m2 - 4 * abs(m2 - m1):
                     if jump not in tried:
                         m_new = jump
-        if m_new in tried and not accurate:
-            # a cycle while solving loosely may be the solver's error: go on accurately
-            accurate, tried, seen = True, [], set()
-        elif m_new in tried and abs(m_new - m) == 1 and marginal is None:
+        if m_new in tried and abs(m_new - m) == 1 and marginal is None:
             # a two-cycle over one node: nodal contact conditions cannot
             # place the edge between nodes, so neither set satisfies them
             marginal = m_new = max(m, m_new)
-            accurate = True
         elif m_new in tried or stats["contact_iterations"] > 50:
             if m_new in tried and (m_new, m) not in seen:
                 seen.add((m_new, m))
