@@ -161,7 +161,7 @@ class Sliding:
                                 doc="sliding step in units of the dimensionless sliding "
                                     "ŝ = k μ E* s / (σ0 a0), or \"auto\": the solver's "
                                     "default (explicit: half its stability limit; implicit "
-                                    "and bdf2: MDR 0.1, FEM 0.02 and 0.01; adaptive: the "
+                                    "and bdf2: MDR and BEM 0.1, FEM 0.02 and 0.01; adaptive: the "
                                     "largest step allowed, auto = no limit), recorded in "
                                     "meta.json info.step_hat")
 
