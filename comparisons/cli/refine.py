@@ -1,4 +1,4 @@
-"""``wearcheck refine CASE.toml --solver mdr|fem --out DIR``: a refinement study on Dask.
+"""``wearcheck refine CASE.toml --solver mdr|fem|bem --out DIR``: a refinement study on Dask.
 
 Runs the case at a sequence of resolutions (and optionally sliding steps),
 one run directory per level in DIR, and writes ``refinement-<solver>.csv`` and
