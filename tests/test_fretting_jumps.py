@@ -36,21 +36,24 @@ def _run(control, jump_tolerance):
 def test_energy_per_cycle_after_jumps_is_the_every_cycle_runs(control, tol):
     # The jump's forward-Euler error in the profile is (n - 1)/2 times the change
     # of W across it, at most tol (n - 1) max|W| by the acceptance test: a
-    # fraction tol of the wear jumped over. The energy per cycle follows the
+    # fraction tol of the wear jumped over. The energy per cycle E follows the
     # profile, so to first order its error is at most tol times its change over
-    # the jumps, at most tol·X, X its largest change over the run. Measured
-    # (every simulated cycle against the same cycle of the reference): 0.15-0.24
-    # of tol·X. With the springs left at the limits from before the jump, the
-    # cycle after it slid less by the limits' fall and its energy was low by
-    # 1.3-2.9 tol·X (force: 1.87, 1.33; depth: 2.91, 1.73 at tol = 0.05, 0.1).
+    # the jumps, at most tol·X, X = max|E(c) - E(1)| its largest change over the
+    # run. Measured (every simulated cycle against the same cycle of the
+    # reference): 0.15-0.25 of tol·X (0.06-0.11 in the limiting state,
+    # benchmarks/bench_fretting_jumps.py). With the springs left at the limits
+    # from before the jump, the cycle after it slid less by the limits' fall and
+    # its energy was low by 1.4-3.0 tol·X (force: 1.92, 1.36; depth: 2.99, 1.77
+    # at tol = 0.05, 0.1).
     ref, res = _run(control, 0.0), _run(control, tol)
     assert res.info["jumps"] >= 10
     E_ref = ref.history["energy_per_cycle"]
-    X = np.max(np.abs(E_ref[1:] / E_ref[1] - 1.0))
+    X = np.max(np.abs(E_ref[1:] - E_ref[1]))
     cycles = res.history["cycles"].astype(int)[1:]
     assert cycles[-1] == CYCLES and len(cycles) < CYCLES / 2   # most cycles were jumped
-    err = res.history["energy_per_cycle"][1:] / E_ref[cycles] - 1.0
-    assert np.max(np.abs(err)) <= tol * X
+    err = res.history["energy_per_cycle"][1:] - E_ref[cycles]
+    ratio = float(np.max(np.abs(err)) / (tol * X))
+    assert ratio <= 1.0, f"energy per cycle off by {ratio:.3g} tol·X"
 
 
 @pytest.mark.parametrize("control", ["force", "depth"])
