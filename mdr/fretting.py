@@ -34,7 +34,9 @@ number). The next simulated cycle gives W_{k+1}; the jump's local error is
 about (n_k/2) |W_{k+1} - W_k|, so a jump is accepted when the wear per cycle
 changed by at most 2·tol relative (max norm) across it, else it is undone and
 retried shorter. The next jump is sized from the change measured (at most
-doubling). ``tol = 0`` simulates every cycle.
+doubling). ``tol = 0`` simulates every cycle. The jump puts the springs on
+the limits its wear lowered without wear: the slip by which they followed
+their limits down is the jumped cycles', and in W already.
 """
 
 from __future__ import annotations
