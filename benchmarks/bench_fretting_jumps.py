@@ -192,8 +192,8 @@ def main(argv=None):
     if not args.quick:
         end_to_end("N=200 k=1e-4 u0=0.5u* 2·10^4 cycles (the paper's k), force control",
                    lambda tol: make_case(200, 1e-4, 0.5, 20_000, tol), (0.02, 0.05))
-        end_to_end("shipped case (N=800), 2000 cycles",
-                   lambda tol: shipped(2000, tol), (0.02,))
+        end_to_end("shipped case (N=800), 2·10^4 cycles",
+                   lambda tol: shipped(20_000, tol), (0.02, 0.05))
 
 
 if __name__ == "__main__":
