@@ -125,7 +125,8 @@ def bdf2_coefficients(h: float, h_prev: float | None) -> tuple[float, float, flo
 DENSE_MAX = 2048
 #: relative tolerance of the contact conditions (gap and line load, times d)
 EDGE_TOL = 1e-9
-#: GMRES tolerance of every pass of the contact iteration (far below the
+#: GMRES tolerance of every pass of the contact iteration of fixed-step runs,
+#: the floor of adaptive ones (solver.ADAPTIVE_SOLVE_SHARE; far below the
 #: spatial error: 2e-5 of F0 at N = 800, falling as N^-1.5). Each pass starts
 #: from the last iterate, so a loose pass while the set is found saves little
 #: and, deciding the marginal edge node differently, costs extra passes: paper
@@ -174,9 +175,11 @@ class ImplicitSystem:
     preconditioner.
     """
 
-    def __init__(self, model: "Model", h: float, nodes: int | None = None):
+    def __init__(self, model: "Model", h: float, nodes: int | None = None,
+                 rtol: float = ACCURATE_RTOL):
         N = len(model.x) - 1
         self.sigma = h * model.wear_rate
+        self.rtol = rtol        # GMRES's relative residual in the contact iteration
         self.dt, self.E = model.dt, model.E_star
         self.nested = N <= DENSE_MAX
         self.N = N
@@ -432,7 +435,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess) -> State:
             # (from the step's start pressure instead, each GMRES pass took
             # 8-10 iterations at N = 25600, now about half that)
             x0 = np.r_[x0[:n], np.full(max(n - len(x0), 0), x0[-1] if len(x0) else 0.0)]
-        rtol = ACCURATE_RTOL
+        rtol = system.rtol
         if model.force is None:
             d = model.depth
             p = system.solve(d - base[:n], sigma, x0, stats, rtol)
