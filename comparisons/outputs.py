@@ -513,19 +513,34 @@ def _directory_stat(path: Path):
     return st if stat.S_ISDIR(st.st_mode) else None
 
 
-def _take_permissions(tmp: Path, occupant) -> None:
-    """Give the new output the permissions and group of the directory it replaces.
+def _take_permissions(tmp: Path, occupant, path: Path) -> None:
+    """Give the new output the permissions, group and ACLs of the directory it replaces.
 
     An output replaces a directory by renaming a new one onto it; without this,
-    an empty directory made ``chmod 700`` (or group-shared) for the results, or
-    an output the user restricted after the run, would come back with the
-    umask's mode, readable by everyone. The owner is left alone: the files
-    inside are this process's.
+    an empty directory made ``chmod 700`` (or group-shared, or given to a
+    colleague by ``setfacl``) for the results, or an output the user
+    restricted after the run, would come back with the umask's mode, readable
+    by everyone. The owner is left alone: the files inside are this process's.
+    The ACLs (and any other extended attributes this process may set) are
+    copied after the mode, which would otherwise rewrite the ACL's mask; a
+    default ACL applies to what is created in the directory later, as it
+    would have.
     """
     with contextlib.suppress(OSError):      # a group we are not in: keep ours
         if occupant.st_gid != os.stat(tmp).st_gid:
             os.chown(tmp, -1, occupant.st_gid)
     os.chmod(tmp, stat.S_IMODE(occupant.st_mode))
+    if not hasattr(os, "listxattr"):        # (not on macOS or Windows)
+        return
+    try:
+        names = os.listxattr(path, follow_symlinks=False)
+    except OSError:                         # a file system without them
+        return
+    for name in names:
+        # (security.* labels need privileges: the new directory keeps its own)
+        with contextlib.suppress(OSError):
+            os.setxattr(tmp, name, os.getxattr(path, name, follow_symlinks=False),
+                        follow_symlinks=False)
 
 
 @contextlib.contextmanager
@@ -549,7 +564,7 @@ def atomic_directory(path, kind: str = "run"):
         yield tmp
         write_marker(tmp, kind, complete=True, files=inventory(tmp, kind))
         if occupant is not None:
-            _take_permissions(tmp, occupant)
+            _take_permissions(tmp, occupant, path)
         _install(tmp, path, kind)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)

@@ -126,10 +126,11 @@ def test_wear_number_scales_with_k_and_the_increments():
 
 
 def test_cycle_jumps_do_not_enter_the_wear_number():
-    # the increment after a jump re-clips the springs to the limits the jump's
-    # wear lowered, a slip of the jumped cycles (1.6 here instead of 0.28 when it
-    # was counted): with jumps Λ is that of the run simulating every cycle, to
-    # 5 % (the jumps change the profile, and the slips, by up to the tolerance)
+    # a jump puts the springs on the limits its wear lowered, without wear (a
+    # slip of the jumped cycles, several times an increment's when the increment
+    # after the jump took it): with jumps Λ is that of the run simulating every
+    # cycle, to 5 % (the jumps change the profile, and the slips, by up to the
+    # tolerance)
     def number(jump_tolerance):
         case, _, _ = make(N=N, amplitude=0.5, cycles=CYCLES, k=K, jump_tolerance=jump_tolerance,
                           increments=160, stage_cycles=[0, CYCLES])

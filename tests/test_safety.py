@@ -788,6 +788,41 @@ def test_an_empty_directory_keeps_its_permissions_and_group(tmp_path, capsys):
     assert stat.S_IMODE(fresh.stat().st_mode) == 0o777 & ~umask
 
 
+def _acl(*entries):
+    """A POSIX access ACL as Linux stores it (xattr system.posix_acl_access):
+    version 2, then (tag, permissions, id) per entry."""
+    blob = (2).to_bytes(4, "little")
+    for tag, perm, uid in entries:
+        blob += tag.to_bytes(2, "little") + perm.to_bytes(2, "little") + uid.to_bytes(4, "little")
+    return blob
+
+
+def test_an_empty_directory_keeps_its_acl(tmp_path):
+    """``setfacl -m u:colleague:rx results`` then ``--out results``: the output
+    replaced the directory and the colleague's entry was gone (the last
+    session's note: only the ACLs were still lost). The ACL and the user's
+    own extended attributes now come along, at the first run and a re-run."""
+    out = tmp_path / "results"
+    out.mkdir()
+    any_id = 0xFFFFFFFF
+    colleague = os.getuid() + 4242
+    # user::rwx, user:colleague:r-x, group::r-x, mask::r-x, other::---
+    acl = _acl((0x01, 7, any_id), (0x02, 5, colleague), (0x04, 5, any_id),
+               (0x10, 5, any_id), (0x20, 0, any_id))
+    try:
+        os.setxattr(out, "system.posix_acl_access", acl)
+        os.setxattr(out, "user.project", b"rig-7")
+    except (OSError, AttributeError):
+        pytest.skip("no ACLs or user extended attributes on this file system")
+    mode = stat.S_IMODE(out.stat().st_mode)
+    for _ in range(2):
+        assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(out), *SMALL]) == 0
+        assert (out / "meta.json").is_file()
+        assert os.getxattr(out, "system.posix_acl_access") == acl
+        assert os.getxattr(out, "user.project") == b"rig-7"
+        assert stat.S_IMODE(out.stat().st_mode) == mode == 0o750
+
+
 def test_a_mount_point_is_refused_before_solving(tmp_path, capsys, no_solve, monkeypatch):
     """An empty mount point (a scratch disk) as --out failed with exit 4 and an
     error about a '.partial' path after the whole solve: rename(2) cannot put
