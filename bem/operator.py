@@ -153,7 +153,7 @@ _CHECKERBOARD: list[float] = []
 
 
 def checkerboard_symbol() -> float:
-    """The symbol of the pixel operator at (π, π), for Δ = E* = 1 (about 0.5797).
+    """The symbol of the pixel operator at (π, π), for Δ = E* = 1 (about 0.5807).
 
     The partial sums over growing squares converge as 1/m (alternating
     tail); Richardson's extrapolation of m = 128 and 256 removes that term

@@ -161,7 +161,7 @@ class Sliding:
                                 doc="sliding step in units of the dimensionless sliding "
                                     "ŝ = k μ E* s / (σ0 a0), or \"auto\": the solver's "
                                     "default (explicit: half its stability limit; implicit "
-                                    "and bdf2: MDR 0.1, FEM 0.02 and 0.01; adaptive: the "
+                                    "and bdf2: MDR and BEM 0.1, FEM 0.02 and 0.01; adaptive: the "
                                     "largest step allowed, auto = no limit), recorded in "
                                     "meta.json info.step_hat")
 
@@ -196,7 +196,8 @@ class FEMSettings:
                                 doc="extent of the candidate contact arc as a multiple of the "
                                     "predicted final contact radius (√2·a0 under depth "
                                     "control; under force control the long-run scar radius "
-                                    "(4 R K F s/π)^(1/4) at the end of the run, at least a0)")
+                                    "at the end of the run, started from a0: "
+                                    "(a0⁴ + 4 R K F s/π)^(1/4) for n = 1)")
     element_order: int = key(2, minimum=1, maximum=2, doc="1: linear, 2: quadratic triangles")
     pressure_recovery: str = key("lumped", choices=("lumped", "consistent"),
                                  doc="nodal pressure = nodal force / lumped 2πr-weighted area, "

@@ -209,7 +209,8 @@ def compare(case: str | Path | Case, out: str | Path, *, solvers: Iterable[str] 
             reference_solver: str | None = None, edge_study: bool = False,
             sphere_sweep: bool = False, render: bool = True, quiet: bool = True) -> dict:
     """Run every solver that supports the case (or ``solvers``), compare each with
-    the reference (default MDR), write figures, metrics and a report into ``out``.
+    the reference (default MDR, or the first exact solver where the MDR solved an
+    approximation of the case), write figures, metrics and a report into ``out``.
 
     Returns the metrics as in ``metrics.json``; ``["passed"]`` is the verdict.
     """

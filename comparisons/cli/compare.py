@@ -41,7 +41,8 @@ def add_parser(sub):
                    help="the solvers to compare (default: every one that supports the case; "
                         "registered: " + ", ".join(registry.names()) + ")")
     p.add_argument("--reference", default=None, metavar="NAME",
-                   help="the solver the others are compared with (default: mdr)")
+                   help="the solver the others are compared with (default: mdr, or the "
+                        "first exact solver where mdr solved an approximation)")
     p.add_argument("--out", type=Path, default=None,
                    help="output directory (default: runs/<case name>)")
     p.add_argument("--edge-study", action="store_true",

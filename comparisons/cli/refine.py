@@ -1,4 +1,4 @@
-"""``wearcheck refine CASE.toml --solver mdr|fem --out DIR``: a refinement study on Dask.
+"""``wearcheck refine CASE.toml --solver mdr|fem|bem --out DIR``: a refinement study on Dask.
 
 Runs the case at a sequence of resolutions (and optionally sliding steps),
 one run directory per level in DIR, and writes ``refinement-<solver>.csv`` and
@@ -31,8 +31,9 @@ def add_parser(sub):
                    help="study directory, shared by the MDR and FEM studies "
                         "(default: runs/<case name>-refine)")
     p.add_argument("--levels", type=_int_list, default=None, metavar="N1,N2,...",
-                   help="resolutions: mdr.elements (default 100,200,400,800,1600,3200) or "
-                        "fem.contact_nodes (default 60,125,250,500,1000)")
+                   help="resolutions: mdr.elements (default 100,200,400,800,1600,3200), "
+                        "fem.contact_nodes (default 60,125,250,500,1000) or bem.grid "
+                        "(default 32,64,128,256)")
     p.add_argument("--steps", type=_float_list, default=None, metavar="S1,S2,...",
                    help="sliding.step_hat per level (pairs with --levels; one value: all)")
     p.add_argument("--tolerance", type=float, default=0.01,

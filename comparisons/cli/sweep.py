@@ -1,4 +1,4 @@
-"""``wearcheck sweep CASE.toml --vary section.key=v1,v2,... --solver mdr|fem --out DIR``.
+"""``wearcheck sweep CASE.toml --vary section.key=v1,v2,... --solver mdr|fem|bem --out DIR``.
 
 One run per value (the cartesian product of several ``--vary``), each in its
 own run directory in DIR, on the same Dask runner as ``wearcheck refine``;
