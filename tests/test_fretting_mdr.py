@@ -145,7 +145,7 @@ def test_depth_control_converges_to_popovs_limiting_profile():
         np.testing.assert_allclose(h["stick_radius"], c0, rtol=1e-4)
         b = math.sqrt(R * d)
         annulus = (res.r > 1.02 * c0) & (res.r < b)
-        # measured 2e-8 p0 after 800 cycles: the annulus is unloaded
+        # measured 6e-7 to 9e-7 p0 after 800 cycles (N = 50 to 200): the annulus is unloaded
         assert np.max(res.p[-1][annulus]) < 1e-5 * np.max(res.p[0])
         F_inf = 2 * case.E_star * c0 * (d - c0**2 / (3 * R))
         force_err.append(abs(h["force"][-1] / F_inf - 1))
