@@ -68,3 +68,23 @@ def test_jumps_keep_the_energy_wear_identity_and_the_sliding_distance(control):
         np.testing.assert_allclose(h["wear_volume"], K / 2e9 * h["dissipated_energy"],
                                    rtol=1e-9, atol=1e-12 * h["wear_volume"][-1])
     assert res.history["s"][-1] == pytest.approx(ref.history["s"][-1], rel=1e-12)
+
+
+@pytest.mark.parametrize("control", ["force", "depth"])
+def test_under_a_tangential_force_amplitude_each_simulated_cycle_starts_at_it(control):
+    # With a tangential force amplitude Q*, every cycle of the every-cycle run
+    # starts where the last one ended, at Q* (u the output). A jump lowers the
+    # spring limits; the springs put on them carry less than Q*, so the jump
+    # reloads them to Q* by a little more travel, as the jumped cycles did.
+    # Clipped only, the stage loops after jumps started 1.2e-3 (force) and
+    # 2.7e-3 (depth control) below Q*
+    # (the next cycle then slid and wore less); the reload solves the springs'
+    # force exactly (displacement_for_force), so the start is Q* to round-off
+    case, _, _ = make(N=N, force_amplitude=0.8, cycles=CYCLES, k=K, control=control,
+                      jump_tolerance=0.1, increments=20, stage_cycles=[0, 50, 100, CYCLES])
+    res = mdr.solve(case)
+    assert res.info["jumps"] >= 10
+    Q_star = case.fretting.force_amplitude
+    start = res.fields["loop_tangential_force"][:, 0]
+    assert len(start) >= 3
+    np.testing.assert_allclose(start, Q_star, rtol=1e-9)
