@@ -522,9 +522,9 @@ def _take_permissions(tmp: Path, occupant, path: Path) -> None:
     restricted after the run, would come back with the umask's mode, readable
     by everyone. The owner is left alone: the files inside are this process's.
     The ACLs (and any other extended attributes this process may set) are
-    copied after the mode, which would otherwise rewrite the ACL's mask; a
-    default ACL applies to what is created in the directory later, as it
-    would have.
+    copied after the mode, which would otherwise rewrite the ACL's mask. A
+    default ACL comes along for what is created in the directory later; the
+    output's own files, written before, keep the process's umask.
     """
     with contextlib.suppress(OSError):      # a group we are not in: keep ours
         if occupant.st_gid != os.stat(tmp).st_gid:
