@@ -521,23 +521,27 @@ def _take_permissions(tmp: Path, occupant, path: Path) -> None:
     colleague by ``setfacl``) for the results, or an output the user
     restricted after the run, would come back with the umask's mode, readable
     by everyone. The owner is left alone: the files inside are this process's.
-    The ACLs (and any other extended attributes this process may set) are
-    copied after the mode, which would otherwise rewrite the ACL's mask. A
-    default ACL comes along for what is created in the directory later; the
-    output's own files, written before, keep the process's umask.
+    The ACLs are copied after the mode, which would otherwise rewrite the
+    ACL's mask.
     """
     with contextlib.suppress(OSError):      # a group we are not in: keep ours
         if occupant.st_gid != os.stat(tmp).st_gid:
             os.chown(tmp, -1, occupant.st_gid)
     os.chmod(tmp, stat.S_IMODE(occupant.st_mode))
+    _copy_attributes(path, tmp)
+
+
+def _copy_attributes(path: Path, tmp: Path) -> None:
+    """The extended attributes of ``path`` (its ACLs among them) onto ``tmp``,
+    those this process may set (security.* labels need privileges: ``tmp``
+    keeps its own)."""
     if not hasattr(os, "listxattr"):        # (not on macOS or Windows)
         return
     try:
         names = os.listxattr(path, follow_symlinks=False)
-    except OSError:                         # a file system without them
+    except OSError:                         # a file system without them, or gone
         return
     for name in names:
-        # (security.* labels need privileges: the new directory keeps its own)
         with contextlib.suppress(OSError):
             os.setxattr(tmp, name, os.getxattr(path, name, follow_symlinks=False),
                         follow_symlinks=False)
@@ -560,6 +564,10 @@ def atomic_directory(path, kind: str = "run"):
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
     try:
         os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; outputs are shared like any dir
+        if occupant is not None:
+            # now, so that a default ACL of the directory replaced reaches the
+            # files written into the new one, as it would have there
+            _copy_attributes(path, tmp)
         write_marker(tmp, kind, complete=False)
         yield tmp
         write_marker(tmp, kind, complete=True, files=inventory(tmp, kind))

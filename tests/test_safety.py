@@ -823,6 +823,30 @@ def test_an_empty_directory_keeps_its_acl(tmp_path):
         assert stat.S_IMODE(out.stat().st_mode) == mode == 0o750
 
 
+def test_an_empty_directory_shares_its_files_by_its_default_acl(tmp_path):
+    """``setfacl -d -m u:colleague:r results``: files made in the directory
+    give the colleague read access. The output's files were written in a new
+    directory without it and came back readable by the owner and umask only;
+    the new directory now takes the default ACL before anything is written."""
+    out = tmp_path / "results"
+    out.mkdir()
+    any_id = 0xFFFFFFFF
+    colleague = os.getuid() + 4242
+    # default: user::rwx, user:colleague:r--, group::r-x, mask::r-x, other::---
+    default = _acl((0x01, 7, any_id), (0x02, 4, colleague), (0x04, 5, any_id),
+                   (0x10, 5, any_id), (0x20, 0, any_id))
+    try:
+        os.setxattr(out, "system.posix_acl_default", default)
+    except (OSError, AttributeError):
+        pytest.skip("no default ACLs on this file system")
+    assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(out), *SMALL]) == 0
+    assert os.getxattr(out, "system.posix_acl_default") == default
+    acl = os.getxattr(out / "meta.json", "system.posix_acl_access")
+    entries = [(int.from_bytes(acl[i:i + 2], "little"), int.from_bytes(acl[i + 2:i + 4], "little"),
+                int.from_bytes(acl[i + 4:i + 8], "little")) for i in range(4, len(acl), 8)]
+    assert (0x02, 4, colleague) in entries
+
+
 def test_a_mount_point_is_refused_before_solving(tmp_path, capsys, no_solve, monkeypatch):
     """An empty mount point (a scratch disk) as --out failed with exit 4 and an
     error about a '.partial' path after the whole solve: rename(2) cannot put
