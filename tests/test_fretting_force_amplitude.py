@@ -95,3 +95,23 @@ def test_a_slip_annulus_under_one_grid_cell_is_refused(profile, override):
         assert abs(energy_error(finer)) < 0.15
     else:
         assert abs(err) < 0.5
+
+
+def test_friction_limit_refusal_states_numbers_that_show_the_excess():
+    # depth control, sphere: F0 of the unworn contact passes the case check,
+    # and the ramp's wear lowers the normal force by about 1e-6; a Q* between
+    # the worn and the unworn μF is refused during the run. The two forces the
+    # message states must show Q* > μF (with four digits both read 8.955 N)
+    base = ["loading.control=depth", "loading.depth=9.8e-7", "fretting.cycles=1"]
+    probe = cases.load(cases.shipped("fretting"), base)
+    from wearcheck.cases import reference
+    Q = 0.999999 * MU * reference.scales(probe)["F0"]
+    case = cases.load(cases.shipped("fretting"), base + [f"fretting.force_amplitude={Q!r}",
+                                                        "mdr.elements=200"])
+    with pytest.raises(cases.SolverError, match="friction limit") as err:
+        mdr.solve(case)
+    msg = str(err.value)
+    stated_Q = float(msg.split("tangential force ")[1].split()[0])
+    stated_limit = float(msg.split("μF = ")[1].split()[0])
+    assert stated_Q > stated_limit
+    assert "fretting.force_amplitude" in msg
