@@ -13,6 +13,7 @@ import pytest
 
 from test_fretting_mdr import FORCE, MU, make
 from wearcheck import cases, mdr
+from wearcheck.cases import reference
 from wearcheck.cases import reference_fretting as rf
 
 
@@ -104,7 +105,6 @@ def test_friction_limit_refusal_states_numbers_that_show_the_excess():
     # message states must show Q* > μF (with four digits both read 8.955 N)
     base = ["loading.control=depth", "loading.depth=9.8e-7", "fretting.cycles=1"]
     probe = cases.load(cases.shipped("fretting"), base)
-    from wearcheck.cases import reference
     Q = 0.999999 * MU * reference.scales(probe)["F0"]
     case = cases.load(cases.shipped("fretting"), base + [f"fretting.force_amplitude={Q!r}",
                                                         "mdr.elements=200"])
