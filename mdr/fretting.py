@@ -323,6 +323,7 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
     acc = run_path(model, st, ramp_path(model))
     counters["total_increments"] += model.increments // 4
     _check_resolution(model, acc, counters)
+    _check_slip_resolved(model, st, acc)
     add(acc)
     record(acc, ramp=True)
     path = cycle_path(model)
@@ -412,6 +413,40 @@ def _check_resolution(model, acc, counters):
             f"increment wear number (k/σ0)·μE*·|Δslip|/Δr reached {number:.4g}, past "
             f"{WEAR_NUMBER_LIMIT:g}, the stability limit of the explicit wear on this grid; "
             f"fretting.increments = {need} would do (or lower wear.k or mdr.elements)")
+
+
+def _check_slip_resolved(model, st, acc):
+    """SolverError if the slip annulus of the first quarter cycle is under one grid cell.
+
+    Any tangential load slides the edge of the unworn contact (the pressure
+    falls to zero there), but an annulus a - c narrower than the cell at the
+    contact edge holds no loaded node, or one barely loaded: the run
+    dissipates and wears almost nothing, silently. Energy of the first cycle
+    against Mindlin–Deresiewicz, sphere and paraboloid, N = 200, Q* = 0.002-0.2
+    μF: -1.0 (to 5e-4) for 0.09-0.86 cells, -0.31 at 1.3, -0.24 at 2.2, -0.10
+    at 3.5, -0.066 at 5.3, -0.034 at 9.2 cells (docs/fretting.md, §2). The
+    grid's own a and c (sub-grid crossings, c to 1e-5 a) measure the annulus.
+    """
+    m = st.normal["m"]
+    if m < 0:
+        return
+    a = st.normal["contact_radius"]
+    c = stick_radius(model, st, acc, ramp=True)
+    cell = float(model.h[m])
+    if a - c >= cell:
+        return
+    N = len(model.x) - 1
+    # the cell at the edge scales as 1/N (t = r² uniform); with 4 cells in the
+    # annulus the first cycle's energy was 10-12 % low (Q* = 0.01 μF, N = 1900;
+    # u0 = 0.003 u*, N = 4200)
+    need = 100 * math.ceil(N * 4.0 * cell / max(a - c, 1e-300) / 100)
+    amp = ("fretting.amplitude" if model.amplitude is not None
+           else "fretting.force_amplitude")
+    raise SolverError(
+        f"mdr.elements = {N} does not resolve the slip annulus of {amp}: it is "
+        f"{a - c:.3g} m wide (a - c, a = {a:.4g} m), {(a - c) / cell:.2g} of the grid cell "
+        f"at the contact edge, so the run would dissipate and wear almost nothing; "
+        f"mdr.elements = {need} would put 4 cells in it (or raise {amp})")
 
 
 def _check_monotone(model, hist, normal, cycle):

@@ -57,10 +57,13 @@ def displacement_for_force(v: np.ndarray, L: np.ndarray, target: float, G_star: 
     # the largest force the springs can carry in this direction
     Qmax = G_star * (weights @ (L if up else -L))
     if (up and target >= Qmax * (1 - 1e-12)) or (not up and target <= Qmax * (1 - 1e-12)):
+        # the limit falls under wear (depth control) to just below Q*: four digits
+        # read "8.955 N is beyond μF = 8.955 N", so the excess is stated
         raise SolverError(
-            f"tangential force {target:.4g} N is beyond the friction limit μF = {abs(Qmax):.4g} N "
-            "(gross slip under force control has no equilibrium); lower "
-            "fretting.force_amplitude")
+            f"tangential force {abs(target):.7g} N is beyond the friction limit μF = "
+            f"{abs(Qmax):.7g} N of the current normal load (by "
+            f"{abs(target) / abs(Qmax) - 1:.2g} relative; gross slip under force control "
+            "has no equilibrium); lower fretting.force_amplitude")
     sgn = 1.0 if up else -1.0
     # distances to saturation along the direction of loading, sorted
     b = sgn * (sgn * L - v)

@@ -141,7 +141,7 @@ def write(directory, case, result) -> list[Path]:
     R, fmt = report, report.fmt
     fr = case.fretting
     load = (f"amplitude u0 = {fr.amplitude:g} m" if fr.amplitude is not None
-            else f"force amplitude Q0 = {fr.force_amplitude:g} N")
+            else f"force amplitude Q* = {fr.force_amplitude:g} N")
     blocks = [R.heading("Fretting run"),
               R.para(f"Case file: {case.source}. {case.indenter.profile}, "
                      f"{case.loading.control} control, {load}, {fr.cycles:g} cycles "
