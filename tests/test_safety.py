@@ -797,6 +797,15 @@ def _acl(*entries):
     return blob
 
 
+def _results_acl(colleague_permissions):
+    """A colleague (a uid that is not ours) and the ACL user::rwx,
+    user:colleague:<permissions>, group::r-x, mask::r-x, other::---."""
+    any_id = 0xFFFFFFFF
+    colleague = os.getuid() + 4242
+    return colleague, _acl((0x01, 7, any_id), (0x02, colleague_permissions, colleague),
+                           (0x04, 5, any_id), (0x10, 5, any_id), (0x20, 0, any_id))
+
+
 def test_an_empty_directory_keeps_its_acl(tmp_path):
     """``setfacl -m u:colleague:rx results`` then ``--out results``: the output
     replaced the directory and the colleague's entry was gone (the last
@@ -804,11 +813,7 @@ def test_an_empty_directory_keeps_its_acl(tmp_path):
     own extended attributes now come along, at the first run and a re-run."""
     out = tmp_path / "results"
     out.mkdir()
-    any_id = 0xFFFFFFFF
-    colleague = os.getuid() + 4242
-    # user::rwx, user:colleague:r-x, group::r-x, mask::r-x, other::---
-    acl = _acl((0x01, 7, any_id), (0x02, 5, colleague), (0x04, 5, any_id),
-               (0x10, 5, any_id), (0x20, 0, any_id))
+    _, acl = _results_acl(5)              # the colleague may read and enter
     try:
         os.setxattr(out, "system.posix_acl_access", acl)
         os.setxattr(out, "user.project", b"rig-7")
@@ -830,11 +835,7 @@ def test_an_empty_directory_shares_its_files_by_its_default_acl(tmp_path):
     the new directory now takes the default ACL before anything is written."""
     out = tmp_path / "results"
     out.mkdir()
-    any_id = 0xFFFFFFFF
-    colleague = os.getuid() + 4242
-    # default: user::rwx, user:colleague:r--, group::r-x, mask::r-x, other::---
-    default = _acl((0x01, 7, any_id), (0x02, 4, colleague), (0x04, 5, any_id),
-                   (0x10, 5, any_id), (0x20, 0, any_id))
+    colleague, default = _results_acl(4)  # the colleague may read what is made here
     try:
         os.setxattr(out, "system.posix_acl_default", default)
     except (OSError, AttributeError):
