@@ -39,18 +39,31 @@ def grid(elements: int, length: float) -> np.ndarray:
 _SPECTRA: dict = {}
 
 
-def _spectrum(kernel: np.ndarray, nfft: int, key) -> np.ndarray:
-    """rFFT of kernel[:nfft//2], cached per (kernel, size): kernels are fixed per grid.
+def _real(x) -> np.ndarray:
+    """x as a real array: float32 kept (the low-precision Krylov iterations of
+    the implicit step, mdr/linalg.py), anything else as float64."""
+    x = np.asarray(x)
+    return x if x.dtype == np.float32 else np.asarray(x, dtype=float)
+
+
+def _spectrum(kernel: np.ndarray, nfft: int, key, dtype=np.float64) -> np.ndarray:
+    """rFFT of kernel[:nfft//2], cached per (kernel, size, precision): kernels are fixed per grid.
 
     With len(x) <= nfft/2, a kernel truncated to nfft/2 terms gives the exact
     leading outputs without wrap-around, so one spectrum serves every length.
+    A float32 spectrum is the float64 one rounded (no float32 transform's
+    error in the kernel).
     """
-    k = (key, nfft)
+    k = (key, nfft, np.dtype(dtype).char)
     spec = _SPECTRA.get(k)
     if spec is None:
-        if len(_SPECTRA) > 32:
+        if len(_SPECTRA) > 48:
             _SPECTRA.clear()
-        spec = _fft.rfft(kernel[:nfft // 2], nfft)  # zero-padded if shorter
+        spec = _SPECTRA.get((key, nfft, "d"))
+        if spec is None:
+            spec = _fft.rfft(kernel[:nfft // 2], nfft)  # zero-padded if shorter
+        if dtype == np.float32:
+            spec = spec.astype(np.complex64)
         _SPECTRA[k] = spec
     return spec
 
@@ -61,13 +74,13 @@ def lower(kernel: np.ndarray, x: np.ndarray, key=None) -> np.ndarray:
     if n == 0:
         return x.copy()
     if n <= 64:  # a direct sum beats the FFT's overhead on tiny vectors
-        return np.convolve(kernel[:n], x)[:n]
+        return np.convolve(kernel[:n].astype(x.dtype, copy=False), x)[:n]
     nfft = _fft.next_fast_len(2 * n, real=True)
     if key is None:
-        spec = _fft.rfft(kernel[:n], nfft)
+        spec = _fft.rfft(kernel[:n].astype(x.dtype, copy=False), nfft)
     else:
         # any truncation between n and nfft/2 terms gives the same leading outputs
-        spec = _spectrum(kernel, nfft, (key, len(kernel)))
+        spec = _spectrum(kernel, nfft, (key, len(kernel)), x.dtype)
     return _fft.irfft(spec * _fft.rfft(x, nfft), nfft)[:n]
 
 
@@ -156,12 +169,13 @@ def _force_weights(n: int) -> np.ndarray:
     return w
 
 
-@lru_cache(maxsize=4)
-def _node_roots(n: int) -> tuple[np.ndarray, np.ndarray]:
+@lru_cache(maxsize=8)
+def _node_roots(n: int, dtype=np.float64) -> tuple[np.ndarray, np.ndarray]:
     """2 sqrt(i) and 1/(2 sqrt(i)), i = 1..n-1 (computed per call, they cost as much
-    as a small transform)."""
+    as a small transform); float32 ones for float32 vectors (no upcast)."""
     r = 2.0 * np.sqrt(np.arange(1, n, dtype=float))
     inv = 1.0 / r
+    r, inv = r.astype(dtype), inv.astype(dtype)
     r.flags.writeable = inv.flags.writeable = False
     return r, inv
 
@@ -171,9 +185,9 @@ def _two_sqrt(n: int) -> np.ndarray:
     return _node_roots(1 << max(int(n - 1).bit_length(), 6))[0][:n - 1]
 
 
-def _half_rsqrt(n: int) -> np.ndarray:
+def _half_rsqrt(n: int, dtype=np.float64) -> np.ndarray:
     """1/(2 sqrt(i)) for i = 1..n-1."""
-    return _node_roots(1 << max(int(n - 1).bit_length(), 6))[1][:n - 1]
+    return _node_roots(1 << max(int(n - 1).bit_length(), 6), np.dtype(dtype).type)[1][:n - 1]
 
 
 def _kernel(fn, n: int) -> np.ndarray:
@@ -202,13 +216,14 @@ def from_1d_exact(g: np.ndarray) -> np.ndarray:
     """The exact inverse of :func:`to_1d` (a discrete Eq. 3).
 
     Triangular, so the inverse on nodes 0..m needs g on 0..m only: used by
-    the implicit wear step, where it must invert to_1d to round-off.
+    the implicit wear step, where it must invert to_1d to round-off. A
+    float32 g is transformed in float32 (the implicit step's inner solves).
     """
-    g = np.asarray(g, dtype=float)
+    g = _real(g)
     n = len(g)
-    f = np.full(n, g[0])
+    f = np.full(n, g[0], dtype=g.dtype)
     if n > 1:
-        s = (g[1:] - g[0]) * _half_rsqrt(n)
+        s = (g[1:] - g[0]) * _half_rsqrt(n, g.dtype)
         # the cumulative sum of the increments, folded into the kernel
         f[1:] += lower(_kernel(abel_kernel_inverse_sum, n - 1), s, key="B")
     return f
@@ -265,9 +280,10 @@ def line_load(p: np.ndarray, dt: float) -> np.ndarray:
     """Inverse of :func:`pressure` for a contact ending at the node after the last.
 
     Given p on nodes 0..m, returns q on 0..m with q_{m+1} = 0 (upper
-    triangular, so the contact set's block is inverted on its own).
+    triangular, so the contact set's block is inverted on its own). A
+    float32 p is transformed in float32.
     """
-    p = np.asarray(p, dtype=float)
+    p = _real(p)
     # q_i = -Σ_{k>=i} Δq_k, the sum folded into the kernel
     return upper(_kernel(abel_kernel_inverse_sum, len(p)), p, key="B") * (0.5 * math.pi * math.sqrt(dt))
 

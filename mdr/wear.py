@@ -134,6 +134,12 @@ EDGE_TOL = 1e-9
 #: with loose passes at 1e-5; 5228, 1396, 7.3 s at 1e-7; 5634, 887, 6.9 s with
 #: every pass at this tolerance
 ACCURATE_RTOL = 1e-9
+#: precision of the Krylov iterations of the matrix-free path (N > DENSE_MAX):
+#: float32 inside an iterative refinement with float64 residuals
+#: (linalg.gmres's ``low``; the answer keeps the float64 tolerance), or
+#: float64 throughout. float32 FFT convolutions take 0.4-0.6 of the time of
+#: float64 ones at 20000-80000 points (docs/mixed-precision.md)
+KRYLOV_PRECISION = "float32"
 #: a nested LU too small for a contact set grows to at least this factor
 NESTED_GROWTH = 1.1
 #: nodes of the coarse grid that preconditions GMRES on finer grids
@@ -308,8 +314,25 @@ class ImplicitSystem:
 
             def precond(v):
                 return self._twolevel(v, s0)
+            if KRYLOV_PRECISION == "float32":
+                return linalg.gmres(lambda v: self.matvec(v, sigma), precond, r, x0=x0,
+                                    rtol=rtol, stats=stats, low=self._low(sigma, s0))
         return linalg.gmres(lambda v: self.matvec(v, sigma), precond, r, x0=x0,
                             rtol=rtol, stats=stats)
+
+    def _low(self, sigma, s0):
+        """The operator and preconditioner in float32 (products, transforms and
+        their cached kernel spectra; the coarse solve stays float64, it is small)."""
+        sigma32 = np.float32(sigma) if np.ndim(sigma) == 0 else np.asarray(sigma, np.float32)
+        scale = np.float32(1.0 / self.E)
+
+        def matvec32(v):
+            return transforms.from_1d_exact(transforms.line_load(v, self.dt)) * scale + \
+                sigma32 * v
+
+        def precond32(v):
+            return self._twolevel(v, s0).astype(np.float32)
+        return matvec32, precond32
 
 
 def implicit_step(model: Model, state: State, h: float, m_guess: int | None = None,
