@@ -62,6 +62,9 @@ SHARE_MOVE = 4
 #: decided by the solver's noise (loose passes at 1e-5 cost 2.4 times the
 #: contact iterations at N = 25600)
 ADAPTIVE_SOLVE_SHARE = 1e-3
+#: the matrix-free solves' GMRES iterations done in float32 (of gmres_iterations)
+#: and their solves finished by float64 GMRES (mdr/linalg.py, iterative refinement)
+_FLOAT32_COUNTERS = ("gmres_float32_iterations", "gmres_float64_fallbacks")
 ADAPTIVE_SOLVE_RTOL_MAX = 1e-7
 #: which solution of a doubled step the adaptive scheme keeps (docs/time-stepping.md)
 ADAPTIVE_ACCEPT = "deferred"
@@ -256,6 +259,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
     stage_s = rec.stage_s
     counters = {"steps": 0, "gmres_iterations": 0, "contact_iterations": 0,
                 "domain_growths": 0}
+    counters.update({k: 0 for k in _FLOAT32_COUNTERS})
     N = len(model.x) - 1
     adaptive = scheme == "adaptive"
     systems: dict = {}
@@ -421,7 +425,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
                 edges.update(state.m, guess, hn, h_last, full.m, half.m, two.m)
                 err = error_of(two, full)
                 for st in (full, half, two):
-                    for k in ("gmres_iterations", "contact_iterations"):
+                    for k in ("gmres_iterations", "contact_iterations") + _FLOAT32_COUNTERS:
                         counters[k] += st.stats.get(k, 0)
                 if err > tolerance and hn > 1e-12 * max(s, hn):
                     counters["rejected_steps"] += 1
@@ -455,7 +459,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
                 new = implicit(state, hn, previous, exact=hc == h_sys, guess=guess)
                 if scheme == "bdf2":
                     previous = (state.f, hn)
-                for k in ("gmres_iterations", "contact_iterations"):
+                for k in ("gmres_iterations", "contact_iterations") + _FLOAT32_COUNTERS:
                     counters[k] += new.stats.get(k, 0)
         except contact.DomainOutgrown:
             if profile is None:

@@ -384,8 +384,8 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
             slope = wear_speed_slope(model, np.maximum(p_k, NEWTON_FLOOR * np.max(p_k)))
             shift = hc * S * (wear_speed(model, p_k) - model.wear_rate * slope * p_k)
             new = _implicit_solve(model, state, base + shift, hc, S * slope, system, m, p_k)
-            for k in total:
-                total[k] += new.stats[k]
+            for k, v in new.stats.items():
+                total[k] = total.get(k, 0) + v
             # converged on the nodes both iterates hold in contact: the outermost
             # node may toggle in and out (no nodal contact set satisfies the
             # conditions exactly there, as for the marginal node of the linear step)
