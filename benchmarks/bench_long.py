@@ -1,6 +1,7 @@
 """Long runs and the adaptive scheme (issue 11). Prints tables.
 
     python benchmarks/bench_long.py [--quick] [--big 25600,102400] [--baseline PYTHON]
+                                    [--only 1,1b,2,3,4]
 
 1. Paper case, MDR N = 800: the adaptive scheme at several tolerances and
    with each way of accepting a doubled step (deferred Richardson correction,
@@ -14,7 +15,10 @@
    interpreter whose environment holds another checkout) if given.
 2. Paper case, MDR at large N (default 25600 and 102400), adaptive at the
    default tolerance, in a fresh process: solve time, contact and GMRES
-   iterations, peak RSS (and the baseline's, if given).
+   iterations (of them float32), peak RSS, for this checkout with float32
+   Krylov iterations (the default) and with float64 ones, and the baseline's
+   if given, alternated twice; then the F/F0 and central-wear histories of
+   each pair over the steps they take alike.
 3. Paper case, FEM (251 nodes): adaptive at 1e-3 and 1e-4 against bdf2 at
    Δŝ = 0.0025: wall time of fem.solve, steps, error.
 4. cases/ball_on_flat.toml: MDR and FEM solve/wall time, steps, and what an
@@ -117,15 +121,22 @@ def table_paper_mdr(tols, quick=False):
                   f"{max_peak(res.r, res.p, res.stage_s, res.history):.3g} |")
 
 
-def child_big(N, python=sys.executable):
+def child_big(N, python=sys.executable, precision=None):
+    """The paper case at N in a fresh process; ``precision`` sets
+    mdr.wear.KRYLOV_PRECISION there (None: the checkout's default)."""
     code = ("import json, resource, sys; from wearcheck import cases, mdr; "
+            + (f"from wearcheck.mdr import wear; wear.KRYLOV_PRECISION = {precision!r}; "
+               if precision else "") +
             f"c = cases.load(cases.shipped('paper'), ['mdr.elements={N}', 'stages.s_hat=[0.0]']); "
-            "r = mdr.solve(c); "
+            "r = mdr.solve(c); h = r.history; "
             "print(json.dumps(dict(solve=r.solve_seconds, steps=r.info['steps'], "
             "rss=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "
             "gmres=r.info['gmres_iterations'], contact=r.info['contact_iterations'], "
+            "f32=r.info.get('gmres_float32_iterations'), "
+            "fallbacks=r.info.get('gmres_float64_fallbacks'), "
             "F=r.history['force'][-1] / r.history['force'][0], "
-            "s_hat=r.history['s_hat'][-1])))")
+            "s_hat=r.history['s_hat'][-1], s=h['s'].tolist(), force=h['force'].tolist(), "
+            "wear_center=h['wear_center'].tolist())))")
     out = subprocess.run([python, "-c", code], capture_output=True, text=True,
                          timeout=3600, cwd="/")
     if out.returncode:
@@ -133,24 +144,63 @@ def child_big(N, python=sys.executable):
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def table_big(Ns, baseline=None):
+def agreement(a, b):
+    """max |ΔF/F0| and max |Δw_center| / max w_center over the steps two runs take alike."""
+    k = 0
+    while k < min(len(a["s"]), len(b["s"])) and a["s"][k] == b["s"][k]:
+        k += 1
+    Fa, Fb = np.asarray(a["force"][:k]), np.asarray(b["force"][:k])
+    wa, wb = np.asarray(a["wear_center"][:k]), np.asarray(b["wear_center"][:k])
+    return k, float(np.max(np.abs(Fa - Fb)) / Fa[0]), \
+        float(np.max(np.abs(wa - wb)) / np.max(np.abs(wa)))
+
+
+def table_big(Ns, baseline=None, rounds=2):
     print("\n## 2. Paper case, MDR at large N, adaptive (tolerance 1e-4), fresh process\n")
     # (the run ends at the first step below 1 % of F0: F/F0 there depends on
     # where the steps fall, so the ŝ it ends at is shown beside it)
-    print("| checkout | N | solve s | steps | contact iterations | GMRES iterations | "
-          "peak RSS MB | F/F0 at the end | ŝ at the end |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("this: float32 Krylov iterations in float64 iterative refinement (the default); "
+          "this float64: mdr.wear.KRYLOV_PRECISION = 'float64'. Alternated "
+          f"{rounds} times in fresh processes; the machine was shared.\n")
+    print("| checkout | N | round | solve s | steps | contact iterations | GMRES iterations "
+          "(float32) | fallbacks | peak RSS MB | F/F0 at the end | ŝ at the end |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    runs = {}
     for N in Ns:
-        for name, python in (("this", sys.executable), ("baseline", baseline)):
-            if python is None:
-                continue
-            r = child_big(N, python)
-            if "error" in r:
-                print(f"| {name} | {N} | failed: {r['error']} |")
-                continue
-            print(f"| {name} | {N} | {r['solve']:.2f} | {r['steps']} | {r.get('contact', '—')} | "
-                  f"{r['gmres']} | {r['rss']:.0f} | {r['F']:.7f} | "
-                  f"{r.get('s_hat', float('nan')):.5f} |", flush=True)
+        for k in range(rounds):
+            for name, python, precision in (("this", sys.executable, None),
+                                            ("this float64", sys.executable, "float64"),
+                                            ("baseline", baseline, None)):
+                if python is None:
+                    continue
+                r = child_big(N, python, precision)
+                if "error" in r:
+                    print(f"| {name} | {N} | {k + 1} | failed: {r['error']} |")
+                    continue
+                runs.setdefault((name, N), []).append(r)
+                print(f"| {name} | {N} | {k + 1} | {r['solve']:.2f} | {r['steps']} | "
+                      f"{r.get('contact', '—')} | {r['gmres']} ({r.get('f32') or 0}) | "
+                      f"{r.get('fallbacks') or 0} | {r['rss']:.0f} | {r['F']:.7f} | "
+                      f"{r.get('s_hat', float('nan')):.5f} |", flush=True)
+    print("\n| N | checkout | best solve s | against | best solve s | gain |")
+    print("|---|---|---|---|---|---|")
+    for N in Ns:
+        for name, other in (("this", "this float64"), ("this", "baseline")):
+            if (name, N) in runs and (other, N) in runs:
+                a = min(r["solve"] for r in runs[(name, N)])
+                b = min(r["solve"] for r in runs[(other, N)])
+                print(f"| {N} | {name} | {a:.2f} | {other} | {b:.2f} | {1 - a / b:+.1%} |")
+    print("\nAccuracy over the steps both runs take alike (same s): max |ΔF/F0|, "
+          "max |Δw_center| / max w_center\n")
+    print("| N | runs | steps alike / steps | max abs(ΔF/F0) | max abs(Δw_center)/max w_center |")
+    print("|---|---|---|---|---|")
+    for N in Ns:
+        for name, other in (("this", "baseline"), ("this float64", "baseline"),
+                            ("this", "this float64")):
+            if (name, N) in runs and (other, N) in runs:
+                a, b = runs[(name, N)][0], runs[(other, N)][0]
+                k, dF, dw = agreement(a, b)
+                print(f"| {N} | {name} vs {other} | {k} / {len(b['s'])} | {dF:.1e} | {dw:.1e} |")
 
 
 def child_speed(python, rounds=5):
@@ -247,21 +297,27 @@ def main():
     ap.add_argument("--quick", action="store_true", help="fewer rows, no large N")
     ap.add_argument("--big", default="25600,102400",
                     help="comma-separated N of table 2 (0: skip)")
+    ap.add_argument("--only", default="1,1b,2,3,4",
+                    help="comma-separated tables to print (default all)")
     ap.add_argument("--baseline", metavar="PYTHON",
                     help="an interpreter with another wearcheck checkout, timed alternately "
                          "with this one (tables 1b and 2)")
     args = ap.parse_args()
     print(f"# bench_long ({time.strftime('%Y-%m-%d %H:%M')}, load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores: a shared machine)")
-    table_paper_mdr((1e-2, 1e-3, 1e-4) if args.quick else (3e-2, 1e-2, 1e-3, 1e-4, 1e-5),
-                    args.quick)
-    table_speed(args.baseline, alternations=2 if args.quick else 6)
+    only = set(args.only.split(","))
+    if "1" in only:
+        table_paper_mdr((1e-2, 1e-3, 1e-4) if args.quick else (3e-2, 1e-2, 1e-3, 1e-4, 1e-5),
+                        args.quick)
+    if "1b" in only:
+        table_speed(args.baseline, alternations=2 if args.quick else 6)
     Ns = [int(n) for n in str(args.big).split(",") if int(n) > 0]
-    if Ns and not args.quick:
+    if Ns and not args.quick and "2" in only:
         table_big(Ns, args.baseline)
-    table_fem()
-    table_ball()
-
+    if "3" in only:
+        table_fem()
+    if "4" in only:
+        table_ball()
 
 if __name__ == "__main__":
     main()
