@@ -55,7 +55,7 @@ def _spectrum(kernel: np.ndarray, nfft: int, key) -> np.ndarray:
     k = (key, nfft)
     spec = _SPECTRA.get(k)
     if spec is None:
-        if len(_SPECTRA) > 48:
+        if len(_SPECTRA) > 32:
             _SPECTRA.clear()
         spec = _fft.rfft(kernel[:nfft // 2], nfft)  # zero-padded if shorter
         _SPECTRA[k] = spec
@@ -75,7 +75,7 @@ def _half_factors(kernel: np.ndarray, m: int, key) -> tuple[np.ndarray, np.ndarr
     k = (key, m, "half")
     out = _SPECTRA.get(k)
     if out is None:
-        if len(_SPECTRA) > 48:
+        if len(_SPECTRA) > 32:
             _SPECTRA.clear()
         S = _fft.rfft(kernel[:m], 2 * m)             # m + 1 terms
         W = np.exp(-1j * np.pi * np.arange(m + 1) / m)
