@@ -116,12 +116,14 @@ def test_the_inner_residual_is_trusted_within_its_bound(monkeypatch):
     # the last float32 pass is not re-checked in float64: its true residual is
     # the Arnoldi one plus γ eps32 |r| with γ <= INNER_ERROR_BOUND (168). Audit
     # every refined solve of a small adaptive and fixed-step run on the
-    # matrix-free path: each meets its tolerance in float64 and keeps γ in bound
+    # matrix-free path (and one with the tangential correction: σ per node):
+    # each meets its tolerance in float64 and keeps γ in bound
     monkeypatch.setattr(wear, "DENSE_MAX", 64)
     monkeypatch.setattr(wear, "COARSE_NODES", 48)
     eps32 = float(np.finfo(np.float32).eps)
     for kw, rtol in ((dict(scheme="adaptive", tolerance=1e-4), 1e-7),
-                     (dict(step_hat=0.15), wear.ACCURATE_RTOL)):
+                     (dict(step_hat=0.15), wear.ACCURATE_RTOL),
+                     (dict(step_hat=0.15, tangential=True), wear.ACCURATE_RTOL)):
         audit = []
         monkeypatch.setattr(linalg, "REFINE_AUDIT", audit)
         res = mdr.solve(make(N=300, s_hat=2.0, control="force", stages=(0.0, 1.0), **kw))
