@@ -189,7 +189,11 @@ class ImplicitSystem:
             # factorise only the contact sets the run is likely to need; grow on demand
             self._factor(N + 1 if nodes is None else nodes)
         else:
-            self.A1 = transforms.compliance_matrix(COARSE_NODES, 1.0, self.E)
+            # shared by every system: adaptive runs on fine grids build two a step
+            key = ("coarse", COARSE_NODES)
+            if key not in _UNIT_COMPLIANCE:
+                _UNIT_COMPLIANCE[key] = transforms.compliance_matrix(COARSE_NODES, 1.0, 1.0)
+            self.A1 = _UNIT_COMPLIANCE[key] / self.E
             self._coarse = (None, None)
 
     def _factor(self, n: int) -> None:
