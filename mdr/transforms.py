@@ -55,6 +55,45 @@ def _spectrum(kernel: np.ndarray, nfft: int, key) -> np.ndarray:
     return spec
 
 
+def _pocketfft():
+    """scipy's own pocketfft entry points (r2c, c2r), or None.
+
+    scipy.fft's wrappers check and pad their arguments in Python: 35 µs of a
+    50-µs convolution of 800 points, against 16 µs calling the transforms
+    directly (most of an implicit step's to_1d at N = 800). A private module,
+    so it is used only when it reproduces scipy.fft on a test convolution;
+    otherwise scipy.fft serves (both paths are tested).
+    """
+    try:
+        from scipy.fft._pocketfft import pypocketfft as pp
+        rng = np.random.default_rng(0)
+        a, b = rng.random(37), rng.random(37)
+        ref = _fft.irfft(_fft.rfft(a, 80) * _fft.rfft(b, 80), 80)
+        got = pp.c2r(pp.r2c(np.r_[a, np.zeros(43)], (0,), True, 0, None, 1)
+                     * _fft.rfft(b, 80), (0,), 80, False, 2, None, 1)
+        if got.shape == ref.shape and np.allclose(got, ref, rtol=0, atol=1e-12):
+            return pp.r2c, pp.c2r
+    except Exception:       # another scipy: its public interface below
+        pass
+    return None
+
+
+_POCKETFFT = _pocketfft()
+
+
+def _convolve(spec: np.ndarray, x: np.ndarray, nfft: int) -> np.ndarray:
+    """The leading len(x) outputs of irfft(spec · rfft(x, nfft))."""
+    n = len(x)
+    if _POCKETFFT is None:
+        return _fft.irfft(spec * _fft.rfft(x, nfft), nfft)[:n]
+    r2c, c2r = _POCKETFFT
+    padded = np.zeros(nfft)
+    padded[:n] = x
+    X = r2c(padded, (0,), True, 0, None, 1)
+    X *= spec
+    return c2r(X, (0,), nfft, False, 2, None, 1)[:n]
+
+
 def lower(kernel: np.ndarray, x: np.ndarray, key=None) -> np.ndarray:
     """y_i = Σ_{j<=i} kernel[i-j] x_j (lower-triangular Toeplitz), i < len(x)."""
     n = len(x)
@@ -68,7 +107,7 @@ def lower(kernel: np.ndarray, x: np.ndarray, key=None) -> np.ndarray:
     else:
         # any truncation between n and nfft/2 terms gives the same leading outputs
         spec = _spectrum(kernel, nfft, (key, len(kernel)))
-    return _fft.irfft(spec * _fft.rfft(x, nfft), nfft)[:n]
+    return _convolve(spec, np.asarray(x, dtype=float), nfft)
 
 
 def upper(kernel: np.ndarray, x: np.ndarray, key=None) -> np.ndarray:

@@ -120,3 +120,27 @@ def test_compliance_matrix_matches_operators(method):
     np.testing.assert_allclose(A[:100, :100] @ p[:100],
                                transforms.from_1d_exact(transforms.line_load(p[:100], dt)) / E,
                                rtol=1e-12, atol=1e-12 * np.max(np.abs(u)))
+
+
+@pytest.mark.parametrize("direct", [True, False])
+def test_toeplitz_products_against_the_direct_sum(direct, monkeypatch):
+    # the FFT convolutions (scipy's pocketfft called directly, or through
+    # scipy.fft where that entry point is missing) against the O(n²) sum, on
+    # sizes through the small-vector branch and odd FFT lengths; round-off
+    # of a few 1e-16 of the sum of |terms|
+    if not direct:
+        monkeypatch.setattr(transforms, "_POCKETFFT", None)
+    else:
+        assert transforms._POCKETFFT is not None   # this scipy has it
+    rng = np.random.default_rng(3)
+    kernel = transforms.abel_kernel(2048)
+    for n in (1, 64, 65, 333, 1000):
+        x = rng.standard_normal(n)
+        ref = np.array([kernel[i::-1] @ x[:i + 1] for i in range(n)])
+        scale = np.array([np.abs(kernel[i::-1]) @ np.abs(x[:i + 1]) for i in range(n)])
+        for key in (None, "c"):
+            y = transforms.lower(kernel, x, key=key)
+            assert np.all(np.abs(y - ref) <= 1e-13 * scale), n
+        up = transforms.upper(kernel, x, key="c")
+        ref_up = np.array([kernel[:n - i] @ x[i:] for i in range(n)])
+        assert np.allclose(up, ref_up, rtol=0, atol=1e-13 * np.max(np.abs(ref_up)) + 1e-300)
