@@ -72,6 +72,9 @@ SHARE_MOVE = 4
 #: contact iterations at N = 25600)
 ADAPTIVE_SOLVE_SHARE = 1e-3
 ADAPTIVE_SOLVE_RTOL_MAX = 1e-7
+#: grids finer than this check the contact beyond a window against a
+#: reference profile (wear.FarGap) instead of transforming the whole grid
+FAR_GAP_FROM = 2048
 #: which solution of a doubled step the adaptive scheme keeps (docs/time-stepping.md)
 ADAPTIVE_ACCEPT = "deferred"
 #: (Richardson's correction is carried everywhere but where it is negative on
@@ -274,6 +277,9 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
     m_prev = [state.m, state.m]
     p_prev = None     # the pressure one step back (on the current grid), for guesses
     edges = _EdgeGuess()
+    # the 1D profile beyond the contact from a reference (fine grids: there the
+    # full transform of each contact iteration cost as much as a GMRES pass)
+    far_gap = wear.FarGap() if N > FAR_GAP_FROM else None
     h_last = None
     # (a pressure exponent's Newton iteration settles to the solves' accuracy:
     # it keeps the accurate solves)
@@ -311,7 +317,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
             hc = hc * 2.0 ** round(math.log2(max(typical, 1e-12)))
             exact = True
         return wear.implicit_step(model, st, hn, m_guess=guess, system=system_for(hc, exact),
-                                  previous=previous, p_guess=p_guess)
+                                  previous=previous, p_guess=p_guess, far_gap=far_gap)
 
     h_sys = None
     if scheme in ("implicit", "bdf2"):
@@ -342,7 +348,7 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
     max_steps = ADAPTIVE_MAX_STEPS if adaptive else MAX_STEPS
 
     def grow():
-        nonlocal model, state, previous, systems, corr, p_prev
+        nonlocal model, state, previous, systems, corr, p_prev, far_gap
         if profile is None:
             raise SolverError("the contact has reached the edge of the MDR domain; raise "
                               "mdr.domain_factor")
@@ -356,6 +362,8 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
         systems = {}
         p_prev = None
         edges.reset()
+        if far_gap is not None:
+            far_gap = wear.FarGap()
         if h_sys is not None:
             system_for(h_sys)
         m_prev[:] = [state.m, state.m]
