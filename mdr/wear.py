@@ -360,27 +360,28 @@ class FarGap:
     """
 
     def __init__(self):
-        self.f = None
-        self.g = None
+        self.reference = None       # (f_ref, g_ref), replaced as one (solves may run in threads)
 
     def penetrating(self, f: np.ndarray, M: int, d: float, tol: float) -> np.ndarray | None:
         """Nodes i >= M with d - g_i > tol·d (none: an empty array), or None if undecided."""
-        if self.f is None:
+        reference = self.reference
+        if reference is None:
             return None
-        delta = f - self.f
+        f_ref, g_ref = reference
+        delta = f - f_ref
         nz = np.flatnonzero(delta)
         K = int(nz[-1]) + 1 if nz.size else 0
         if K >= M:
             return None
-        if np.any(d - self.g[M:] + far_bound(delta, K, M) > tol * d):
+        if np.any(d - g_ref[M:] + far_bound(delta, K, M) > tol * d):
             return None
         return np.zeros(0, dtype=np.int64)
 
     def full(self, f: np.ndarray) -> np.ndarray:
         """g = to_1d(f) on the whole grid, kept as the reference."""
-        self.f = f.copy()
-        self.g = transforms.to_1d(f)
-        return self.g
+        g = transforms.to_1d(f)
+        self.reference = (f.copy(), g)
+        return g
 
 
 def implicit_step(model: Model, state: State, h: float, m_guess: int | None = None,
