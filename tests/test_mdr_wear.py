@@ -401,3 +401,24 @@ def test_far_gap_leaves_a_run_unchanged(monkeypatch):
         assert a.info["contact_iterations"] == b.info["contact_iterations"]
         for key in ("force", "depth", "contact_radius", "wear_center"):
             np.testing.assert_allclose(a.history[key], b.history[key], rtol=1e-12, atol=0)
+
+
+def test_coarse_solve_through_eigenvectors_is_the_shifted_solve():
+    # the preconditioner's coarse solve for any contact set and step size,
+    # through the unit matrix's eigenvectors, against np.linalg.solve of the
+    # assembled coarse matrix (scaled by sqrt(n Δt / nc)/E*, shifted by σ)
+    from wearcheck.mdr import transforms
+    case = make(N=400)
+    model, sc = solver.build_model(case)
+    system = wear.ImplicitSystem.__new__(wear.ImplicitSystem)
+    system.dt, system.E = model.dt, model.E_star
+    system._eigen = wear.coarse_eigen(wear.COARSE_NODES)
+    nc = wear.COARSE_NODES
+    rng = np.random.default_rng(1)
+    for n, h_hat in ((3000, 2.0 ** -7), (50000, 0.25), (700, 1.0)):
+        sigma = h_hat / sc["s_hat_per_m"] * model.wear_rate
+        A = transforms.compliance_matrix(nc, n * model.dt / nc, model.E_star)
+        A[np.diag_indices(nc)] += sigma
+        rc = rng.standard_normal(nc)
+        e = system._coarse_solve(rc, n, sigma)
+        assert np.linalg.norm(A @ e - rc) <= 1e-12 * np.linalg.norm(rc)
