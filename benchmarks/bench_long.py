@@ -1,6 +1,6 @@
 """Long runs and the adaptive scheme (issue 11). Prints tables.
 
-    python benchmarks/bench_long.py [--quick] [--big 25600,102400] [--baseline PYTHON]
+    python benchmarks/bench_long.py [--quick] [--big 25600,102400] [--baseline PYTHON] [--only 1b,2]
 
 1. Paper case, MDR N = 800: the adaptive scheme at several tolerances and
    with each way of accepting a doubled step (deferred Richardson correction,
@@ -117,15 +117,19 @@ def table_paper_mdr(tols, quick=False):
                   f"{max_peak(res.r, res.p, res.stage_s, res.history):.3g} |")
 
 
-def child_big(N, python=sys.executable):
+def child_big(N, python=sys.executable, fft=None):
+    """The paper case at N in a fresh process; ``fft`` forces the FFT library
+    of the MDR's products (mdr.transforms.FFT), else the checkout's default."""
+    force = f"transforms.FFT = {fft!r}; " if fft else ""
     code = ("import json, resource, sys; from wearcheck import cases, mdr; "
+            "from wearcheck.mdr import transforms; " + force +
             f"c = cases.load(cases.shipped('paper'), ['mdr.elements={N}', 'stages.s_hat=[0.0]']); "
             "r = mdr.solve(c); "
             "print(json.dumps(dict(solve=r.solve_seconds, steps=r.info['steps'], "
             "rss=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "
             "gmres=r.info['gmres_iterations'], contact=r.info['contact_iterations'], "
             "F=r.history['force'][-1] / r.history['force'][0], "
-            "s_hat=r.history['s_hat'][-1])))")
+            "s_hat=r.history['s_hat'][-1], fft=getattr(transforms, 'FFT', 'pocketfft'))))")
     out = subprocess.run([python, "-c", code], capture_output=True, text=True,
                          timeout=3600, cwd="/")
     if out.returncode:
@@ -136,20 +140,27 @@ def child_big(N, python=sys.executable):
 def table_big(Ns, baseline=None):
     print("\n## 2. Paper case, MDR at large N, adaptive (tolerance 1e-4), fresh process\n")
     # (the run ends at the first step below 1 % of F0: F/F0 there depends on
-    # where the steps fall, so the ŝ it ends at is shown beside it)
-    print("| checkout | N | solve s | steps | contact iterations | GMRES iterations | "
+    # where the steps fall, so the ŝ it ends at is shown beside it). With
+    # pyFFTW installed (the fftw extra) this checkout runs with FFTW and,
+    # for comparison, with scipy's pocketfft
+    from wearcheck.mdr import transforms
+    runs = [("this", sys.executable, None)]
+    if transforms.FFT == "fftw":
+        runs.append(("this", sys.executable, "pocketfft"))
+    runs.append(("baseline", baseline, None))
+    print("| checkout | FFT | N | solve s | steps | contact iterations | GMRES iterations | "
           "peak RSS MB | F/F0 at the end | ŝ at the end |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for N in Ns:
-        for name, python in (("this", sys.executable), ("baseline", baseline)):
+        for name, python, fft in runs:
             if python is None:
                 continue
-            r = child_big(N, python)
+            r = child_big(N, python, fft)
             if "error" in r:
-                print(f"| {name} | {N} | failed: {r['error']} |")
+                print(f"| {name} | {fft or ''} | {N} | failed: {r['error']} |")
                 continue
-            print(f"| {name} | {N} | {r['solve']:.2f} | {r['steps']} | {r.get('contact', '—')} | "
-                  f"{r['gmres']} | {r['rss']:.0f} | {r['F']:.7f} | "
+            print(f"| {name} | {r['fft']} | {N} | {r['solve']:.2f} | {r['steps']} | "
+                  f"{r.get('contact', '—')} | {r['gmres']} | {r['rss']:.0f} | {r['F']:.7f} | "
                   f"{r.get('s_hat', float('nan')):.5f} |", flush=True)
 
 
@@ -250,17 +261,24 @@ def main():
     ap.add_argument("--baseline", metavar="PYTHON",
                     help="an interpreter with another wearcheck checkout, timed alternately "
                          "with this one (tables 1b and 2)")
+    ap.add_argument("--only", metavar="TABLES",
+                    help="comma-separated tables to run (1, 1b, 2, 3, 4); default all")
     args = ap.parse_args()
+    only = set(args.only.split(",")) if args.only else {"1", "1b", "2", "3", "4"}
     print(f"# bench_long ({time.strftime('%Y-%m-%d %H:%M')}, load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores: a shared machine)")
-    table_paper_mdr((1e-2, 1e-3, 1e-4) if args.quick else (3e-2, 1e-2, 1e-3, 1e-4, 1e-5),
-                    args.quick)
-    table_speed(args.baseline, alternations=2 if args.quick else 6)
+    if "1" in only:
+        table_paper_mdr((1e-2, 1e-3, 1e-4) if args.quick else (3e-2, 1e-2, 1e-3, 1e-4, 1e-5),
+                        args.quick)
+    if "1b" in only:
+        table_speed(args.baseline, alternations=2 if args.quick else 6)
     Ns = [int(n) for n in str(args.big).split(",") if int(n) > 0]
-    if Ns and not args.quick:
+    if Ns and not args.quick and "2" in only:
         table_big(Ns, args.baseline)
-    table_fem()
-    table_ball()
+    if "3" in only:
+        table_fem()
+    if "4" in only:
+        table_ball()
 
 
 if __name__ == "__main__":
