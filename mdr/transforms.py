@@ -425,15 +425,21 @@ def compliance_matrix(n: int, dt: float, E_star: float, method: str | None = Non
     from scipy.linalg import toeplitz
 
     B = np.cumsum(_kernel(abel_kernel_inverse, n)[:n])          # kernel of both triangular maps
-    Q = toeplitz(np.r_[B[0], np.zeros(n - 1)], B) * (0.5 * math.pi * math.sqrt(dt))
     if (method or ("product" if n <= DENSE_PRODUCT_MAX else "fft")) == "product":
         from scipy.linalg.blas import dtrmm
 
-        # T⁻¹ as a matrix: f_i = g_0 + Σ_{1<=j<=i} B[i-j] (g_j - g_0)/(2 sqrt j)
-        L = toeplitz(B, np.zeros(n))
-        L *= np.r_[0.0, 1.0 / (2.0 * np.sqrt(np.arange(1, n)))]
-        L[:, 0] = 1.0 - L.sum(axis=1)
-        return dtrmm(1.0 / E_star, L, Q, lower=1, overwrite_b=1)
+        # both factors built as their transposes in C order, so that BLAS
+        # gets them in Fortran order without copies (5.5-6 ms at n = 570
+        # against 10 ms through the wrapper's copies)
+        # P⁻¹ (upper Toeplitz): its transpose is lower
+        Qt = toeplitz(B, np.zeros(n)) * (0.5 * math.pi * math.sqrt(dt))
+        # T⁻¹ as a matrix: f_i = g_0 + Σ_{1<=j<=i} B[i-j] (g_j - g_0)/(2 sqrt j);
+        # its transpose holds column j of T⁻¹ in row j
+        Lt = toeplitz(np.r_[B[0], np.zeros(n - 1)], B)
+        Lt *= np.r_[0.0, 1.0 / (2.0 * np.sqrt(np.arange(1, n)))][:, None]
+        Lt[0, :] = 1.0 - Lt.sum(axis=0)
+        return dtrmm(1.0 / E_star, Lt.T, Qt.T, lower=1, overwrite_b=1)
+    Q = toeplitz(np.r_[B[0], np.zeros(n - 1)], B) * (0.5 * math.pi * math.sqrt(dt))
     # T⁻¹ = [[1, 0], [1 - L d, L D]] with L lower Toeplitz (kernel B) and
     # D = diag(d), d_i = 1/(2 sqrt i); applied to Q through one 2D FFT along
     # the rows (O(n² log n), where the dense product was O(n³))
