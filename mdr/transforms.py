@@ -128,8 +128,12 @@ def _fftw_plan(nfft: int):
         plans = _LOCAL.plans = {}
     plan = plans.pop(nfft, None)
     if plan is None:
-        import pyfftw
-
+        try:
+            import pyfftw
+        except ImportError:         # found but broken: pocketfft from now on
+            global FFT
+            FFT = "pocketfft"
+            return None
         real = pyfftw.empty_aligned(nfft, dtype="float64")
         spectrum = pyfftw.empty_aligned(nfft // 2 + 1, dtype="complex128")
         # FFTW_ESTIMATE: planning in about 10 ms (FFTW_MEASURE took 0.3-3 s a size,
@@ -154,8 +158,9 @@ def _fft_length(n: int) -> int:
 def _convolve(spec: np.ndarray, x: np.ndarray, nfft: int) -> np.ndarray:
     """The leading len(x) outputs of irfft(spec · rfft(x, nfft))."""
     n = len(x)
-    if FFT == "fftw" and nfft >= FFTW_FROM:
-        real, spectrum, forward, backward = _fftw_plan(nfft)
+    plan = _fftw_plan(nfft) if FFT == "fftw" and nfft >= FFTW_FROM else None
+    if plan is not None:
+        real, spectrum, forward, backward = plan
         real[:n] = x
         real[n:] = 0.0
         forward.execute()

@@ -190,3 +190,18 @@ def test_fftw_lengths_and_threads():
     finally:
         transforms.FFT = old
     assert len(errors) == 60 and max(errors) < 1e-13
+
+
+def test_a_broken_pyfftw_falls_back_to_pocketfft(monkeypatch):
+    # pyFFTW found at import but failing to import when first needed: the
+    # product is pocketfft's, and pocketfft serves from then on
+    import sys
+    monkeypatch.setattr(transforms, "FFT", "fftw")
+    monkeypatch.setattr(transforms, "_LOCAL", __import__("threading").local())
+    monkeypatch.setitem(sys.modules, "pyfftw", None)       # import raises ImportError
+    kernel = transforms.abel_kernel(8192)
+    x = np.random.default_rng(2).standard_normal(3000)
+    ref = np.array([kernel[i::-1] @ x[:i + 1] for i in range(len(x))])
+    y = transforms.lower(kernel, x, key="c")
+    assert np.max(np.abs(y - ref)) < 1e-13 * np.max(np.abs(ref))
+    assert transforms.FFT == "pocketfft"
