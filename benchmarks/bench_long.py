@@ -1,7 +1,6 @@
 """Long runs and the adaptive scheme (issue 11). Prints tables.
 
-    python benchmarks/bench_long.py [--quick] [--big 25600,102400] [--baseline PYTHON]
-                                    [--only 1,1b,2,3,4]
+    python benchmarks/bench_long.py [--quick] [--big 25600,102400] [--baseline PYTHON] [--only 1b,2]
 
 1. Paper case, MDR N = 800: the adaptive scheme at several tolerances and
    with each way of accepting a doubled step (deferred Richardson correction,
@@ -16,9 +15,10 @@
 2. Paper case, MDR at large N (default 25600 and 102400), adaptive at the
    default tolerance, in a fresh process: solve time, contact and GMRES
    iterations (of them float32), peak RSS, for this checkout with float32
-   Krylov iterations (the default) and with float64 ones, and the baseline's
-   if given, alternated twice; then the F/F0 and central-wear histories of
-   each pair over the steps they take alike.
+   Krylov iterations (the default) and float64 ones, with FFTW and pocketfft
+   where pyFFTW is installed, and the baseline's if given, alternated twice;
+   then the F/F0 and central-wear histories of each pair over the steps they
+   take alike.
 3. Paper case, FEM (251 nodes): adaptive at 1e-3 and 1e-4 against bdf2 at
    Δŝ = 0.0025: wall time of fem.solve, steps, error.
 4. cases/ball_on_flat.toml: MDR and FEM solve/wall time, steps, and what an
@@ -121,12 +121,14 @@ def table_paper_mdr(tols, quick=False):
                   f"{max_peak(res.r, res.p, res.stage_s, res.history):.3g} |")
 
 
-def child_big(N, python=sys.executable, precision=None):
+def child_big(N, python=sys.executable, precision=None, fft=None):
     """The paper case at N in a fresh process; ``precision`` sets
-    mdr.wear.KRYLOV_PRECISION there (None: the checkout's default)."""
+    mdr.wear.KRYLOV_PRECISION there, ``fft`` the FFT library of the MDR's
+    products (mdr.transforms.FFT); None: the checkout's defaults."""
+    force = (f"from wearcheck.mdr import wear; wear.KRYLOV_PRECISION = {precision!r}; "
+             if precision else "") + (f"transforms.FFT = {fft!r}; " if fft else "")
     code = ("import json, resource, sys; from wearcheck import cases, mdr; "
-            + (f"from wearcheck.mdr import wear; wear.KRYLOV_PRECISION = {precision!r}; "
-               if precision else "") +
+            "from wearcheck.mdr import transforms; " + force +
             f"c = cases.load(cases.shipped('paper'), ['mdr.elements={N}', 'stages.s_hat=[0.0]']); "
             "r = mdr.solve(c); h = r.history; "
             "print(json.dumps(dict(solve=r.solve_seconds, steps=r.info['steps'], "
@@ -135,7 +137,8 @@ def child_big(N, python=sys.executable, precision=None):
             "f32=r.info.get('gmres_float32_iterations'), "
             "fallbacks=r.info.get('gmres_float64_fallbacks'), "
             "F=r.history['force'][-1] / r.history['force'][0], "
-            "s_hat=r.history['s_hat'][-1], s=h['s'].tolist(), force=h['force'].tolist(), "
+            "s_hat=r.history['s_hat'][-1], fft=getattr(transforms, 'FFT', 'pocketfft'), "
+            "s=h['s'].tolist(), force=h['force'].tolist(), "
             "wear_center=h['wear_center'].tolist())))")
     out = subprocess.run([python, "-c", code], capture_output=True, text=True,
                          timeout=3600, cwd="/")
@@ -158,49 +161,68 @@ def agreement(a, b):
 def table_big(Ns, baseline=None, rounds=2):
     print("\n## 2. Paper case, MDR at large N, adaptive (tolerance 1e-4), fresh process\n")
     # (the run ends at the first step below 1 % of F0: F/F0 there depends on
-    # where the steps fall, so the ŝ it ends at is shown beside it)
-    print("this: float32 Krylov iterations in float64 iterative refinement (the default); "
-          "this float64: mdr.wear.KRYLOV_PRECISION = 'float64'. Alternated "
+    # where the steps fall, so the ŝ it ends at is shown beside it). With
+    # pyFFTW installed (the fftw extra) this checkout runs with FFTW and,
+    # for comparison, with scipy's pocketfft; each with float32 Krylov
+    # iterations (the default) and float64 ones
+    from wearcheck.mdr import transforms
+    print("Krylov float32: iterations in float32 inside float64 iterative refinement "
+          "(mdr.wear.KRYLOV_PRECISION, the default); float64: the float64 GMRES. Alternated "
           f"{rounds} times in fresh processes; the machine was shared.\n")
-    print("| checkout | N | round | solve s | steps | contact iterations | GMRES iterations "
-          "(float32) | fallbacks | peak RSS MB | F/F0 at the end | ŝ at the end |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
-    runs = {}
+    runs = [("this", sys.executable, None, None), ("this", sys.executable, "float64", None)]
+    if transforms.FFT == "fftw":
+        runs += [("this", sys.executable, None, "pocketfft"),
+                 ("this", sys.executable, "float64", "pocketfft")]
+    runs.append(("baseline", baseline, None, None))
+    print("| checkout | FFT | Krylov | N | round | solve s | steps | contact iterations | "
+          "GMRES iterations (float32) | fallbacks | peak RSS MB | F/F0 at the end | "
+          "ŝ at the end |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    done = {}
     for N in Ns:
         for k in range(rounds):
-            for name, python, precision in (("this", sys.executable, None),
-                                            ("this float64", sys.executable, "float64"),
-                                            ("baseline", baseline, None)):
+            for name, python, precision, fft in runs:
                 if python is None:
                     continue
-                r = child_big(N, python, precision)
+                r = child_big(N, python, precision, fft)
                 if "error" in r:
-                    print(f"| {name} | {N} | {k + 1} | failed: {r['error']} |")
+                    print(f"| {name} | {fft or ''} | {precision or ''} | {N} | {k + 1} | "
+                          f"failed: {r['error']} |")
                     continue
-                runs.setdefault((name, N), []).append(r)
-                print(f"| {name} | {N} | {k + 1} | {r['solve']:.2f} | {r['steps']} | "
-                      f"{r.get('contact', '—')} | {r['gmres']} ({r.get('f32') or 0}) | "
-                      f"{r.get('fallbacks') or 0} | {r['rss']:.0f} | {r['F']:.7f} | "
-                      f"{r.get('s_hat', float('nan')):.5f} |", flush=True)
-    print("\n| N | checkout | best solve s | against | best solve s | gain |")
+                kry = "—" if name == "baseline" else \
+                    ("float32" if r.get("f32") else "float64")
+                key = (name, r["fft"], kry)
+                done.setdefault((key, N), []).append(r)
+                print(f"| {name} | {r['fft']} | {kry} | {N} | {k + 1} | {r['solve']:.2f} | "
+                      f"{r['steps']} | {r.get('contact', '—')} | {r['gmres']} "
+                      f"({r.get('f32') or 0}) | {r.get('fallbacks') or 0} | {r['rss']:.0f} | "
+                      f"{r['F']:.7f} | {r.get('s_hat', float('nan')):.5f} |", flush=True)
+    keys = sorted({key for key, _ in done}, key=str)
+    print("\n| N | run | best solve s | against | best solve s | gain |")
     print("|---|---|---|---|---|---|")
+    pairs = [(a, b) for a in keys for b in keys
+             if a[0] == "this" and a[2] == "float32" and
+             (b[0] == "baseline" or (b[1] == a[1] and b[2] == "float64"))]
     for N in Ns:
-        for name, other in (("this", "this float64"), ("this", "baseline")):
-            if (name, N) in runs and (other, N) in runs:
-                a = min(r["solve"] for r in runs[(name, N)])
-                b = min(r["solve"] for r in runs[(other, N)])
-                print(f"| {N} | {name} | {a:.2f} | {other} | {b:.2f} | {1 - a / b:+.1%} |")
+        for a, b in pairs:
+            if (a, N) in done and (b, N) in done:
+                ta = min(r["solve"] for r in done[(a, N)])
+                tb = min(r["solve"] for r in done[(b, N)])
+                print(f"| {N} | {' '.join(a)} | {ta:.2f} | {' '.join(b)} | {tb:.2f} | "
+                      f"{1 - ta / tb:+.1%} |")
     print("\nAccuracy over the steps both runs take alike (same s): max |ΔF/F0|, "
           "max |Δw_center| / max w_center\n")
     print("| N | runs | steps alike / steps | max abs(ΔF/F0) | max abs(Δw_center)/max w_center |")
     print("|---|---|---|---|---|")
     for N in Ns:
-        for name, other in (("this", "baseline"), ("this float64", "baseline"),
-                            ("this", "this float64")):
-            if (name, N) in runs and (other, N) in runs:
-                a, b = runs[(name, N)][0], runs[(other, N)][0]
-                k, dF, dw = agreement(a, b)
-                print(f"| {N} | {name} vs {other} | {k} / {len(b['s'])} | {dF:.1e} | {dw:.1e} |")
+        for a, b in pairs:
+            if (a, N) in done and (b, N) in done:
+                ra, rb = done[(a, N)][0], done[(b, N)][0]
+                if "s" not in rb:
+                    continue
+                k, dF, dw = agreement(ra, rb)
+                print(f"| {N} | {' '.join(a)} vs {' '.join(b)} | {k} / {len(rb['s'])} | "
+                      f"{dF:.1e} | {dw:.1e} |")
 
 
 def child_speed(python, rounds=5):
@@ -297,15 +319,15 @@ def main():
     ap.add_argument("--quick", action="store_true", help="fewer rows, no large N")
     ap.add_argument("--big", default="25600,102400",
                     help="comma-separated N of table 2 (0: skip)")
-    ap.add_argument("--only", default="1,1b,2,3,4",
-                    help="comma-separated tables to print (default all)")
     ap.add_argument("--baseline", metavar="PYTHON",
                     help="an interpreter with another wearcheck checkout, timed alternately "
                          "with this one (tables 1b and 2)")
+    ap.add_argument("--only", metavar="TABLES",
+                    help="comma-separated tables to run (1, 1b, 2, 3, 4); default all")
     args = ap.parse_args()
+    only = set(args.only.split(",")) if args.only else {"1", "1b", "2", "3", "4"}
     print(f"# bench_long ({time.strftime('%Y-%m-%d %H:%M')}, load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores: a shared machine)")
-    only = set(args.only.split(","))
     if "1" in only:
         table_paper_mdr((1e-2, 1e-3, 1e-4) if args.quick else (3e-2, 1e-2, 1e-3, 1e-4, 1e-5),
                         args.quick)
@@ -318,6 +340,7 @@ def main():
         table_fem()
     if "4" in only:
         table_ball()
+
 
 if __name__ == "__main__":
     main()

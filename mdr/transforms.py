@@ -23,6 +23,7 @@ Paper Eq. 13::
 from __future__ import annotations
 
 import math
+import threading
 from functools import lru_cache
 
 import numpy as np
@@ -62,6 +63,132 @@ def _spectrum(kernel: np.ndarray, nfft: int, key) -> np.ndarray:
     return spec
 
 
+def _pocketfft():
+    """scipy's own pocketfft entry points (r2c, c2r), or None.
+
+    scipy.fft's wrappers check and pad their arguments in Python: 35 µs of a
+    50-µs convolution of 800 points, against 16 µs calling the transforms
+    directly (most of an implicit step's to_1d at N = 800). A private module,
+    so it is used only when it reproduces scipy.fft on a test convolution;
+    otherwise scipy.fft serves (both paths are tested).
+    """
+    try:
+        from scipy.fft._pocketfft import pypocketfft as pp
+        rng = np.random.default_rng(0)
+        a, b = rng.random(37), rng.random(37)
+        ref = _fft.irfft(_fft.rfft(a, 80) * _fft.rfft(b, 80), 80)
+        got = pp.c2r(pp.r2c(np.r_[a, np.zeros(43)], (0,), True, 0, None, 1)
+                     * _fft.rfft(b, 80), (0,), 80, False, 2, None, 1)
+        if got.shape == ref.shape and np.allclose(got, ref, rtol=0, atol=1e-12):
+            return pp.r2c, pp.c2r
+    except Exception:       # another scipy: its public interface below
+        pass
+    return None
+
+
+_POCKETFFT = _pocketfft()
+
+
+def _has_pyfftw() -> bool:
+    # (found, not imported: importing pyFFTW takes 0.17 s, most of it
+    # dask.array for its interfaces; it is imported by the first large product)
+    import importlib.util
+    return importlib.util.find_spec("pyfftw") is not None
+
+
+#: the FFT library of the larger convolutions: "fftw" (pyFFTW, installed with
+#: the ``fftw`` extra; FFTW is GPL, so it is optional) or "pocketfft" (scipy's).
+#: FFTW's real transforms (planned with FFTW_ESTIMATE) took 0.12-0.5 ms at
+#: 8·10^4-2·10^5 points where pocketfft took 0.8-1.8 ms, single-threaded;
+#: the paper case at N = 102400 took 8.5-9.0 s against 12.8-14.3 s, the same
+#: iterations and history to 6e-14 (2026-11-23)
+FFT = "fftw" if _has_pyfftw() else "pocketfft"
+#: FFT lengths below this stay with pocketfft: planning costs 1-4 ms a size, and
+#: the small products of coarse grids gain little (N = 800: 0.081 against 0.087 s
+#: warm, but 0.123 s cold)
+FFTW_FROM = 4096
+#: plans kept per thread (each holds its sizes' aligned buffers: 16 bytes a point)
+FFTW_PLANS = 8
+_LOCAL = threading.local()
+
+
+def _fftw_size(n: int) -> int:
+    """The FFT length used for at least n points: 2^k times 1, 9/8, 5/4, 3/2 or 7/4.
+
+    A coarse ladder, so that a run's changing contact sets share a few plans
+    (each costs about 10 ms to make); at most 1/8 of padding beyond the
+    next size that FFTW transforms fast.
+    """
+    if n <= 64:
+        return 64
+    k = 1 << (int(n - 1).bit_length() - 1)        # the power of 2 below n
+    for f in (1.0, 1.125, 1.25, 1.5, 1.75, 2.0):
+        if f * k >= n:
+            return int(f * k)
+    return 2 * k
+
+
+def _fftw_plan(nfft: int, single: bool = False):
+    """(real buffer, complex buffer, forward plan, backward plan) of one size, per thread.
+
+    ``single``: float32 buffers (FFTW's single precision, the implicit step's
+    inner solves).
+    """
+    plans = getattr(_LOCAL, "plans", None)
+    if plans is None:
+        plans = _LOCAL.plans = {}
+    plan = plans.pop((nfft, single), None)
+    if plan is None:
+        try:
+            import pyfftw
+        except ImportError:         # found but broken: pocketfft from now on
+            global FFT
+            FFT = "pocketfft"
+            return None
+        real = pyfftw.empty_aligned(nfft, dtype="float32" if single else "float64")
+        spectrum = pyfftw.empty_aligned(nfft // 2 + 1,
+                                        dtype="complex64" if single else "complex128")
+        # FFTW_ESTIMATE: planning in about 10 ms (FFTW_MEASURE took 0.3-3 s a size,
+        # for transforms 1.2-2x faster still)
+        forward = pyfftw.FFTW(real, spectrum, flags=("FFTW_ESTIMATE",), threads=1)
+        backward = pyfftw.FFTW(spectrum, real, direction="FFTW_BACKWARD",
+                               flags=("FFTW_ESTIMATE", "FFTW_DESTROY_INPUT"), threads=1)
+        plan = (real, spectrum, forward, backward)
+        if len(plans) >= FFTW_PLANS:
+            plans.pop(next(iter(plans)))
+    plans[(nfft, single)] = plan
+    return plan
+
+
+def _fft_length(n: int) -> int:
+    """The FFT length of a product whose leading n outputs are wanted (at least 2n)."""
+    if FFT == "fftw" and 2 * n >= FFTW_FROM:
+        return _fftw_size(2 * n)
+    return _fft.next_fast_len(2 * n, real=True)
+
+
+def _convolve(spec: np.ndarray, x: np.ndarray, nfft: int) -> np.ndarray:
+    """The leading len(x) outputs of irfft(spec · rfft(x, nfft))."""
+    n = len(x)
+    plan = _fftw_plan(nfft) if FFT == "fftw" and nfft >= FFTW_FROM else None
+    if plan is not None:
+        real, spectrum, forward, backward = plan
+        real[:n] = x
+        real[n:] = 0.0
+        forward.execute()
+        spectrum *= spec
+        backward.execute()
+        return real[:n] * (1.0 / nfft)      # FFTW's backward transform is unnormalised
+    if _POCKETFFT is None:
+        return _fft.irfft(spec * _fft.rfft(x, nfft), nfft)[:n]
+    r2c, c2r = _POCKETFFT
+    padded = np.zeros(nfft)
+    padded[:n] = x
+    X = r2c(padded, (0,), True, 0, None, 1)
+    X *= spec
+    return c2r(X, (0,), nfft, False, 2, None, 1)[:n]
+
+
 def _half_factors(kernel: np.ndarray, m: int, key) -> tuple[np.ndarray, np.ndarray]:
     """P, Q with FFT_2m-convolution = IFFT_m(P Z + Q conj(Z[-k])), Z = FFT_m of x packed complex.
 
@@ -88,6 +215,16 @@ def _half_factors(kernel: np.ndarray, m: int, key) -> tuple[np.ndarray, np.ndarr
     return out
 
 
+def _spectrum32(kernel: np.ndarray, nfft: int, key) -> np.ndarray:
+    """:func:`_spectrum` rounded to complex64, cached beside it."""
+    k = (key, nfft, "single")
+    spec = _SPECTRA.get(k)
+    if spec is None:
+        spec = _spectrum(kernel, nfft, key).astype(np.complex64)
+        _SPECTRA[k] = spec
+    return spec
+
+
 def _lower_float32(kernel: np.ndarray, x: np.ndarray, key) -> np.ndarray:
     """:func:`lower` of a float32 x by two complex FFTs of half the length.
 
@@ -99,6 +236,18 @@ def _lower_float32(kernel: np.ndarray, x: np.ndarray, key) -> np.ndarray:
     1.7 (float64: 2.0; n = 64800, docs/mixed-precision.md).
     """
     n = len(x)
+    if FFT == "fftw" and 2 * n >= FFTW_FROM:
+        # FFTW's single-precision real transforms (SIMD within one transform)
+        nfft = _fftw_size(2 * n)
+        plan = _fftw_plan(nfft, single=True)
+        if plan is not None:
+            real, spectrum, forward, backward = plan
+            real[:n] = x
+            real[n:] = 0.0
+            forward.execute()
+            spectrum *= _spectrum32(kernel, nfft, (key, len(kernel)))
+            backward.execute()
+            return real[:n] * np.float32(1.0 / nfft)
     # 5-smooth: the complex default admits factors 7 and 11, far slower here
     # (n = 65000: m = 65219 = 7²·11³, a float32 product 2.5 ms; m = 65536, 1.2 ms)
     m = _fft.next_fast_len(n, real=True)
@@ -125,13 +274,13 @@ def lower(kernel: np.ndarray, x: np.ndarray, key=None) -> np.ndarray:
         return np.convolve(kernel[:n].astype(x.dtype, copy=False), x)[:n]
     if x.dtype == np.float32 and key is not None:
         return _lower_float32(kernel, x, key)
-    nfft = _fft.next_fast_len(2 * n, real=True)
+    nfft = _fft_length(n)
     if key is None:
-        spec = _fft.rfft(kernel[:n].astype(x.dtype, copy=False), nfft)
+        spec = _fft.rfft(kernel[:n], nfft)
     else:
         # any truncation between n and nfft/2 terms gives the same leading outputs
         spec = _spectrum(kernel, nfft, (key, len(kernel)))
-    return _fft.irfft(spec * _fft.rfft(x, nfft), nfft)[:n]
+    return _convolve(spec, np.asarray(x, dtype=float), nfft)
 
 
 def upper(kernel: np.ndarray, x: np.ndarray, key=None) -> np.ndarray:
@@ -374,15 +523,21 @@ def compliance_matrix(n: int, dt: float, E_star: float, method: str | None = Non
     from scipy.linalg import toeplitz
 
     B = np.cumsum(_kernel(abel_kernel_inverse, n)[:n])          # kernel of both triangular maps
-    Q = toeplitz(np.r_[B[0], np.zeros(n - 1)], B) * (0.5 * math.pi * math.sqrt(dt))
     if (method or ("product" if n <= DENSE_PRODUCT_MAX else "fft")) == "product":
         from scipy.linalg.blas import dtrmm
 
-        # T⁻¹ as a matrix: f_i = g_0 + Σ_{1<=j<=i} B[i-j] (g_j - g_0)/(2 sqrt j)
-        L = toeplitz(B, np.zeros(n))
-        L *= np.r_[0.0, 1.0 / (2.0 * np.sqrt(np.arange(1, n)))]
-        L[:, 0] = 1.0 - L.sum(axis=1)
-        return dtrmm(1.0 / E_star, L, Q, lower=1, overwrite_b=1)
+        # both factors built as their transposes in C order, so that BLAS
+        # gets them in Fortran order without copies (5.5-6 ms at n = 570
+        # against 10 ms through the wrapper's copies)
+        # P⁻¹ (upper Toeplitz): its transpose is lower
+        Qt = toeplitz(B, np.zeros(n)) * (0.5 * math.pi * math.sqrt(dt))
+        # T⁻¹ as a matrix: f_i = g_0 + Σ_{1<=j<=i} B[i-j] (g_j - g_0)/(2 sqrt j);
+        # its transpose holds column j of T⁻¹ in row j
+        Lt = toeplitz(np.r_[B[0], np.zeros(n - 1)], B)
+        Lt *= np.r_[0.0, 1.0 / (2.0 * np.sqrt(np.arange(1, n)))][:, None]
+        Lt[0, :] = 1.0 - Lt.sum(axis=0)
+        return dtrmm(1.0 / E_star, Lt.T, Qt.T, lower=1, overwrite_b=1)
+    Q = toeplitz(np.r_[B[0], np.zeros(n - 1)], B) * (0.5 * math.pi * math.sqrt(dt))
     # T⁻¹ = [[1, 0], [1 - L d, L D]] with L lower Toeplitz (kernel B) and
     # D = diag(d), d_i = 1/(2 sqrt i); applied to Q through one 2D FFT along
     # the rows (O(n² log n), where the dense product was O(n³))

@@ -18,6 +18,7 @@ from wearcheck.comparisons.analysis import scar
 from wearcheck.comparisons.present.scar_figure import scar_figure
 from wearcheck.comparisons.analysis.edge_peak import find_edge_peak
 from wearcheck.mdr import solver as mdr_solver
+from wearcheck.mdr import wear as mdr_wear
 
 BALL = cases.shipped("ball_on_flat")
 PAPER = cases.shipped("paper")
@@ -207,19 +208,53 @@ def _time_error(res, ref):
     return float(np.max(np.abs(h["force"][m] / h["force"][0] - F(h["s_hat"][m]))))
 
 
-def test_adaptive_error_follows_the_tolerance(time_reference):
-    errs, estimates = [], []
+@pytest.mark.parametrize("path", ["direct", "iterative"])
+def test_adaptive_error_follows_the_tolerance(time_reference, path, monkeypatch):
+    # direct solves (nested LU) step on the ladder 2^k ŝ; iterative ones (GMRES,
+    # forced on this grid) set the step continuously to bring the estimate to
+    # half the tolerance (mdr.solver.ADAPTIVE_ERROR_TARGET)
+    if path == "iterative":
+        monkeypatch.setattr(mdr_wear, "DENSE_MAX", 64)
+        monkeypatch.setattr(mdr_wear, "COARSE_NODES", 48)
+    errs, estimates, steps = [], [], []
     for tol in (1e-3, 1e-4):
         res = mdr.solve(paper("mdr.elements=200", "sliding.scheme=adaptive",
                               "sliding.step_hat=\"auto\"", f"sliding.tolerance={tol}"))
         errs.append(_time_error(res, time_reference))
         estimates.append(res.info["time_error"]["estimate"])
-        # measured at N = 800: 7.9e-4 and 9.9e-5; the global error is within a
+        steps.append(res.info["steps"])
+        # measured at N = 800: 7.9e-4 and 9.9e-5 on the ladder, 7.9e-5 at 1e-4
+        # continuous (1.1e-4 and 1.2e-4 at N = 200); the global error is within a
         # small factor of the tolerance, and so is the reported estimate
         assert tol / 10 < errs[-1] < 2 * tol
         assert errs[-1] / 3 < estimates[-1] < 3 * errs[-1]
+        h_hat = np.diff(res.history["s_hat"])
+        on_ladder = np.isclose(np.log2(h_hat), np.round(np.log2(h_hat)), rtol=0, atol=1e-9)
+        # stage landings aside, the direct path keeps to the ladder and the
+        # iterative one leaves it
+        if path == "direct":
+            assert np.mean(on_ladder) > 0.9
+        else:
+            assert np.mean(on_ladder) < 0.2
     # and falls with it
     assert errs[1] < errs[0] / 4
+
+
+def test_continuous_steps_take_fewer_steps_than_the_ladder(time_reference, monkeypatch):
+    # the ladder doubles a step only when its estimate is below 0.2 of the
+    # tolerance, so its steps run at 0.2-0.8 of it; set continuously to 0.5 the
+    # same accuracy takes fewer steps (measured at N = 200, tolerance 1e-4: 147
+    # against 167 steps, error 1.2e-4 against 1.1e-4; N = 800: 144 against 166,
+    # 7.9e-5 against 9.3e-5)
+    monkeypatch.setattr(mdr_wear, "DENSE_MAX", 64)
+    monkeypatch.setattr(mdr_wear, "COARSE_NODES", 48)
+    out = {}
+    for target in (None, 0.5):
+        monkeypatch.setattr(mdr_solver, "ADAPTIVE_ERROR_TARGET", target)
+        res = mdr.solve(paper("mdr.elements=200", "sliding.tolerance=1e-4"))
+        out[target] = (res.info["steps"], _time_error(res, time_reference))
+    assert out[0.5][0] < 0.95 * out[None][0]
+    assert out[0.5][1] < 1.25 * out[None][1]
 
 
 def test_schemes_agree_as_step_and_tolerance_shrink(time_reference):

@@ -120,3 +120,88 @@ def test_compliance_matrix_matches_operators(method):
     np.testing.assert_allclose(A[:100, :100] @ p[:100],
                                transforms.from_1d_exact(transforms.line_load(p[:100], dt)) / E,
                                rtol=1e-12, atol=1e-12 * np.max(np.abs(u)))
+
+
+@pytest.mark.parametrize("backend", ["fftw", "pocketfft", "scipy.fft"])
+def test_toeplitz_products_against_the_direct_sum(backend, monkeypatch):
+    # the FFT convolutions (FFTW through pyFFTW from FFTW_FROM points on;
+    # scipy's pocketfft called directly, or through scipy.fft where that
+    # entry point is missing) against the O(n²) sum, on sizes through the
+    # small-vector branch, odd FFT lengths and FFTW's ladder of lengths;
+    # round-off of a few 1e-16 of the sum of |terms|
+    if backend == "fftw":
+        pytest.importorskip("pyfftw")           # installed with the test extra
+        monkeypatch.setattr(transforms, "FFT", "fftw")
+    else:
+        monkeypatch.setattr(transforms, "FFT", "pocketfft")
+    if backend == "scipy.fft":
+        monkeypatch.setattr(transforms, "_POCKETFFT", None)
+    elif backend == "pocketfft":
+        assert transforms._POCKETFFT is not None   # this scipy has it
+    used = []
+    plan = transforms._fftw_plan
+    monkeypatch.setattr(transforms, "_fftw_plan", lambda nfft: used.append(nfft) or plan(nfft))
+    rng = np.random.default_rng(3)
+    kernel = transforms.abel_kernel(8192)
+    for n in (1, 64, 65, 333, 1000, 2049, 4500):
+        x = rng.standard_normal(n)
+        ref = np.array([kernel[i::-1] @ x[:i + 1] for i in range(n)])
+        scale = np.array([np.abs(kernel[i::-1]) @ np.abs(x[:i + 1]) for i in range(n)])
+        for key in (None, "c"):
+            y = transforms.lower(kernel, x, key=key)
+            assert np.all(np.abs(y - ref) <= 1e-13 * scale), n
+        up = transforms.upper(kernel, x, key="c")
+        ref_up = np.array([kernel[:n - i] @ x[i:] for i in range(n)])
+        assert np.allclose(up, ref_up, rtol=0, atol=1e-13 * np.max(np.abs(ref_up)) + 1e-300)
+    # FFTW served exactly the products from FFTW_FROM points on
+    assert bool(used) == (backend == "fftw")
+    assert all(nfft >= transforms.FFTW_FROM for nfft in used)
+
+
+def test_fftw_lengths_and_threads():
+    # the ladder of FFTW lengths: at least the points asked, at most 1/8 above
+    # a length of the ladder 2^k·{1, 9/8, 5/4, 3/2, 7/4}
+    for n in range(65, 70000, 997):
+        m = transforms._fftw_size(n)
+        assert n <= m <= 1.25 * n
+    pytest.importorskip("pyfftw")
+    # plans and buffers are per thread: products in two threads at once are
+    # each the direct sum's
+    import threading
+    kernel = transforms.abel_kernel(8192)
+    rng = np.random.default_rng(5)
+    xs = [rng.standard_normal(3000) for _ in range(2)]
+    refs = [np.array([kernel[i::-1] @ x[:i + 1] for i in range(len(x))]) for x in xs]
+    errors = []
+
+    def work(x, ref):
+        for _ in range(30):
+            y = transforms.lower(kernel, x, key="c")
+            errors.append(np.max(np.abs(y - ref)) / np.max(np.abs(ref)))
+
+    old = transforms.FFT
+    transforms.FFT = "fftw"
+    try:
+        threads = [threading.Thread(target=work, args=(x, r)) for x, r in zip(xs, refs)]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+    finally:
+        transforms.FFT = old
+    assert len(errors) == 60 and max(errors) < 1e-13
+
+
+def test_a_broken_pyfftw_falls_back_to_pocketfft(monkeypatch):
+    # pyFFTW found at import but failing to import when first needed: the
+    # product is pocketfft's, and pocketfft serves from then on
+    import sys
+    monkeypatch.setattr(transforms, "FFT", "fftw")
+    monkeypatch.setattr(transforms, "_LOCAL", __import__("threading").local())
+    monkeypatch.setitem(sys.modules, "pyfftw", None)       # import raises ImportError
+    kernel = transforms.abel_kernel(8192)
+    x = np.random.default_rng(2).standard_normal(3000)
+    ref = np.array([kernel[i::-1] @ x[:i + 1] for i in range(len(x))])
+    y = transforms.lower(kernel, x, key="c")
+    assert np.max(np.abs(y - ref)) < 1e-13 * np.max(np.abs(ref))
+    assert transforms.FFT == "pocketfft"

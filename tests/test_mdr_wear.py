@@ -243,6 +243,9 @@ def test_adaptive_iterative_solves_keep_to_a_share_of_the_tolerance(monkeypatch)
         if path == "iterative":
             monkeypatch.setattr(wear, "DENSE_MAX", 64)
             monkeypatch.setattr(wear, "COARSE_NODES", 48)
+            # the ladder's steps, as the direct path (iterative paths otherwise
+            # set them continuously), so that the histories can be compared
+            monkeypatch.setattr(solver, "ADAPTIVE_ERROR_TARGET", None)
         runs[path] = [mdr.solve(make(N=300, s_hat=2.0, scheme="adaptive", tolerance=tol,
                                      control=c, stages=(0.0, 1.0)))
                       for c in ("depth", "force")]
@@ -326,3 +329,96 @@ def test_a_run_that_reaches_no_stage_keeps_its_grid():
     res = mdr.solve(case)
     assert len(res.stage_s) == 0
     assert res.f.shape == res.p.shape == (0, len(res.r)) and len(res.r) == 201
+
+
+def test_far_gap_bound_holds_against_the_transform():
+    # the bound on the 1D transform of a change confined to nodes 0..K-1,
+    # beyond a window M > K, against the transform itself: wear-like bumps,
+    # signed noise and a step (the worst case of the summation by parts)
+    from wearcheck.mdr import transforms
+    rng = np.random.default_rng(7)
+    N1 = 3001
+    for K, M in ((1, 2), (40, 41), (900, 1000), (2000, 2250), (2999, 3000)):
+        j = np.arange(N1)
+        bumps = [np.where(j < K, np.cos(0.5 * np.pi * j / K), 0.0),
+                 np.where(j < K, rng.standard_normal(N1), 0.0),
+                 np.where(j < K, 1.0, 0.0)]
+        for delta in bumps:
+            delta[K:] = 0.0
+            exact = np.abs(transforms.to_1d(delta)[M:])
+            bound = wear.far_bound(delta, K, M)
+            assert np.all(exact <= bound * (1 + 1e-12) + 1e-13 * np.max(np.abs(delta))), (K, M)
+        # and it is not loose by orders of magnitude for a one-signed change
+        # (the step: within a factor 3 at the window's first node)
+        assert wear.far_bound(bumps[2], K, M)[0] < 3 * abs(transforms.to_1d(bumps[2])[M]) + 1e-15
+
+
+def test_far_gap_sees_a_penetration_beyond_its_window():
+    # a reference profile, then a change near the centre large enough to
+    # bring the whole grid below the depth: the bound cannot clear it, so the
+    # check falls back to the full transform, which finds the nodes
+    from wearcheck.mdr import transforms
+    N1 = 2001
+    f_ref = np.linspace(0, 1, N1)       # a paraboloid: linear in t
+    far = wear.FarGap()
+    g_ref = far.full(f_ref)             # 2 f_ref
+    d = g_ref[600]                      # in contact up to node 600
+    f = f_ref.copy()
+    f[:300] += 10.0                      # a worn cap: pulls g down beyond it
+    assert far.penetrating(f, 800, d, 1e-9) is None
+    assert np.any(d - transforms.to_1d(f)[800:] > 1e-9 * d)
+    # a small change leaves the nodes beyond the window clear without a transform
+    f = f_ref.copy()
+    f[:300] += 1e-4 * np.cos(np.linspace(0, 0.5 * np.pi, 300))
+    clear = far.penetrating(f, 800, d, 1e-9)
+    assert clear is not None and clear.size == 0
+    assert not np.any(d - transforms.to_1d(f)[800:] > 1e-9 * d)
+
+
+def test_far_gap_leaves_a_run_unchanged(monkeypatch):
+    # fine grids check the contact beyond a window against a reference (forced
+    # here on a small GMRES grid): the same contact sets, so the same history
+    # to round-off, with the full transform done a few times per run instead
+    # of once per contact iteration
+    monkeypatch.setattr(wear, "DENSE_MAX", 64)
+    monkeypatch.setattr(wear, "COARSE_NODES", 48)
+    full = []
+    original = wear.FarGap.full
+
+    def spy(self, f):
+        full.append(1)
+        return original(self, f)
+
+    monkeypatch.setattr(wear.FarGap, "full", spy)
+    runs = {}
+    for threshold in (100, 10**9):
+        monkeypatch.setattr(solver, "FAR_GAP_FROM", threshold)
+        runs[threshold] = [mdr.solve(make(N=300, s_hat=2.0, scheme="adaptive", tolerance=1e-4,
+                                          control=c, stages=(0.0, 1.0)))
+                           for c in ("depth", "force")]
+    assert 0 < len(full) < 0.1 * sum(r.info["contact_iterations"] for r in runs[100])
+    for a, b in zip(runs[100], runs[10**9]):
+        assert a.info["contact_iterations"] == b.info["contact_iterations"]
+        for key in ("force", "depth", "contact_radius", "wear_center"):
+            np.testing.assert_allclose(a.history[key], b.history[key], rtol=1e-12, atol=0)
+
+
+def test_coarse_solve_through_eigenvectors_is_the_shifted_solve():
+    # the preconditioner's coarse solve for any contact set and step size,
+    # through the unit matrix's eigenvectors, against np.linalg.solve of the
+    # assembled coarse matrix (scaled by sqrt(n Δt / nc)/E*, shifted by σ)
+    from wearcheck.mdr import transforms
+    case = make(N=400)
+    model, sc = solver.build_model(case)
+    system = wear.ImplicitSystem.__new__(wear.ImplicitSystem)
+    system.dt, system.E = model.dt, model.E_star
+    system._eigen = wear.coarse_eigen(wear.COARSE_NODES)
+    nc = wear.COARSE_NODES
+    rng = np.random.default_rng(1)
+    for n, h_hat in ((3000, 2.0 ** -7), (50000, 0.25), (700, 1.0)):
+        sigma = h_hat / sc["s_hat_per_m"] * model.wear_rate
+        A = transforms.compliance_matrix(nc, n * model.dt / nc, model.E_star)
+        A[np.diag_indices(nc)] += sigma
+        rc = rng.standard_normal(nc)
+        e = system._coarse_solve(rc, n, sigma)
+        assert np.linalg.norm(A @ e - rc) <= 1e-12 * np.linalg.norm(rc)
