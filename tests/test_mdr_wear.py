@@ -422,3 +422,22 @@ def test_coarse_solve_through_eigenvectors_is_the_shifted_solve():
         rc = rng.standard_normal(nc)
         e = system._coarse_solve(rc, n, sigma)
         assert np.linalg.norm(A @ e - rc) <= 1e-12 * np.linalg.norm(rc)
+
+
+@pytest.mark.parametrize("n", [30, 47, 48, 49, 257, 5000])
+def test_restriction_is_the_interpolation_transposed(n, monkeypatch):
+    # the preconditioner's restriction by segment sums (or bincounts where a
+    # coarse cell is empty, n < COARSE_NODES) against the sparse transpose of
+    # its interpolation matrix, and that matrix against np.interp
+    monkeypatch.setattr(wear, "COARSE_NODES", 48)
+    wear._TRANSFERS.clear()
+    system = wear.ImplicitSystem.__new__(wear.ImplicitSystem)
+    j, w0, w1, P, starts = system._transfer(n)
+    rng = np.random.default_rng(n)
+    r = rng.standard_normal(n)
+    ref = (P.T @ r)[:48]
+    assert np.allclose(system._restrict(r), ref, rtol=0, atol=1e-13 * np.abs(r).sum())
+    e = rng.standard_normal(49)
+    # (the fine nodes' coarse coordinates round alike to 1e-16)
+    assert np.allclose(P @ e, np.interp(np.arange(n) * (48 / n), np.arange(49.0), e),
+                       rtol=0, atol=1e-13 * np.max(np.abs(e)))
