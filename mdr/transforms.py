@@ -160,6 +160,20 @@ def _fftw_plan(nfft: int, single: bool = False):
     return plan
 
 
+def _fftw_convolve(plan, spec: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The leading len(x) outputs of the product with spec, through one size's FFTW plan
+    (in the plan's precision)."""
+    real, spectrum, forward, backward = plan
+    n = len(x)
+    real[:n] = x
+    real[n:] = 0.0
+    forward.execute()
+    spectrum *= spec
+    backward.execute()
+    # FFTW's backward transform is unnormalised
+    return real[:n] * real.dtype.type(1.0 / len(real))
+
+
 def _fft_length(n: int) -> int:
     """The FFT length of a product whose leading n outputs are wanted (at least 2n)."""
     if FFT == "fftw" and 2 * n >= FFTW_FROM:
@@ -172,13 +186,7 @@ def _convolve(spec: np.ndarray, x: np.ndarray, nfft: int) -> np.ndarray:
     n = len(x)
     plan = _fftw_plan(nfft) if FFT == "fftw" and nfft >= FFTW_FROM else None
     if plan is not None:
-        real, spectrum, forward, backward = plan
-        real[:n] = x
-        real[n:] = 0.0
-        forward.execute()
-        spectrum *= spec
-        backward.execute()
-        return real[:n] * (1.0 / nfft)      # FFTW's backward transform is unnormalised
+        return _fftw_convolve(plan, spec, x)
     if _POCKETFFT is None:
         return _fft.irfft(spec * _fft.rfft(x, nfft), nfft)[:n]
     r2c, c2r = _POCKETFFT
@@ -241,13 +249,7 @@ def _lower_float32(kernel: np.ndarray, x: np.ndarray, key) -> np.ndarray:
         nfft = _fftw_size(2 * n)
         plan = _fftw_plan(nfft, single=True)
         if plan is not None:
-            real, spectrum, forward, backward = plan
-            real[:n] = x
-            real[n:] = 0.0
-            forward.execute()
-            spectrum *= _spectrum32(kernel, nfft, (key, len(kernel)))
-            backward.execute()
-            return real[:n] * np.float32(1.0 / nfft)
+            return _fftw_convolve(plan, _spectrum32(kernel, nfft, (key, len(kernel))), x)
     # 5-smooth: the complex default admits factors 7 and 11, far slower here
     # (n = 65000: m = 65219 = 7²·11³, a float32 product 2.5 ms; m = 65536, 1.2 ms)
     m = _fft.next_fast_len(n, real=True)
