@@ -343,6 +343,7 @@ class ImplicitSystem:
         rtol: GMRES's relative residual (1e-9: far below the spatial error,
         which is 2e-5 of F0 at N = 800 and falls as N^-1.5).
         """
+        low = None
         if self.nested:
             if self.exact(sigma):
                 return self._nested_solve(r)
@@ -353,10 +354,9 @@ class ImplicitSystem:
             def precond(v):
                 return self._twolevel(v, s0)
             if KRYLOV_PRECISION == "float32":
-                return linalg.gmres(lambda v: self.matvec(v, sigma), precond, r, x0=x0,
-                                    rtol=rtol, stats=stats, low=self._low(sigma, s0))
+                low = self._low(sigma, s0)
         return linalg.gmres(lambda v: self.matvec(v, sigma), precond, r, x0=x0,
-                            rtol=rtol, stats=stats)
+                            rtol=rtol, stats=stats, low=low)
 
     def _low(self, sigma, s0):
         """The operator and preconditioner in float32 (products, transforms and
@@ -419,20 +419,16 @@ class FarGap:
     def __init__(self):
         self.reference = None       # (f_ref, g_ref), replaced as one (solves may run in threads)
 
-    def penetrating(self, f: np.ndarray, M: int, d: float, tol: float) -> np.ndarray | None:
-        """Nodes i >= M with d - g_i > tol·d (none: an empty array), or None if undecided."""
+    def clears(self, f: np.ndarray, M: int, d: float, tol: float) -> bool:
+        """Whether the bound shows every node i >= M out of contact (d - g_i <= tol·d)."""
         reference = self.reference
         if reference is None:
-            return None
+            return False
         f_ref, g_ref = reference
         delta = f - f_ref
         nz = np.flatnonzero(delta)
         K = int(nz[-1]) + 1 if nz.size else 0
-        if K >= M:
-            return None
-        if np.any(d - g_ref[M:] + far_bound(delta, K, M) > tol * d):
-            return None
-        return np.zeros(0, dtype=np.int64)
+        return K < M and not np.any(d - g_ref[M:] + far_bound(delta, K, M) > tol * d)
 
     def full(self, f: np.ndarray) -> np.ndarray:
         """g = to_1d(f) on the whole grid, kept as the reference."""
@@ -596,7 +592,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
             g = transforms.to_1d(f[:M])
             below = np.flatnonzero(d - g[n:] > tol * d)
             if not len(below) and M <= N:
-                if far_gap.penetrating(f, M, d, tol) is None:
+                if not far_gap.clears(f, M, d, tol):
                     g = far_gap.full(f)
                     below = np.flatnonzero(d - g[n:] > tol * d)
         if len(below):
