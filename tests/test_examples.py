@@ -25,7 +25,8 @@ def run_script(path: Path, cwd: Path, timeout=600) -> str:
 
 
 def test_every_example_is_tested():
-    tested = {"friction_and_wear.py", "mu_sweep_on_dask.py", "fem_fields_in_paraview.py"}
+    tested = {"friction_and_wear.py", "mu_sweep_on_dask.py", "fem_fields_in_paraview.py",
+              "lab_rig_to_case.py"}
     assert {p.name for p in EXAMPLES.glob("*.py")} == tested
 
 
@@ -63,6 +64,24 @@ def test_fem_fields_in_paraview(tmp_path):
     assert float(m.group(2)) == pytest.approx(0.48, abs=0.04)
     assert (tmp_path / "runs" / "hertz-fem" / "vtk" / "solid.pvd").is_file()
     assert "wear_volume     [m^3] worn volume" in out
+
+
+def test_lab_rig_to_case(tmp_path):
+    out = run_script(EXAMPLES / "lab_rig_to_case.py", tmp_path)
+    k = float(re.search(r"k = K σ0/μ = ([\d.e+-]+)", out).group(1))
+    # the conversion k = K σ0/μ with the script's K = 1e-15 m³/(N·m), σ0 = 7 GPa, μ = 0.6
+    assert k == pytest.approx(1e-15 * 7e9 / 0.6, rel=1e-3)
+    m = re.search(r"scar diameter ([\d.]+) µm, worn volume ([\d.e+-]+) m³, "
+                  r"K F s = ([\d.e+-]+) m³", out)
+    D, V, V_archard = float(m.group(1)) * 1e-6, float(m.group(2)), float(m.group(3))
+    # Archard under a held force: V = K F s exactly (the MDR's pressure quadrature: 2e-4)
+    assert V == pytest.approx(5e-15 * 100.0, rel=1e-3) and V_archard == pytest.approx(5e-13)
+    # the long-run scar, b ≫ a_H (here b/a_H = 4.6): D → 2 (4 R K F s/π)^¼ = 418 µm
+    # (ball_on_flat: within 0.3 % from b/a_H = 8 on; 2 % is a margin for the smaller ratio)
+    assert D == pytest.approx(2 * (4 * 3e-3 * 1e-15 * 5.0 * 100.0 / 3.141592653589793) ** 0.25,
+                              rel=0.02)
+    assert (tmp_path / "ball_6mm.toml").is_file()
+    assert (tmp_path / "lab_rig_to_case.png").stat().st_size > 10_000
 
 
 def readme_python_block() -> str:
