@@ -574,7 +574,8 @@ def to_toml(case: Case) -> str:
 
 
 def key_reference() -> str:
-    """A Markdown table of every key (used for the README)."""
+    """A Markdown table of every key (``docs/case-files.md`` includes it, generated at every
+    docs build)."""
     rows = ["| key | unit | default | meaning |", "|---|---|---|---|"]
     for section in SECTIONS:
         for name, f in section_fields(section):

@@ -2,7 +2,7 @@
 
 Every key is declared once, as a dataclass field whose metadata holds its unit,
 its check and its documentation. Reading, validation, ``--set`` overrides, the
-resolved ``case.toml`` and the README's key reference all derive from these
+resolved ``case.toml`` and the documentation's key reference all derive from these
 declarations.
 """
 

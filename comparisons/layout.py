@@ -3,9 +3,9 @@ column, array and field with its unit and meaning.
 
 This is the one definition. ``rundir`` writes and reads by it, every
 ``meta.json`` carries the part that applies to its run (``data_dictionary``),
-``metrics.json`` carries the comparison's, and the README's output tables are
-generated from it (``python -c "from wearcheck.comparisons import layout;
-layout.update_readme('README.md')"``). A solver documents its own extra history
+``metrics.json`` carries the comparison's, and the output tables of the
+documentation (``docs/outputs.md``) are generated from it at every docs build
+(:func:`doc_tables`). A solver documents its own extra history
 columns and ``fields.npz`` arrays in its registry entry.
 """
 
@@ -217,14 +217,15 @@ def comparison_dictionary() -> dict:
 
 
 def markdown(items, first="name") -> str:
-    """A Markdown table of items (the README's output tables)."""
+    """A Markdown table of items (the documentation's output tables)."""
     rows = [f"| {first} | unit | meaning |", "|---|---|---|"]
     rows += [f"| `{i.name}` | {i.unit} | {i.meaning} |" for i in items]
     return "\n".join(rows)
 
 
-def readme_sections() -> dict[str, str]:
-    """The README's generated output tables, by marker name."""
+def doc_tables() -> dict[str, str]:
+    """The documentation's output tables, by name (``docs/outputs.md`` includes
+    each as ``_generated/layout-NAME.md``, written at every docs build)."""
     return {
         "run-files": markdown(RUN_FILES, "file"),
         "history": markdown(HISTORY, "column"),
@@ -234,19 +235,3 @@ def readme_sections() -> dict[str, str]:
         "metrics": markdown(METRICS, "key"),
         "stage-metrics": markdown(STAGE_METRICS, "key"),
     }
-
-
-def update_readme(path) -> bool:
-    """Rewrite the generated tables between ``<!-- layout:NAME -->`` and
-    ``<!-- /layout:NAME -->`` in the README at ``path``; True if it changed."""
-    import re
-    from pathlib import Path
-    path = Path(path)
-    text = path.read_text(encoding="utf-8")
-    new = text
-    for name, table in readme_sections().items():
-        new = re.sub(rf"(<!-- layout:{name} -->\n).*?(<!-- /layout:{name} -->)",
-                     lambda m: m.group(1) + table + "\n" + m.group(2), new, flags=re.S)
-    if new != text:
-        path.write_text(new, encoding="utf-8")
-    return new != text
