@@ -26,6 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import metrics
+
 #: share of a check's tolerance a run's own time-error estimate must use for the
 #: time steps to be named before the grids
 TIME_SHARE = 0.5
@@ -122,52 +124,71 @@ def advise(failure: dict, runs: list[Resolution], *, scheme: str, tolerance: flo
     Returns
     -------
     dict: setting (dotted key or None), value (its current value), suggestion
-    (a value to try, or None), solver, reason (one sentence), and the measures
-    (per solver: points_across, time_share).
+    (a value to try, or None), solver, reason (one sentence), otherwise (the
+    runner-up in words, or None), rule, and the measures (per solver:
+    points_across, time_share).
     """
     measures = {r.solver: dict(points_across=r.points_across,
                                time_share=time_share(r.time_error, failure))
                 for r in runs}
     out = dict(check=failure["check"], stage=failure["stage"], s_hat=failure["s_hat"],
-               measures=measures, rule=(f"time steps when a run's own time-error estimate "
-                                        f"uses >= {TIME_SHARE:g} of the tolerance at the "
-                                        "stage; else the grid with the fewest points across "
-                                        "the stage's contact radius"))
+               measures=measures, otherwise=None,
+               rule=(f"the time steps when a run's own time-error estimate uses at least "
+                     f"{TIME_SHARE:g} of the tolerance at the stage; else the grid with the "
+                     "fewest points across the stage's contact radius"))
     approx = [r for r in runs if r.approximate]
     if approx:
         r = approx[0]
         return dict(out, setting=None, value=None, suggestion=None, solver=r.solver,
                     reason=f"{r.title} solved an approximation of the case ({r.approximate}); "
                            "no setting removes that difference")
-    shares = [(measures[r.solver]["time_share"], r) for r in runs
-              if np.isfinite(measures[r.solver]["time_share"])]
-    timed = max(shares, key=lambda t: t[0], default=None)
+    label = metrics.CHECK_BY_COLUMN[failure["check"]].label \
+        if failure["check"] in metrics.CHECK_BY_COLUMN else failure["check"]
     where = f"stage {failure['stage']} (ŝ = {failure['s_hat']:.3g})"
-    if timed is not None and timed[0] >= TIME_SHARE:
+    # at ŝ = 0 nothing has slid: the time steps cannot be the cause
+    shares = [(measures[r.solver]["time_share"], r) for r in runs
+              if failure["s_hat"] > 0.0 and np.isfinite(measures[r.solver]["time_share"])]
+    timed = max(shares, key=lambda t: t[0], default=None)
+    time_advice = None
+    if timed is not None:
         share, r = timed
-        if scheme == "adaptive":
-            return dict(out, setting="sliding.tolerance", value=tolerance,
-                        suggestion=tolerance / TOLERANCE_FACTOR, solver=r.solver,
-                        reason=f"{r.title}'s own time-error estimate uses {100 * share:.0f} % "
-                               f"of the {failure['check']} tolerance at {where}")
-        return dict(out, setting="sliding.step_hat", value=step_hat, suggestion=None,
-                    solver=r.solver,
-                    reason=f"{r.title}'s own time-error estimate uses {100 * share:.0f} % of "
-                           f"the {failure['check']} tolerance at {where}")
+        time_advice = dict(setting="sliding.tolerance", value=tolerance,
+                           suggestion=tolerance / TOLERANCE_FACTOR, solver=r.solver,
+                           reason=f"{r.title}'s own time-error estimate uses "
+                                  f"{100 * share:.0f} % of the {label} tolerance at {where}")
+    elif failure["s_hat"] > 0.0 and scheme != "adaptive":
+        time_advice = dict(setting="sliding.step_hat", value=step_hat, suggestion=None,
+                           solver=None, reason=f"the {scheme} scheme's fixed steps report no "
+                                               "time-error estimate")
     gridded = [r for r in runs if np.isfinite(r.points_across)]
-    if not gridded:
+    grid_advice = None
+    if gridded:
+        r = min(gridded, key=lambda r: r.points_across)
+        others = ", ".join(f"{o.title} {o.points_across:.0f}" for o in gridded if o is not r)
+        reason = (f"{r.title} has {r.points_across:.1f} points across the contact radius at "
+                  f"{where}" + (f" ({others})" if others else ""))
+        if r.key is None:
+            grid_advice = dict(setting=None, value=None, suggestion=None, solver=r.solver,
+                               reason=reason + f"; {r.title} names no resolution setting")
+        else:
+            grid_advice = dict(setting=r.key, value=r.value, solver=r.solver, reason=reason,
+                               suggestion=r.value * REFINE_FACTOR
+                               if isinstance(r.value, int) else None)
+    if time_advice is not None and timed is not None and timed[0] >= TIME_SHARE:
+        first, second = time_advice, grid_advice
+    else:
+        first, second = grid_advice, time_advice
+    if first is None:
         return dict(out, setting=None, value=None, suggestion=None, solver=None,
-                    reason="no run reports a grid to refine")
-    r = min(gridded, key=lambda r: r.points_across)
-    others = ", ".join(f"{o.title} {o.points_across:.0f}" for o in gridded if o is not r)
-    reason = (f"{r.title} has {r.points_across:.1f} points across the contact radius at "
-              f"{where}" + (f" ({others})" if others else ""))
-    if r.key is None:
-        return dict(out, setting=None, value=None, suggestion=None, solver=r.solver,
-                    reason=reason + f"; {r.title} names no resolution setting")
-    suggestion = r.value * REFINE_FACTOR if isinstance(r.value, int) else None
-    return dict(out, setting=r.key, value=r.value, suggestion=suggestion, solver=r.solver,
-                reason=reason)
+                    reason="no run reports a grid or a time-error estimate")
+    return dict(out, **first, otherwise=_words(second) if second else None)
+
+
+def _words(advice: dict) -> str:
+    """An advice's setting, value and reason in one clause."""
+    if advice.get("setting") is None:
+        return advice["reason"]
+    return f"{advice['setting']} (now {advice['value']!s}): {advice['reason']}"
 
 
 def sentence(advice: dict) -> str:
@@ -177,5 +198,6 @@ def sentence(advice: dict) -> str:
     try_ = f"; try {advice['suggestion']:g}" if advice.get("suggestion") is not None else ""
     verb = "tighten" if advice["setting"] == "sliding.tolerance" else (
         "reduce" if advice["setting"] == "sliding.step_hat" else "raise")
+    then = f" Next most likely: {advice['otherwise']}." if advice.get("otherwise") else ""
     return (f"{verb} {advice['setting']} (now {advice['value']!s}{try_}): "
-            f"{advice['reason']}.")
+            f"{advice['reason']}.{then}")
