@@ -56,6 +56,14 @@ def rows_of(directory: Path) -> list[list[str]]:
         skipped = "; ".join(f"{n} skipped" for n in m.get("skipped", {}))
         rows.append([directory.name, f"{b} vs {a}", str(pair["stages_compared"])] + cells
                     + ["pass" if pair["passed"] else "FAIL", str(floors), skipped])
+    # the truncated paraboloid: each solver against the quadrature of paper Eqs. 13/19
+    for name, row in m.get("truncated_reference", {}).get("solvers", {}).items():
+        c = row["checks"]
+        cells = ["—"] + [f"{100 * c[k]['value']:.2g} %" for k in
+                         ("force", "pressure_interior_max", "contact_radius")]
+        rows.append([directory.name, f"{name} vs quadrature", "1"] + cells
+                    + ["pass" if row["passed"] else "FAIL",
+                       str(sum(x["scale_from"] == "floor" for x in c.values())), ""])
     return rows
 
 

@@ -194,7 +194,7 @@ def _pair_blocks(m, name, pair) -> list:
         blocks.append(R.para("Most likely fix: " + diagnosis.sentence(pair["diagnosis"])))
     header = ["stage", "ŝ"]
     for ch in metrics.CHECKS:
-        header += [f"{ch.label} {ch.difference} / scale", f"{ch.label} scale"]
+        header += [f"{ch.label} / scale", f"{ch.label} scale"]
     blocks.append(R.table(header + ["verdict"], verdict_rows))
     blocks.append(R.table(["stage", f"ŝ {ref}", f"ŝ {other}", f"F/F0 {ref}", f"F/F0 {other}",
                            "|ΔF|/F0", f"a/a0 {ref}", f"a/a0 {other}", "|Δa|/a0",
