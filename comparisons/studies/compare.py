@@ -141,7 +141,8 @@ def truncated_reference(case, results, scales) -> dict | None:
         row["pressure_edge_max"], _, _ = metrics.max_rms(dp[edge])
         # judged as a stage is: against the reference's own force, contact radius and
         # peak pressure (away from the singularity); no profile is compared here
-        own = dict(profile_contact_max=1.0, force=out["force"], contact_radius=out["contact_radius"],
+        own = dict(profile_contact_max=1.0, force=out["force"],
+                   contact_radius=out["contact_radius"],
                    pressure_interior_max=metrics.peak_pressure(r, p_ref, b, cmp.edge_band * a)
                    / scales["p0"])
         tol = metrics.verdict(dict(row, profile_contact_max=0.0, stage_scales=own),
