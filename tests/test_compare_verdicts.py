@@ -87,14 +87,19 @@ def test_force_and_pressure_inflated_at_the_last_stage_fail(paper, tmp_path):
     assert "force 0.4 > 0.03 of the stage's own scale" in md
 
 
-def test_the_honest_copy_passes(paper):
+def test_the_honest_copy_passes(paper, tmp_path):
     case, mdr = paper
-    m = compare_mod.analyse(case, {"mdr": mdr, "copy": mdr})
+    try:
+        m = compare_mod.compare(case, tmp_path / "honest", solvers=["mdr", "copy"],
+                                solve=solve_with(mdr, mdr), render=False)
+    finally:
+        unregister("copy")
     assert m["passed"] and m["stages_compared"] == len(mdr.stage_s) == 7
     # identical results: every judged difference is zero
     for st in m["pairs"]["copy"]["stages"]:
         assert all(c["value"] == 0.0 for c in st["checks"].values())
     assert m["diagnosis"] is None
+    assert json.loads((tmp_path / "honest" / "metrics.json").read_text())["passed"]
 
 
 @pytest.mark.parametrize("stage", range(7))
