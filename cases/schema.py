@@ -222,15 +222,37 @@ class BEMSettings:
 
 @dataclass(frozen=True)
 class CompareSettings:
+    """What ``wearcheck compare`` accepts as agreement.
+
+    Each stage is judged against its own magnitudes: a difference is divided by
+    the reference's value at that stage (its force, peak pressure, depth, contact
+    radius), floored at a small fraction of the unworn scale so that a quantity
+    near zero is not judged relative to itself.
+    """
+
     profile_tolerance: float = key(0.01, positive=True,
-                                   doc="max profile difference allowed, relative to the depth d")
-    force_tolerance: float = key(0.01, positive=True,
-                                 doc="max force difference allowed, relative to F0")
-    pressure_tolerance: float = key(0.02, positive=True,
+                                   doc="max profile difference allowed, relative to the "
+                                       "stage's depth (the approach of the unworn tip, "
+                                       "which includes the central wear)")
+    force_tolerance: float = key(0.03, positive=True,
+                                 doc="max force difference allowed, relative to the stage's "
+                                     "force")
+    pressure_tolerance: float = key(0.03, positive=True,
                                     doc="max pressure difference allowed away from the contact "
-                                        "edge, relative to p0")
+                                        "edge, relative to the stage's peak pressure")
     contact_radius_tolerance: float = key(0.02, positive=True,
-                                          doc="max contact-radius difference allowed, relative to a0")
+                                          doc="max contact-radius difference allowed, relative "
+                                              "to the stage's contact radius")
+    profile_floor: float = key(0.01, positive=True,
+                               doc="smallest profile scale of a stage, relative to the depth d "
+                                   "(d0 under force control)")
+    force_floor: float = key(0.01, positive=True,
+                             doc="smallest force scale of a stage, relative to F0")
+    pressure_floor: float = key(0.001, positive=True,
+                                doc="smallest pressure scale of a stage, relative to p0")
+    contact_radius_floor: float = key(0.1, positive=True,
+                                      doc="smallest contact-radius scale of a stage, relative "
+                                          "to a0")
     edge_band: float = key(0.1, minimum=0.0, maximum=1.0, open_maximum=True,
                            doc="width of the band at the contact edge, as a fraction of the "
                                "contact radius, whose pressure is reported separately")

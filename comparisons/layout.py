@@ -118,8 +118,16 @@ METRICS = (
     Item("pairs", "", "per solver: stages (list of STAGE_METRICS), stages_compared, worst "
                       "(largest share of each tolerance), history (over the common sliding "
                       "range), checks (stages_reached: the same number of stages as the "
-                      "reference), passed"),
+                      "reference), diagnosis (as `diagnosis`, for this solver; null when it "
+                      "passed), passed"),
     Item("passed", "", "the verdict: every check of every solver within its tolerance"),
+    Item("skipped", "", "per registered solver left out of the comparison: why (the "
+                        "reason it cannot run the case, or not asked for)"),
+    Item("diagnosis", "", "null when passed; else for the worst failed check: setting (the "
+                          "case key most likely to fix it, or null), value (its current "
+                          "value), suggestion, solver, reason, otherwise (the runner-up), "
+                          "rule, measures (per solver: points across the stage's contact "
+                          "radius, share of the tolerance its time-error estimate uses)"),
     Item("stages_compared", "", "stages reached by every solver"),
     Item("scales", "", "as in meta.json"),
     Item("profile_scale_depth", "m", "the depth d profiles are measured in (held depth, or d0)"),
@@ -165,11 +173,19 @@ STAGE_METRICS = (
     Item("contact_radius", "", "|Δa|/a0"),
     Item("profile_max", "", "max |Δf|/d over the compared solver's radii"),
     Item("profile_rms", "", "RMS Δf/d"),
+    Item("profile_contact_max", "", "max |Δf|/d over the contact and its edge band, r <= "
+                                    "(1 + edge_band)·a (the larger a of the two)"),
+    Item("profile_contact_rms", "", "RMS Δf/d there"),
     Item("pressure_interior_max", "", "max |Δp|/p0 in r < (1 - edge_band)·a"),
     Item("pressure_interior_rms", "", "RMS Δp/p0 there"),
     Item("pressure_edge_max", "", "max |Δp|/p0 in the edge band"),
     Item("pressure_edge_rms", "", "RMS Δp/p0 there"),
-    Item("checks", "", "each check's value, tolerance and pass"),
+    Item("stage_scales", "", "per check, the stage's own scale in the unworn unit: the "
+                             "reference's depth (or central wear, if larger) /d, force /F0, "
+                             "peak pressure /p0, contact radius /a0"),
+    Item("checks", "", "per check: value (the difference over scale), tolerance, scale "
+                       "(max(the stage's own scale, the floor), in unit), scale_from ('stage' "
+                       "or 'floor'), unit, unworn (the difference in unit), passed"),
     Item("passed", "", "every check of the stage within tolerance"),
 )
 
