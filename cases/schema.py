@@ -118,8 +118,10 @@ class Wear:
     mu: float = key(unit="1", positive=True, doc="coefficient of friction μ, τ = μ p (paper Eq. 14)")
     hardness: float = key(unit="Pa", positive=True, doc="hardness σ0 of the worn indenter")
     tangential_correction: bool = key(False,
-                                      doc="subtract the elastic tangential displacement of the "
-                                          "surface from the slip (paper Eqs. 15-16)")
+                                      doc="reciprocating sliding: take off the slip the "
+                                          "tangential springs lose at each stroke end while "
+                                          "they reverse (2μq/G* per stroke, paper Eqs. 15-16; "
+                                          "MDR only); needs sliding.stroke")
     pressure_exponent: float = key(1.0, minimum=1.0, maximum=4.0,
                                    doc="exponent n of the wear law dw/ds = (k μ/σ0)·σ0·(p/σ0)^n "
                                        "(1: Reye–Archard, the paper); in [1, 4] (below 1 the "

@@ -100,7 +100,8 @@ def build_model(case) -> tuple[wear.Model, dict]:
     tangential = (case.wear.mu / case.G_star) if case.wear.tangential_correction else 0.0
     model = wear.Model(x=x, f0=f0, E_star=case.E_star, wear_rate=case.wear_rate,
                        depth=case.loading.depth, force=case.loading.force,
-                       tangential=tangential, exponent=case.wear.pressure_exponent,
+                       tangential=tangential, stroke=case.sliding.stroke,
+                       exponent=case.wear.pressure_exponent,
                        hardness=case.wear.hardness)
     return model, sc
 

@@ -11,7 +11,7 @@ import pytest
 from wearcheck import cases, mdr
 from wearcheck.mdr import linalg, solver, transforms, wear
 
-from test_mdr_wear import make
+from test_mdr_wear import make, u_star_of
 
 
 @pytest.fixture(scope="module")
@@ -121,9 +121,11 @@ def test_the_inner_residual_is_trusted_within_its_bound(monkeypatch):
     monkeypatch.setattr(wear, "DENSE_MAX", 64)
     monkeypatch.setattr(wear, "COARSE_NODES", 48)
     eps32 = float(np.finfo(np.float32).eps)
+    # the tangential correction at a stroke of 5u*: S from 0.68 to 1, σ per node
+    stroke = 5.0 * u_star_of(make(N=50, control="force"))
     for kw, rtol in ((dict(scheme="adaptive", tolerance=1e-4), 1e-7),
                      (dict(step_hat=0.15), wear.ACCURATE_RTOL),
-                     (dict(step_hat=0.15, tangential=True), wear.ACCURATE_RTOL)):
+                     (dict(step_hat=0.15, tangential=True, stroke=stroke), wear.ACCURATE_RTOL)):
         audit = []
         monkeypatch.setattr(linalg, "REFINE_AUDIT", audit)
         res = mdr.solve(make(N=300, s_hat=2.0, control="force", stages=(0.0, 1.0), **kw))
