@@ -186,16 +186,9 @@ def _solve(case, progress=None) -> RunResult:
                             f"Euler stability limit of this mesh, {limit_hat:.4g} (node spacing "
                             f"{model.stats()['contact_spacing']:.3g} m); use a step <= "
                             f"{limit_hat:.4g} or sliding.scheme = \"implicit\"")
-    step = step_hat / per_m
-    s_hat_cap, max_steps = stepping.caps(sl.scheme)
-    s_end, stage_s, until = programme.sliding_plan(case, step_hat, per_m, s_hat_cap=s_hat_cap,
-                                                   max_steps=max_steps, adaptive=adaptive)
+    plan, until = programme.stepping_plan(case, step_hat, sc)
+    step, s_end = plan.step, plan.end
     control = case.loading.control
-    plan = stepping.Plan(
-        scheme=sl.scheme, step=step, end=s_end, per_m=per_m, stages=tuple(stage_s),
-        force_fraction=sl.force_fraction if until == "force_fraction" else None,
-        tolerance=sl.tolerance, force_scale=F0, depth_scale=d0,
-        step_key=f"key 'sliding.step_hat' = {sl.step_hat!r}")
     problem = superelement.Superelement(
         C, z, r, area, rate, control=control, value=getattr(case.loading, control),
         gap_scale=d0, force_scale=F0, pressure_scale=p0, center=center, exponent=n_exp,

@@ -11,7 +11,7 @@ uses the pressure at its end: on the contact nodes 0..m it solves
 
 the contact problem of the 3D compliance plus a diagonal wear compliance
 (docs/theory.md §7-8). The variable-step BDF2 is the same problem with f_n replaced
-by a f_n + b f_{n-1} and h by c h (:func:`bdf2_coefficients`).
+by a f_n + b f_{n-1} and h by c h (:func:`numerics.stepping.bdf2_coefficients`).
 
 T⁻¹ and P⁻¹ are triangular, so on the contact set only their leading blocks
 enter: up to DENSE_MAX nodes one LU factorisation without
@@ -106,18 +106,6 @@ def explicit_step(model: Model, state: State, h: float) -> State:
     new = contact_state(model, f)
     new.slip = _slip(model, state, new, h)
     return new
-
-
-def bdf2_coefficients(h: float, h_prev: float | None) -> tuple[float, float, float]:
-    """Variable-step BDF2: f_{n+1} = a f_n + b f_{n-1} + c h f'_{n+1}.
-
-    With ω = h/h_prev: a = (1+ω)²/(1+2ω), b = -ω²/(1+2ω), c = (1+ω)/(1+2ω)
-    (a + b = 1). ``h_prev=None`` (no history) gives backward Euler (1, 0, 1).
-    """
-    if h_prev is None:
-        return 1.0, 0.0, 1.0
-    w = h / h_prev
-    return (1.0 + w) ** 2 / (1.0 + 2.0 * w), -w * w / (1.0 + 2.0 * w), (1.0 + w) / (1.0 + 2.0 * w)
 
 
 #: largest grid factorised densely (nested LU, exact); finer grids use GMRES
@@ -437,23 +425,24 @@ class FarGap:
         return g
 
 
-def implicit_step(model: Model, state: State, h: float, m_guess: int | None = None,
-                  system: ImplicitSystem | None = None,
-                  previous: tuple[np.ndarray, float] | None = None,
-                  p_guess: np.ndarray | None = None, far_gap: FarGap | None = None) -> State:
-    """Backward Euler, or BDF2 with ``previous``: wear by the pressure at the end of the step.
+def implicit_step(model: Model, state: State, h: float, c: float = 1.0,
+                  base: np.ndarray | None = None, m_guess: int | None = None,
+                  system: ImplicitSystem | None = None, p_guess: np.ndarray | None = None,
+                  far_gap: FarGap | None = None) -> State:
+    """An implicit step of length h: wear by the pressure at the end of the step.
+
+    The new profile is ``base + c h K S p`` with p the contact pressure of
+    that profile: backward Euler from ``state`` (``base`` = state.f, c = 1),
+    or the variable-step BDF2 step (``base`` = a f_n + b f_{n-1},
+    :func:`numerics.stepping.bdf2_coefficients`). ``state``: the state the
+    step starts from (its contact set and pressure start the solve; its slip
+    factor S, the tangential correction's, lagged one step, is the step's).
+    ``system`` must be built for c h when it is to be used directly.
 
     ``p_guess`` (nodes 0..N) starts the iterative solves of finer grids (the
     pressure at the start of the step if None); the result is the same to the
     solver's tolerance. ``far_gap`` (one per grid, kept across steps) spares
     the full 1D transform of each contact iteration (:class:`FarGap`).
-
-    ``previous = (f_{n-1}, h_{n-1})``, the profile one step before ``state``
-    and the step from it, makes this the variable-step BDF2 step: the same
-    contact problem from a f_n + b f_{n-1} with wear compliance c h K S
-    (:func:`bdf2_coefficients`). The slip factor S (tangential correction)
-    is the lagged first-order one of either scheme. ``system`` must be built
-    for c h when it is to be used for the regular step directly.
 
     With a pressure exponent n != 1 the wear speed K σ0 (p/σ0)^n is
     linearised about the last iterate (Newton): wear compliance c h K S n
@@ -466,11 +455,9 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
     # full slip everywhere (no tangential correction): a scalar, so the wear
     # compliance is one number and the regular step's factors solve it directly
     S = 1.0 if state.slip is None else state.slip
-    if previous is None:
-        base, hc = state.f, h
-    else:
-        a, b, c = bdf2_coefficients(h, previous[1])
-        base, hc = a * state.f + b * previous[0], c * h
+    if base is None:
+        base = state.f
+    hc = c * h
     system = system or ImplicitSystem(model, hc)
     m = max(state.m if m_guess is None else m_guess, 0)
     if model.exponent == 1.0:

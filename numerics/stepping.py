@@ -260,13 +260,16 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
         return max(abs(Fa - Fb) / plan.force_scale, abs(da - db) / max(d0, abs(da)),
                    abs(wa - wb) / max(d0, abs(wa)))
 
+    if not h > 0.0:
+        raise CaseError(f"{plan.step_key}: the step in metres of sliding is {h!r} in floating "
+                        "point; raise the step")
     h_cur = min(FIRST_STEP_HAT / per_m, h) if adaptive else h
     ramp = []
     if bdf2:
         # a short backward-Euler step, then doubling: h/16, h/16, h/8, h/4, h/2
         # reach s = h, so the regular steps stay aligned with stages at multiples of h
         ramp = [BDF2_FIRST_STEP * h]
-        while sum(ramp) < h * (1 - 1e-9):
+        while sum(ramp) < h * (1 - 1e-9) and len(ramp) < 64:
             ramp.append(sum(ramp))
     # the wear compliance factor of the regular step (bdf2 at a constant step: 2/3)
     c_regular = bdf2_coefficients(h, h)[2] if bdf2 else 1.0
@@ -402,11 +405,18 @@ def _check_projected_steps(plan: Plan, s: float, force_ratio: float, scheme: str
     projected = s / fallen / plan.step if fallen > 0.0 else math.inf
     if projected > plan.max_steps:
         what = "steps of at most" if scheme == "adaptive" else "steps of"
+        step = f"{plan.step * plan.per_m:.4g} in ŝ"
+        remedy = "; raise the step" + ("" if scheme == "adaptive" else
+                                       " or use sliding.scheme = \"adaptive\"")
+        if fallen > 0.0:
+            raise CaseError(
+                f"{plan.step_key}: the run would take about {projected:.3g} {what} {step} "
+                f"to F < {plan.force_fraction:g} F0, projected from its first step (cap "
+                f"{plan.max_steps}){remedy}")
         raise CaseError(
-            f"{plan.step_key}: the run would take about {projected:.3g} {what} "
-            f"{plan.step * plan.per_m:.4g} in ŝ to F < {plan.force_fraction:g} F0, "
-            f"projected from its first step (cap {plan.max_steps}); raise the step"
-            + ("" if scheme == "adaptive" else " or use sliding.scheme = \"adaptive\""))
+            f"{plan.step_key}: the force did not fall in a first step of {step} (too "
+            f"short to move the solution in floating point), so the run cannot reach "
+            f"F < {plan.force_fraction:g} F0 within its cap of {plan.max_steps} steps{remedy}")
 
 
 def info(outcome: Outcome, plan: Plan) -> dict:

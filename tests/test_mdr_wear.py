@@ -7,8 +7,9 @@ import pytest
 
 from wearcheck import cases
 from wearcheck import mdr
-from wearcheck.cases import reference
+from wearcheck.cases import profiles, programme, reference
 from wearcheck.mdr import linalg, solver, wear
+from wearcheck.numerics import stepping
 
 R = 0.01
 D = 1e-6
@@ -41,6 +42,16 @@ def make(N=200, s_hat=None, stages=(0.0,), domain_factor=1.3, control="depth",
         raw["sliding"].pop("force_fraction", None)
         case = cases.from_dict(raw)
     return case
+
+
+def run_with_control(case, control):
+    """The MDR run of ``case`` (adaptive) with the step control given: the
+    solver's own choice is the ladder for direct solves, continuous for
+    iterative ones. Returns :func:`mdr.solver.run`'s dict."""
+    model, sc = solver.build_model(case)
+    plan, _ = programme.stepping_plan(case, math.inf, sc, control=control)
+    return solver.run(model, plan,
+                      profile=lambda x: profiles.height(case.indenter, x, case.table))
 
 
 def force_at(res, s_hat):
@@ -149,19 +160,21 @@ def test_grid_scale_oscillation_is_detected():
     N = 200
     model, per = _model_and_scale(make(N=N))
     limit = solver.stability_limit_hat(model, per) / per
-    s_end = 3.0 / per
-    args = ([], "distance", s_end, 0.01)
+
+    def plan(scheme, step):
+        return stepping.Plan(scheme=scheme, step=step, end=3.0 / per, per_m=per)
+
     with pytest.raises(cases.SolverError, match="oscillation"):
-        solver.run(model, "explicit", 3.0 * limit, *args)
-    wrong = solver.run(model, "explicit", 3.0 * limit, *args, check_oscillation=False)
-    right = solver.run(model, "implicit", 0.01 / per, *args)   # time error ~7e-4
+        solver.run(model, plan("explicit", 3.0 * limit))
+    wrong = solver.run(model, plan("explicit", 3.0 * limit), check_oscillation=False)
+    right = solver.run(model, plan("implicit", 0.01 / per))   # time error ~7e-4
     F_wrong = wrong["history"]["force"][-1] / wrong["history"]["force"][0]
     F_right = right["history"]["force"][-1] / right["history"]["force"][0]
     # measured 0.228 against 0.279: an error 100 times the time error of a
     # stable step, with nothing non-finite to betray it
     assert abs(F_wrong - F_right) > 0.02
     # a stable explicit run is not flagged
-    solver.run(model, "explicit", 0.5 * limit, *args)
+    solver.run(model, plan("explicit", 0.5 * limit))
 
 
 def test_observed_order_in_N():
@@ -197,10 +210,14 @@ def test_tangential_correction_is_small_and_speeds_wear():
     assert np.all(shift > 0.1 * eps) and np.all(shift < eps)
 
 
-def test_runaway_guard(monkeypatch):
-    monkeypatch.setattr(solver, "MAX_STEPS", 5)
-    with pytest.raises(cases.SolverError, match="steps"):
-        mdr.solve(make(N=50, step_hat=0.1))
+def test_runaway_guard():
+    # the plan's step cap stops an MDR run that would pass it (ten steps
+    # asked, five allowed)
+    model, per = _model_and_scale(make(N=50))
+    plan = stepping.Plan(scheme="implicit", step=0.1 / per, end=1.0 / per, per_m=per,
+                         max_steps=5)
+    with pytest.raises(cases.SolverError, match="more than 5 steps"):
+        solver.run(model, plan)
 
 
 def test_matrix_free_path_solves_the_same_equations(monkeypatch):
@@ -243,11 +260,10 @@ def test_adaptive_iterative_solves_keep_to_a_share_of_the_tolerance(monkeypatch)
         if path == "iterative":
             monkeypatch.setattr(wear, "DENSE_MAX", 64)
             monkeypatch.setattr(wear, "COARSE_NODES", 48)
-            # the ladder's steps, as the direct path (iterative paths otherwise
-            # set them continuously), so that the histories can be compared
-            monkeypatch.setattr(solver, "ADAPTIVE_ERROR_TARGET", None)
-        runs[path] = [mdr.solve(make(N=300, s_hat=2.0, scheme="adaptive", tolerance=tol,
-                                     control=c, stages=(0.0, 1.0)))
+        # the ladder's steps on both paths (iterative ones otherwise set them
+        # continuously), so that the histories can be compared
+        runs[path] = [run_with_control(make(N=300, s_hat=2.0, scheme="adaptive", tolerance=tol,
+                                            control=c, stages=(0.0, 1.0)), "ladder")
                       for c in ("depth", "force")]
     # the share reaches every iterative solve of the adaptive runs; a fixed-step
     # run keeps the accurate solves
@@ -256,8 +272,8 @@ def test_adaptive_iterative_solves_keep_to_a_share_of_the_tolerance(monkeypatch)
     mdr.solve(make(N=300, s_hat=0.5, step_hat=0.15))
     assert used and set(used) == {wear.ACCURATE_RTOL}
     for a, b in zip(runs["direct"], runs["iterative"]):
-        assert b.info["gmres_iterations"] > 10 * a.info["gmres_iterations"]
-        ha, hb = a.history, b.history
+        assert b["counters"]["gmres_iterations"] > 10 * a["counters"]["gmres_iterations"]
+        ha, hb = a["history"], b["history"]
         k = 0
         while k < min(len(ha["s"]), len(hb["s"])) and ha["s"][k] == hb["s"][k]:
             k += 1

@@ -9,6 +9,7 @@ are checked against the exact solution.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -60,6 +61,25 @@ def run(scheme, step, end=2.0, stages=(0.0, 2.0), **kw):
     out = stepping.run(problem, np.zeros(3), plan,
                        lambda st, s, n: seen.append((s, st.copy(), n)))
     return out, seen, problem
+
+
+def bdf2_textbook(h, h_prev):
+    """(a, b, c) of the variable-step BDF2 written out here, independent of the stepper."""
+    w = h / h_prev
+    return (1 + w) ** 2 / (1 + 2 * w), -w ** 2 / (1 + 2 * w), (1 + w) / (1 + 2 * w)
+
+
+def test_bdf2_coefficients_integrate_quadratics_exactly():
+    # the variable-step BDF2 is exact for polynomials of degree 2 at any
+    # step ratio ω (its defining property); backward Euler without history
+    for w in (0.1, 0.5, 1.0, 2.0, 2.4):
+        h_prev, h = 0.3, 0.3 * w
+        a, b, c = stepping.bdf2_coefficients(h, h_prev)
+        s0, s1, s2 = 0.7, 0.7 + h_prev, 0.7 + h_prev + h
+        for y, dy in ((lambda s: 1.0 + 0 * s, lambda s: 0.0), (lambda s: s, lambda s: 1.0),
+                      (lambda s: s * s, lambda s: 2.0 * s)):
+            assert a * y(s1) + b * y(s0) + c * h * dy(s2) == pytest.approx(y(s2), abs=1e-13)
+    assert stepping.bdf2_coefficients(0.1, None) == (1.0, 0.0, 1.0)
 
 
 def test_backward_euler_is_the_closed_recursion():
@@ -160,6 +180,13 @@ def test_a_step_too_small_for_the_cap_is_refused_after_the_first_step(scheme):
                          step_key="key 'sliding.step_hat' = 1e-09")
     with pytest.raises(CaseError, match=r"^key 'sliding\.step_hat' = 1e-09: the run would "
                                         r"take about [0-9.e+]+ steps"):
+        stepping.run(problem, np.zeros(3), plan, lambda *a: None)
+    assert len(problem.solves) <= 3
+    # a step below the resolution of floating point: the force does not move
+    problem = Springs()
+    plan = dataclasses.replace(plan, step=1e-300, step_key="key 'sliding.step_hat' = 1e-300")
+    with pytest.raises(CaseError, match=r"^key 'sliding\.step_hat' = 1e-300: the force did "
+                                        r"not fall in a first step"):
         stepping.run(problem, np.zeros(3), plan, lambda *a: None)
     assert len(problem.solves) <= 3
     # a step that ends the run under the cap runs to its end
