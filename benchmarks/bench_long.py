@@ -99,14 +99,15 @@ def table_paper_mdr(tols):
 
 
 def child_big(N, python=sys.executable, precision=None, fft=None):
-    """The paper case at N in a fresh process; ``precision`` sets
-    mdr.wear.KRYLOV_PRECISION there, ``fft`` the FFT library of the MDR's
-    products (mdr.transforms.FFT); None: the checkout's defaults."""
-    force = (f"from wearcheck.mdr import wear; wear.KRYLOV_PRECISION = {precision!r}; "
-             if precision else "") + (f"transforms.FFT = {fft!r}; " if fft else "")
+    """The paper case at N in a fresh process; ``precision`` is its
+    mdr.krylov_precision, ``fft`` the FFT library of the MDR's products
+    (mdr.transforms.FFT, the installation's choice); None: the defaults."""
+    force = f"transforms.FFT = {fft!r}; " if fft else ""
+    keys = [f"mdr.elements={N}", "stages.s_hat=[0.0]"] + \
+        ([f"mdr.krylov_precision={precision}"] if precision else [])
     code = ("import json, resource, sys; from wearcheck import cases, mdr; "
             "from wearcheck.mdr import transforms; " + force +
-            f"c = cases.load(cases.shipped('paper'), ['mdr.elements={N}', 'stages.s_hat=[0.0]']); "
+            f"c = cases.load(cases.shipped('paper'), {keys!r}); "
             "r = mdr.solve(c); h = r.history; "
             "print(json.dumps(dict(solve=r.solve_seconds, steps=r.info['steps'], "
             "rss=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "
@@ -150,7 +151,7 @@ def table_big(Ns, baseline=None, rounds=2):
     # iterations (the default) and float64 ones
     from wearcheck.mdr import transforms
     print("Krylov float32: iterations in float32 inside float64 iterative refinement "
-          "(mdr.wear.KRYLOV_PRECISION, the default); float64: the float64 GMRES. Alternated "
+          "(mdr.krylov_precision, the default); float64: the float64 GMRES. Alternated "
           f"{rounds} times in fresh processes; the machine was shared.\n")
     runs = [("this", sys.executable, None, None), ("this", sys.executable, "float64", None)]
     if transforms.FFT == "fftw":

@@ -73,7 +73,8 @@ def build_model(case) -> tuple[wear.Model, dict]:
     model = wear.Model(x=x, f0=f0, E_star=case.E_star, wear_rate=case.wear_rate,
                        depth=case.loading.depth, force=case.loading.force,
                        tangential=tangential, exponent=case.wear.pressure_exponent,
-                       hardness=case.wear.hardness)
+                       hardness=case.wear.hardness, linear_solver=case.mdr.linear_solver,
+                       krylov_precision=case.mdr.krylov_precision)
     return model, sc
 
 
@@ -470,7 +471,7 @@ def _solve(case, progress=None) -> RunResult:
         info["warning"] = ELLIPSOID_WARNING
     # direct solves reuse one factorisation per step size: their steps keep to
     # the ladder 2^k ŝ; iterative solves cost the same at any step
-    control = "continuous" if case.mdr.elements > wear.DENSE_MAX else "ladder"
+    control = "ladder" if wear.solves_directly(model) else "continuous"
     plan, until = programme.stepping_plan(case, step_hat, sc, control=control)
 
     def profile(x):
