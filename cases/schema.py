@@ -188,6 +188,19 @@ class MDRSettings:
                                    "√2·a0, the contact radius reached at complete wear under "
                                    "depth control; the domain grows (the grid is remapped) "
                                    "when a worn contact nears its edge")
+    linear_solver: str = key("auto", choices=("auto", "direct", "iterative"),
+                             doc="how the implicit wear steps are solved: direct (a nested LU "
+                                 "of the compliance per step size, 8 (N+1)² bytes each; "
+                                 "adaptive steps keep to the ladder 2^k ŝ so that each serves "
+                                 "many steps), iterative (FFT products and GMRES with a "
+                                 "coarse-grid preconditioner, memory O(N); adaptive steps are "
+                                 "set continuously), or auto: direct up to N = 2048. Both "
+                                 "solve the same equations (to GMRES's tolerance)")
+    krylov_precision: str = key("float32", choices=("float32", "float64"),
+                                doc="iterative solves: the GMRES iterations in float32 inside an "
+                                    "iterative refinement with float64 residuals (the answer "
+                                    "meets the float64 tolerance, 10-15 % faster at N = 102400), "
+                                    "or in float64 throughout (docs/mixed-precision.md)")
 
 
 @dataclass(frozen=True)

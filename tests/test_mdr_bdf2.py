@@ -5,7 +5,8 @@ import pytest
 import threadpoolctl
 
 from wearcheck import mdr
-from wearcheck.mdr import solver, wear
+from wearcheck.mdr import solver
+from wearcheck.numerics import stepping
 from test_mdr_wear import make, u_star_of
 
 # points away from the start: the run begins at a Hertz contact whose
@@ -32,22 +33,9 @@ def reference(N, s_eval, s_hat=2.0):
 
 
 def bdf2_textbook(h, h_prev):
-    """(a, b, c) of the variable-step BDF2 written out here, independent of mdr."""
+    """(a, b, c) of the variable-step BDF2 written out here, independent of the stepper."""
     w = h / h_prev
     return (1 + w) ** 2 / (1 + 2 * w), -w ** 2 / (1 + 2 * w), (1 + w) / (1 + 2 * w)
-
-
-def test_bdf2_coefficients_integrate_quadratics_exactly():
-    # the variable-step BDF2 is exact for polynomials of degree 2 at any
-    # step ratio ω (its defining property); backward Euler without history
-    for w in (0.1, 0.5, 1.0, 2.0, 2.4):
-        h_prev, h = 0.3, 0.3 * w
-        a, b, c = wear.bdf2_coefficients(h, h_prev)
-        s0, s1, s2 = 0.7, 0.7 + h_prev, 0.7 + h_prev + h
-        for y, dy in ((lambda s: 1.0 + 0 * s, lambda s: 0.0), (lambda s: s, lambda s: 1.0),
-                      (lambda s: s * s, lambda s: 2.0 * s)):
-            assert a * y(s1) + b * y(s0) + c * h * dy(s2) == pytest.approx(y(s2), abs=1e-13)
-    assert wear.bdf2_coefficients(0.1, None) == (1.0, 0.0, 1.0)
 
 
 def test_bdf2_is_second_order_and_implicit_first_order():
@@ -102,7 +90,7 @@ def test_variable_steps_keep_second_order():
             errs[scheme].append(np.max(np.abs(force_at(res, s) - ref(s))))
             if scheme == "bdf2":
                 d = np.diff(res.history["s_hat"])
-                assert np.max(d[1:] / d[:-1]) <= solver.BDF2_MAX_RATIO * (1 + 1e-9)
+                assert np.max(d[1:] / d[:-1]) <= stepping.BDF2_MAX_RATIO * (1 + 1e-9)
     ratios = {k: np.array(e[:-1]) / np.array(e[1:]) for k, e in errs.items()}
     assert np.all(ratios["bdf2"] > 3.0)          # second order: 4; first: 2
     assert np.all(ratios["implicit"] < 2.3)
@@ -159,18 +147,15 @@ def test_bdf2_force_control():
     assert h["wear_volume"][-1] == pytest.approx(case.wear_rate * 20.0 * h["s"][-1], rel=1e-3)
 
 
-def test_bdf2_matrix_free_path_solves_the_same_equations(monkeypatch):
+def test_bdf2_matrix_free_path_solves_the_same_equations():
     # the first and stage-landing BDF2 steps have another wear compliance
     # than the regular one: GMRES preconditioned by the regular factors on
     # the dense path, the coarse grid on the matrix-free one. Same discrete
     # equations, so the histories agree to the GMRES tolerance (as for
     # implicit Euler in test_mdr_wear)
-    cases_ = [make(N=300, s_hat=2.0, step_hat=0.15, scheme="bdf2", control=c,
-                   stages=(0.0, 1.0)) for c in ("depth", "force")]
-    dense = [mdr.solve(c) for c in cases_]
-    monkeypatch.setattr(wear, "DENSE_MAX", 64)
-    monkeypatch.setattr(wear, "COARSE_NODES", 48)
-    free = [mdr.solve(c) for c in cases_]
+    dense, free = ([mdr.solve(make(N=300, s_hat=2.0, step_hat=0.15, scheme="bdf2", control=c,
+                                   stages=(0.0, 1.0), linear_solver=solver_))
+                    for c in ("depth", "force")] for solver_ in ("direct", "iterative"))
     for a, b in zip(dense, free):
         for key in ("force", "depth", "contact_radius", "wear_volume"):
             np.testing.assert_allclose(b.history[key], a.history[key], rtol=1e-7)
