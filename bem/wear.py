@@ -192,14 +192,15 @@ def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> 
 def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
         force_fraction: float, progress=None, *, tolerance: float | None = None,
         scales: dict | None = None, ring: tuple | None = None,
-        max_steps: int = 2_000_000) -> dict:
+        max_steps: int = 2_000_000, watch=None) -> dict:
     """Step the wear from the unworn state (h, stage_s, s_end in metres of sliding).
 
     Adaptive: h is the largest step (inf for none), ``tolerance`` and
     ``scales`` (F0, d0, s_hat_per_m) set the error control. ``ring`` =
     (ring index per pixel, number of rings, radii) adds the ``scar_radius``
     column (from the ring-averaged wear). Returns the history, the stages
-    reached (s, f, p, gap, depth) and counters.
+    reached (s, f, p, gap, depth) and counters. ``watch(s, contact_radius,
+    scar_radius)`` is called at every recorded step (:class:`cases.validity.BodyWatch`).
     """
     area = model.op.spacing**2
     i0, j0 = model.centre
@@ -234,6 +235,8 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
             hist["scar_radius"].append(scar_radius(radii, total / count))
         else:
             hist["scar_radius"].append(math.nan)
+        if watch is not None:
+            watch(s, hist["contact_radius"][-1], hist["scar_radius"][-1])
         while stage_s and stage_s[0] <= s * (1 + 1e-12) + 1e-300:
             stages.append((s, st.f.copy(), st.p.copy(), st.gap.copy(), st.depth))
             stage_s.pop(0)

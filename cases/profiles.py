@@ -47,7 +47,10 @@ def height(indenter: Indenter, r, table=None) -> np.ndarray:
     if kind == "table":
         rt, ft = table
         out = _table_interpolant(table)(np.minimum(r, rt[-1]))
-        # beyond the table: continue with the last slope (the profile keeps rising)
+        # beyond the table: continue with the last slope (the profile keeps rising).
+        # Only the gap outside the contact sees it: a contact or scar that
+        # leaves the table stops the run (cases/validity.py), as that continuation
+        # is a guess, not the measured body
         slope_end = _table_interpolant(table).derivative()(rt[-1])
         return np.where(r > rt[-1], ft[-1] + slope_end * (r - rt[-1]), out)
     raise ValueError(f"unknown profile {kind!r}")

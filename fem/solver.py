@@ -9,7 +9,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from wearcheck import meshes
-from wearcheck.cases import CaseError, SolverError, RunResult, reference
+from wearcheck.cases import CaseError, SolverError, RunResult, reference, validity
 from wearcheck.cases.profiles import height
 
 from . import wear
@@ -87,6 +87,7 @@ def check_case(case) -> None:
 def mesh_parameters(case) -> meshes.SphereMeshParameters:
     """The mesh of a case, after checking that the FEM can represent it."""
     check_case(case)
+    validity.check_planned(case, fem_sphere=True)
     fem, order, R = case.fem, case.fem.element_order, case.indenter.radius
     a0 = reference.scales(case)["a0"]
     # the arc is sized for the contact's final radius: √2·a0 under depth control,
@@ -220,6 +221,8 @@ def _solve(case, progress=None) -> RunResult:
             progress(0.05 + 0.9 * frac, text)
 
     t0 = time.perf_counter()
+    watch = validity.BodyWatch(case, fem_sphere=True,
+                               spacing=model.stats()["contact_spacing"])
     out = wear.run(C, z, r, area, rate, control=control, value=value, step=step,
                    scheme=sl.scheme, stage_s=stage_s,
                    until="force_fraction" if sl.until == "force_fraction" else "distance",
@@ -227,7 +230,8 @@ def _solve(case, progress=None) -> RunResult:
                    force_scale=F0, pressure_scale=p0, center=center, progress=loop_progress,
                    max_steps=ADAPTIVE_MAX_STEPS if adaptive else MAX_STEPS,
                    tolerance=sl.tolerance, depth_scale=d0, exponent=n_exp,
-                   hardness=case.wear.hardness, first_step=ADAPTIVE_FIRST_STEP_HAT / per_m)
+                   hardness=case.wear.hardness, first_step=ADAPTIVE_FIRST_STEP_HAT / per_m,
+                   watch=watch)
     t_loop = time.perf_counter() - t0
 
     # stages: full arc values (with the axis node for P2)
@@ -295,6 +299,8 @@ def _solve(case, progress=None) -> RunResult:
                         "depth and central wear /max(d0, value)); the recorded states are "
                         "backward-Euler states one step off the Richardson-corrected solution")))
     info["predicted_scar_radius"] = reference.predicted_scar_radius(case, s_end or 0.0)
+    if watch.remarks:
+        info["warnings"] = watch.remarks
     if progress:
         progress(1.0, "done")
     return RunResult(history=history, stage_s=np.array([st[0] for st in out.stages]),

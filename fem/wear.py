@@ -102,7 +102,7 @@ def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
         distance=None, force_fraction=None, gap_scale, force_scale, pressure_scale,
         center=None, progress=None, max_steps=2_000_000, oscillation_steps=5,
         tolerance=None, depth_scale=None, exponent=1.0, hardness=1.0,
-        first_step=None) -> WearRun:
+        first_step=None, watch=None) -> WearRun:
     """Slide and wear; return history and the states at the stored stages.
 
     Parameters
@@ -118,7 +118,8 @@ def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
     step-doubling error estimate (force /force_scale, depth and central wear
     /max(depth_scale, value)), ``first_step`` [m]. ``exponent`` n and
     ``hardness`` σ0: wear speed rate σ0 (p/σ0)^n (implicit steps linearise it,
-    Newton).
+    Newton). ``watch(s, contact_radius, scar_radius)`` is called at every
+    recorded step (:class:`cases.validity.BodyWatch`).
     """
     n = len(z)
     out = WearRun()
@@ -206,6 +207,8 @@ def run(C, z, r, area, rate, *, control, value, step, scheme, stage_s, until,
         out.wear_center.append(float(center @ w))
         out.wear_volume.append(float(area @ w))
         out.scar_radius.append(scar_radius(r, w))
+        if watch is not None:
+            watch(s, out.contact_radius[-1], out.scar_radius[-1])
         if stages and abs(s - stages[0]) <= 1e-12 * max(abs(s), step if math.isfinite(step)
                                                          else abs(s)):
             out.stages.append((s, res.f.copy(), w.copy(), res.depth, res.gap.copy()))

@@ -9,9 +9,10 @@ import time
 import numpy as np
 
 from wearcheck.cases import CaseError, RunResult, SolverError, profiles, programme, reference
+from wearcheck.cases import validity
 from wearcheck.cases.result import scar_radius
 
-from . import contact, linalg, transforms, wear
+from . import contact, linalg, resolution, transforms, wear
 
 #: implicit Euler's default step in ŝ (sliding.step_hat = "auto"); see README/report:
 #: on the paper case its time error in F/F0 is 7.7e-3 (0.077 Δŝ, first order)
@@ -90,6 +91,18 @@ ELLIPSOID_WARNING = ("the ellipsoid (radii R1, R2) is run as the paraboloid of "
                      "revolution (use the BEM for the ellipsoid as it is)")
 
 
+def ellipsoid_warning(case) -> str:
+    """ELLIPSOID_WARNING with what the stand-in costs at the start: its unworn force
+    (depth control) or depth (force control) over the exact elliptical Hertz one."""
+    ind, ld = case.indenter, case.loading
+    load = {ld.control: getattr(ld, ld.control)}
+    exact = reference.hertz_elliptical(case.E_star, ind.radius, ind.radius_y, **load)
+    stand_in = reference.hertz(case.E_star, profiles.equivalent_radius(ind), **load)
+    what = "force" if ld.control == "depth" else "depth"
+    return (f"{ELLIPSOID_WARNING}; at R2/R1 = {ind.radius_y / ind.radius:.4g} its unworn {what} "
+            f"is {stand_in[what] / exact[what]:.4g} of the exact (elliptical Hertz) one")
+
+
 def build_model(case) -> tuple[wear.Model, dict]:
     """Grid, unworn profile and load of a case; the scales of reference.scales."""
     sc = reference.scales(case)
@@ -150,11 +163,12 @@ def grow_domain(model: wear.Model, profile, arrays=()) -> tuple[wear.Model, list
 class _Recorder:
     """History rows and stored stages of a run whose grid may grow."""
 
-    def __init__(self, stage_s):
+    def __init__(self, stage_s, watch=None):
         self.hist = {k: [] for k in ("s", "force", "depth", "contact_radius", "wear_center",
                                      "wear_volume", "scar_radius", "max_pressure")}
         self.stage_s = list(stage_s)
         self.stages = []      # (s, x, f, p)
+        self.watch = watch    # watch(s, contact_radius, scar_radius) per recorded step
 
     def __call__(self, model, st, s):
         w = st.f - model.f0
@@ -167,6 +181,8 @@ class _Recorder:
         h["wear_volume"].append(transforms.volume(w, model.dt))
         h["scar_radius"].append(scar_radius(model.x, w))
         h["max_pressure"].append(float(np.max(st.p)))
+        if self.watch is not None:
+            self.watch(s, st.contact_radius, h["scar_radius"][-1])
         while self.stage_s and self.stage_s[0] <= s * (1 + 1e-12) + 1e-300:
             self.stages.append((s, model.x.copy(), st.f.copy(), st.p.copy()))
             self.stage_s.pop(0)
@@ -246,7 +262,7 @@ class _EdgeGuess:
 def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: float,
         force_fraction: float, progress=None, check_oscillation: bool = True, *,
         tolerance: float | None = None, scales: dict | None = None, profile=None,
-        accept: str = "deferred") -> dict:
+        accept: str = "deferred", watch=None) -> dict:
     """Step the wear from the unworn state; the numerics without case handling.
 
     h, stage_s, s_end in metres of sliding (adaptive: h is the largest step,
@@ -260,14 +276,15 @@ def run(model: wear.Model, scheme: str, h: float, stage_s, until: str, s_end: fl
     "deferred" (the two half steps, Richardson's correction 2·two − full
     added to the start of the next step), "euler" (the two half steps, no
     correction) or "extrapolated" (Richardson's profile, its contact solved
-    afresh: not monotone at the edge).
+    afresh: not monotone at the edge). ``watch(s, contact_radius,
+    scar_radius)`` is called at every recorded step (:class:`cases.validity.BodyWatch`).
     """
     state = wear.contact_state(model, model.f0.copy())
     F_start = state.force
     if not F_start > 0.0:
         raise SolverError("the unworn indenter carries no load (no node in contact); "
                           "raise mdr.elements or the load")
-    rec = _Recorder(stage_s)
+    rec = _Recorder(stage_s, watch)
     stage_s = rec.stage_s
     counters = {"steps": 0, "gmres_iterations": 0, "contact_iterations": 0,
                 "domain_growths": 0}
@@ -551,6 +568,8 @@ def solve(case, progress=None) -> RunResult:
 
 def _solve(case, progress=None) -> RunResult:
     t0 = time.perf_counter()
+    resolution.check(case)
+    validity.check_planned(case)
     model, sc = build_model(case)
     per_m = sc["s_hat_per_m"]
     sl = case.sliding
@@ -576,10 +595,12 @@ def _solve(case, progress=None) -> RunResult:
         step_hat = auto if sl.step_hat == "auto" else sl.step_hat
     info["step_hat"] = float(step_hat) if math.isfinite(step_hat) else "unlimited"
     # approximate: False, or the reason (what comparisons report per solver)
-    info["approximate"] = case.indenter.profile == "ellipsoid" and ELLIPSOID_WARNING
-    if info["approximate"]:
+    watch = validity.BodyWatch(case)
+    info["approximate"] = False
+    if case.indenter.profile == "ellipsoid":
+        info["approximate"] = info["warning"] = ellipsoid_warning(case)
         info["equivalent_radius"] = profiles.equivalent_radius(case.indenter)
-        info["warning"] = ELLIPSOID_WARNING
+        validity.remark(watch.remarks, info["warning"])
     s_end, stage_s, until = programme.sliding_plan(
         case, step_hat, per_m, s_hat_cap=ADAPTIVE_MAX_S_HAT if adaptive else MAX_S_HAT,
         max_steps=MAX_STEPS, adaptive=adaptive)
@@ -588,7 +609,10 @@ def _solve(case, progress=None) -> RunResult:
         return profiles.height(case.indenter, x, case.table)
 
     out = run(model, sl.scheme, step_hat / per_m, stage_s, until, s_end, sl.force_fraction,
-              progress, tolerance=sl.tolerance, scales=sc, profile=profile, accept=ADAPTIVE_ACCEPT)
+              progress, tolerance=sl.tolerance, scales=sc, profile=profile, accept=ADAPTIVE_ACCEPT,
+              watch=watch)
+    if watch.remarks:
+        info["warnings"] = watch.remarks
     hist = programme.finish_history(case, out["history"], until, s_end, per_m)
     counters = out["counters"]
     info.update(counters)

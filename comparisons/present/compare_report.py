@@ -67,6 +67,9 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
         blocks.append(R.para(f"Note: {w}"))
     for n, text in m.get("approximate", {}).items():
         blocks.append(R.para(f"Approximate: {title(n)} — {text}"))
+    for n, texts in m.get("run_warnings", {}).items():
+        blocks += [R.para(f"Note: {title(n)} — {t}") for t in texts
+                   if t != m.get("approximate", {}).get(n)]
     if m.get("reference_note"):
         blocks.append(R.para(f"Reference: {m['reference_note']}."))
     tol = m["tolerances"]
@@ -345,6 +348,9 @@ def print_summary(m, out, stream=None) -> None:
     """
     stream = sys.stderr if stream is None else stream
     ref = title(m["reference"])
+    for name, texts in m.get("run_warnings", {}).items():
+        for text in texts:
+            print(f"note: {title(name)}: {text}", file=stream)
     for name, pair in m["pairs"].items():
         print(f"{title(name)} against {ref}:", file=stream)
         for st in pair["stages"]:
