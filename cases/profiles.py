@@ -19,9 +19,22 @@ def equivalent_radius(indenter: Indenter) -> float:
     return float(np.sqrt(indenter.radius * indenter.radius_y))
 
 
+#: PCHIP interpolants of the tables seen last, by the identity of their radius
+#: array (a case's table is built once and never changed): building one per
+#: evaluation cost ~4 ms, which every recorded step of a run pays (cases/validity.py)
+_INTERPOLANTS: dict = {}
+
+
 def _table_interpolant(table):
     r, f = table
-    return scipy.interpolate.PchipInterpolator(r, f, extrapolate=True)
+    hit = _INTERPOLANTS.get(id(r))
+    if hit is not None and hit[0] is r and hit[1] is f:
+        return hit[2]
+    interpolant = scipy.interpolate.PchipInterpolator(r, f, extrapolate=True)
+    if len(_INTERPOLANTS) >= 8:
+        _INTERPOLANTS.clear()
+    _INTERPOLANTS[id(r)] = (r, f, interpolant)   # (r, f) kept: their ids stay theirs
+    return interpolant
 
 
 def height(indenter: Indenter, r, table=None) -> np.ndarray:

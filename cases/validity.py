@@ -153,11 +153,11 @@ class BodyWatch:
         self.end = body_end(case, fem_sphere)
         self.spacing = float(spacing)
         self.inside = None          # (s, cycle) of the last recorded step inside the body
-        self.per_m = reference.scales(case)["s_hat_per_m"]
         self.remarks: list[str] = []
 
     def _at(self, s: float, cycle: float | None) -> str:
-        text = f"ŝ = {s * self.per_m:.4g} (s = {s:.4g} m"
+        # (the scales only here: a table case's cost a quadrature)
+        text = f"ŝ = {s * reference.scales(self.case)['s_hat_per_m']:.4g} (s = {s:.4g} m"
         cpm = getattr(self.case, "cycles_per_metre", None)
         if cycle is None and cpm is not None and self.case.fretting is None:
             cycle = s * cpm

@@ -109,10 +109,13 @@ def mesh_parameters(case) -> meshes.SphereMeshParameters:
                         f"would lie inside the unworn contact (a0 = {a0:.4g} m); at least "
                         f"{MIN_NODES_IN_CONTACT} are needed, i.e. fem.contact_nodes >= {need}")
     if rc >= R:
+        # (a predicted scar past R itself was refused by validity.check_planned, as
+        # by the other solvers: here only the arc's margin beyond it does not fit)
         raise CaseError(f"key 'fem.contact_factor' = {fem.contact_factor!r}: the candidate "
-                        f"arc would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m"
-                        + (f" (predicted final scar radius {predicted:.4g} m: shorten the run "
-                           "or lower the load)" if case.loading.control == "force" else ""))
+                        f"arc would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m "
+                        f"(predicted final scar radius {predicted:.4g} m); use "
+                        f"fem.contact_factor < {math.floor(R / predicted * 1000) / 1000:g} "
+                        "(>= 1 reaches the predicted scar), or shorten the run or lower the load")
     return meshes.SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges,
                                        growth=GROWTH[order])
 
