@@ -181,7 +181,7 @@ def write_run_files(directory: Path, case: cases.Case, result: RunResult, solver
         meta.update(extra_meta)
     meta["data_dictionary"] = layout.run_dictionary(_registered(solver), list(result.history),
                                                     list(result.fields or {}),
-                                                    list(result.stage_extra or {}))
+                                                    list(result.stage_extra or {}), list(meta))
     write_json(directory / "meta.json", meta)
     entry = _registered(solver)
     if entry is not None and entry.run_report:  # e.g. the MDR's fretting report

@@ -234,6 +234,7 @@ def test_a_table_that_holds_the_contact_runs_and_its_digest_is_recorded(tmp_path
     meta = json.loads((Path(path) / "meta.json").read_text())
     assert meta["profile_table"]["sha256"] == hashlib.sha256(table.read_bytes()).hexdigest()
     assert meta["profile_table"]["last_radius"] == 2e-4
+    assert set(meta) == set(meta["data_dictionary"]["meta_json"])   # described, as every key
 
 
 # -- item 8: messages -----------------------------------------------------------------
