@@ -8,9 +8,9 @@ force control over three decades, wear keys, scheme, MDR grid and domain,
 run length — and runs each through the solvers asked for (BEM at 48 pixels,
 FEM at 80 nodes, to keep it quick). Each outcome must be one of: a result
 whose history is finite and, for the Reye–Archard law (n = 1), balances
-the worn volume against K ∫F ds (trapezoid over the recorded steps; within
-2 %: the implicit steps' first-order difference between the step's end force
-and the trapezoid, ≈ Δs·|dF/ds|/2 per step); a CaseError (bad input or past
+the worn volume against K ∫F ds (between the left and right rectangle sums
+over the recorded steps, to 1e-2 of the volume: :func:`archard_imbalance`);
+a CaseError (bad input or past
 the case's validity, one line naming a key); a SolverError (a numerical
 failure reported). Anything else (another exception, a non-finite value, an
 unbalanced volume) is a failure; exit status 1 if any.
@@ -32,8 +32,11 @@ import numpy as np
 import wearcheck
 from wearcheck.cases import CaseError, RunWarning, SolverError
 
-#: relative Archard balance a finished run must meet (see the module docstring)
-BALANCE = 0.02
+#: how far outside the bracket of the rectangle sums the worn volume may lie, relative
+#: to it: the MDR's volume and force quadratures differ by 2e-4 at N = 800 (README)
+#: but by up to 5e-3 on the coarsest grids accepted (cone, 13 cells: 4.8e-3; 3.7e-4
+#: and 1.9e-5 at 4 and 16 times the elements): the 1 % of the resolution criterion
+BALANCE = 1e-2
 
 
 def draw_case(rng, table_dir: Path) -> dict:
@@ -77,7 +80,7 @@ def draw_case(rng, table_dir: Path) -> dict:
     ch["wear.mu"] = float(rng.uniform(0.05, 0.9))
     ch["wear.hardness"] = float(10 ** rng.uniform(8.5, 10))
     if rng.random() < 0.2:
-        ch["wear.pressure_exponent"] = float(rng.uniform(0.5, 2.5))
+        ch["wear.pressure_exponent"] = float(rng.uniform(1.0, 2.5))
     ch["sliding.scheme"] = str(rng.choice(["adaptive", "adaptive", "implicit", "bdf2"]))
     ch["mdr.elements"] = int(10 ** rng.uniform(1.3, 3.2))   # 20 ... 1600: some refused
     ch["mdr.domain_factor"] = float(10 ** rng.uniform(0.02, 0.9))
@@ -88,12 +91,21 @@ def draw_case(rng, table_dir: Path) -> dict:
 
 
 def archard_imbalance(run) -> float:
+    """How far the worn volume leaves K ∫F ds, relative to the final volume.
+
+    Any consistent one-step scheme's volume lies between the left and right
+    rectangle sums of K F over the recorded steps when F is monotone (it falls
+    under depth control, is held under force control, where both sums are
+    K F s); the distance outside that bracket is returned.
+    """
     h = run.history
-    K = run.case.wear_rate
-    expected = K * np.concatenate([[0.0], np.cumsum(0.5 * (h["force"][1:] + h["force"][:-1])
-                                                    * np.diff(h["s"]))])
-    scale = max(float(np.max(np.abs(expected))), 1e-300)
-    return float(np.max(np.abs(h["wear_volume"] - expected)) / scale)
+    K, F, ds = run.case.wear_rate, h["force"], np.diff(h["s"])
+    left = K * np.concatenate([[0.0], np.cumsum(F[:-1] * ds)])
+    right = K * np.concatenate([[0.0], np.cumsum(F[1:] * ds)])
+    lo, hi = np.minimum(left, right), np.maximum(left, right)
+    V = h["wear_volume"]
+    outside = np.maximum(lo - V, 0.0) + np.maximum(V - hi, 0.0)
+    return float(np.max(outside) / max(float(np.max(np.abs(V))), 1e-300))
 
 
 def main() -> int:
