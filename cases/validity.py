@@ -24,7 +24,6 @@ import os
 import sys
 import warnings
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -187,7 +186,6 @@ class BodyWatch:
                    "a sphere); the solvers take the bodies as half-spaces, valid for contacts "
                    "small and flat against them, so the results past this point are approximate")
 
-
     def _stop(self, s, cycle, what, edge):
         end, case = self.end, self.case
         at = f"the unworn {what}" if s == 0.0 else f"the {what}, at {self._at(s, cycle)},"
@@ -218,14 +216,16 @@ def remark(remarks: list, text: str) -> None:
     warnings.warn(text, RunWarning, stacklevel=_caller_level())
 
 
-#: wearcheck's package directories (the repository root holds tests/ and examples/ too)
-_PACKAGES = tuple(str(Path(__file__).resolve().parents[1] / name) + os.sep
-                  for name in ("cases", "mdr", "fem", "bem", "comparisons", "wearcheck"))
-
-
 def _caller_level() -> int:
-    """The stacklevel of the first frame outside wearcheck (the warning points at its caller)."""
+    """The stacklevel of the first frame outside wearcheck (the warning points at its caller).
+
+    wearcheck's files are those of its imported modules (its packages sit in
+    several directories of a source checkout, beside tests/ and examples/).
+    """
+    ours = {os.path.dirname(m.__file__) for name, m in list(sys.modules.items())
+            if (name == "wearcheck" or name.startswith("wearcheck."))
+            and getattr(m, "__file__", None)}
     level, frame = 2, sys._getframe(2)
-    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGES):
+    while frame is not None and os.path.dirname(frame.f_code.co_filename) in ours:
         level, frame = level + 1, frame.f_back
     return level

@@ -61,6 +61,6 @@ def check(case) -> None:
     else:
         why = (f"the unworn contact spans {cells:.3g} cells of the MDR grid (N/(2·"
                f"mdr.domain_factor²) with mdr.elements = {N}, mdr.domain_factor = {factor:g}); "
-               f"at least {MIN_CONTACT_CELLS} are needed, below which F/F0 errs by more than "
-               "1 % (docs/limits.md)")
+               f"at least {MIN_CONTACT_CELLS} are needed, below which F/F0 (d/d0 under force "
+               "control) errs by more than 1 % (docs/limits.md)")
     raise CaseError(f"key '{key}' = {value!r}: {why}; use " + " or ".join(remedies))
