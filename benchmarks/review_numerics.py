@@ -61,7 +61,10 @@ def main() -> int:
         if code == 2:
             ok = ok and len(errors) == 1 and not out.exists()
         if ok and written is not None:
-            ok = written(out, err)
+            try:
+                ok = bool(written(out, err))
+            except (KeyError, IndexError, ValueError, OSError):   # a key or file missing
+                ok = False
         results.append((label, got, ok, (errors or lines or [""])[0][:160]))
         if not ok:
             failures.append((label, err))
