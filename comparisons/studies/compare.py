@@ -210,6 +210,9 @@ def analyse(case, results, reference_solver=None) -> dict:
                     for k, v in results.items()}
     m["approximate"] = {k: v.info.get("approximate") for k, v in results.items()
                         if v.info.get("approximate")}
+    # each solver's remarks on its run (cases.validity: half-space theory stretched, ...)
+    m["run_warnings"] = {k: list(v.info["warnings"]) for k, v in results.items()
+                         if v.info.get("warnings")}
     m["anisotropy"] = {k: v.info["anisotropy"] for k, v in results.items()
                        if isinstance(v.info.get("anisotropy"), dict)}
     tr = truncated_reference(case, results, sc)
