@@ -44,6 +44,12 @@ def default(key: str):
     return dict(section_fields(section))[name].default
 
 
+def switch_values(key: str) -> tuple:
+    """Every value a switch (a key of choices, or true/false) takes."""
+    section, name = split(key)
+    return tuple(dict(section_fields(section))[name].metadata["choices"] or (True, False))
+
+
 def _same(a, b) -> bool:
     """Equal and of the same type (true is not 1), as JSON Schema's const compares."""
     return a == b and isinstance(a, bool) == isinstance(b, bool)
@@ -165,9 +171,6 @@ class Absent:
 
     def schema(self, at: str | None) -> dict:
         return {"not": Given(self.key).schema(at)}
-
-
-Condition = Is | Given | Absent
 
 
 def _plain(value):
@@ -305,6 +308,13 @@ class Excludes(Rule):
     def __post_init__(self):
         object.__setattr__(self, "when", _tuple(self.when))
         object.__setattr__(self, "keys", _tuple(self.keys))
+
+    @classmethod
+    def unless(cls, switch: Is, keys, **kw) -> "Excludes":
+        """``keys`` apply only when ``switch`` holds: excluded at the switch's other values."""
+        return cls(Is(switch.key, tuple(v for v in switch_values(switch.key)
+                                        if not any(_same(v, w) for w in switch.values))),
+                   keys, **kw)
 
     def keys_named(self):
         return _keys_of(self.when) + list(self.keys)

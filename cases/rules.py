@@ -20,9 +20,10 @@ states. Adding a rule: docs/case-files.md, "Adding a key or a rule".
 from __future__ import annotations
 
 from . import loader_checks as lc
+from .errors import CaseError
 from .rule_kinds import (Absent, Excludes, Forbids, Given, Is, LoaderOnly, OneOf, Requires,
-                         RuleError, View, split)
-from .schema import PROFILES, section_fields
+                         RuleError, View, split, switch_values)
+from .schema import PROFILES
 
 #: which geometry keys each profile takes (besides ``profile``), and which it requires
 PROFILE_KEYS = {
@@ -93,7 +94,7 @@ RULES = (
     Excludes(Is("sliding.until", "cycles"), "sliding.distance",
              why="the distance is 2·stroke·cycles"),
     Requires(Is("sliding.until", "cycles"), ("sliding.stroke", "sliding.cycles")),
-    Excludes(Is("sliding.until", ("force_fraction", "distance")), "sliding.cycles"),
+    Excludes.unless(Is("sliding.until", "cycles"), "sliding.cycles"),
     Forbids((Is("sliding.until", "force_fraction"), Is("loading.control", "force"),
              Absent("fretting")),
             why="a force-controlled run cannot end on a falling force (the force does not "
@@ -131,11 +132,6 @@ RULES = (
 )
 
 
-def _switch_values(key: str) -> tuple:
-    f = dict(section_fields(split(key)[0]))[split(key)[1]]
-    return tuple(f.metadata["choices"]) if f.metadata["choices"] else (True, False)
-
-
 def _fill_alternatives(rules):
     """An Excludes rule on a switch names, for each of its keys, the switch's values
     under which that key applies (no rule on the switch excludes it there)."""
@@ -147,7 +143,7 @@ def _fill_alternatives(rules):
         for key in rule.keys:
             excluded_at = {v for r in rules if isinstance(r, Excludes) and r.switch() == switch
                            and key in r.keys for v in r.when[0].values}
-            pairs.append((key, tuple(v for v in _switch_values(switch) if v not in excluded_at)))
+            pairs.append((key, tuple(v for v in switch_values(switch) if v not in excluded_at)))
         object.__setattr__(rule, "alternatives", tuple(pairs))
     return rules
 
@@ -173,13 +169,10 @@ def check(raw: dict, built: dict) -> None:
 
 def check_loader_only(case):
     """Run the loader-only rules on the built case; the case, completed by them."""
-    from .errors import CaseError
     for rule in RULES:
         if is_loader_only(rule):
             try:
                 case = rule.check(case) or case
-            except RuleError:
-                raise
             except CaseError as exc:
                 raise RuleError(str(exc), rule) from None
     return case
@@ -211,12 +204,18 @@ def drop_inapplicable(raw: dict, changed) -> None:
                     table.pop(other, None)
 
 
+def one_of_groups(section: str) -> list[tuple[str, ...]]:
+    """The groups of keys of ``section`` given one way or another (:class:`OneOf`)."""
+    return [tuple(split(k)[1] for k in rule.keys) for rule in RULES
+            if isinstance(rule, OneOf) and split(rule.keys[0])[0] == section]
+
+
 def partners(section: str, key: str) -> tuple[str, ...]:
     """The keys of ``section`` given instead of ``key`` (a :class:`OneOf`): an override
     of ``key`` drops them."""
-    for rule in RULES:
-        if isinstance(rule, OneOf) and f"{section}.{key}" in rule.keys:
-            return tuple(split(k)[1] for k in rule.keys if k != f"{section}.{key}")
+    for group in one_of_groups(section):
+        if key in group:
+            return tuple(k for k in group if k != key)
     return ()
 
 
