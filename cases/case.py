@@ -10,11 +10,12 @@ from typing import Any
 import numpy as np
 
 from . import rules
-from .errors import CaseError
+from .errors import ArgumentError, CaseError
 from .schema import (BEMSettings, did_you_mean, OPTIONAL_SECTIONS, REQUIRED_SECTIONS,
                      SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
                      Loading,
                      MDRSettings, Sliding, Stages, Wear, format_value, build_section,
+                     key_problem,
                      section_fields, toml_string)
 
 
@@ -68,6 +69,18 @@ class Case:
         if sl.until == "cycles":
             return 2.0 * sl.stroke * sl.cycles
         return None
+
+    @property
+    def end_condition(self) -> str:
+        """How the run ends, in words: ``"it stops once F < 0.01 F0"``."""
+        sl = self.sliding
+        if self.fretting is not None:
+            return f"it stops after {self.fretting.cycles} fretting cycles"
+        if sl.until == "force_fraction":
+            return f"it stops once F < {sl.force_fraction:g} F0"
+        if sl.until == "distance":
+            return f"it stops at s = {sl.distance:g} m"
+        return f"it stops after {sl.cycles:g} cycles (s = {self.end_distance:g} m)"
 
     @property
     def cycles_per_metre(self) -> float | None:
@@ -191,6 +204,43 @@ def parse_override(text: str) -> tuple[str, str, Any]:
     except tomllib.TOMLDecodeError:
         parsed = value  # bare word such as loading.control=force
     return section, k, parsed
+
+
+def split_values(text: str) -> list[str]:
+    """Split at commas outside brackets and quotes: ``[0, 1],[2]`` is two values."""
+    values, depth, quote, cur = [], 0, None, ""
+    for ch in text:
+        if quote:
+            quote = None if ch == quote else quote
+        elif ch in "\"'":
+            quote = ch
+        elif ch == "[":
+            depth += 1
+        elif ch == "]":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            values.append(cur.strip())
+            cur = ""
+            continue
+        cur += ch
+    values.append(cur.strip())
+    return values
+
+
+def parse_vary(text: str) -> tuple[str, list]:
+    """``section.key=v1,v2`` -> (``"section.key"``, [v1, v2]), each value read as ``--set``
+    reads it (TOML, or a bare word): the command line's values, typed once."""
+    if "=" not in text:
+        raise ArgumentError("vary", "expected section.key=v1,v2,...", value=text)
+    name, _, rest = text.partition("=")
+    name = name.strip()
+    problem = key_problem(name)
+    if problem:
+        raise ArgumentError("vary", problem, value=text)
+    texts = split_values(rest)
+    if not all(texts):
+        raise ArgumentError("vary", "an empty value", value=text)
+    return name, [parse_override(f"{name}={v}")[2] for v in texts]
 
 
 def read_raw(path: str | Path) -> dict:

@@ -463,6 +463,21 @@ def did_you_mean(name: str, allowed) -> str:
     return f" (did you mean '{close[0]}'?)" if close else ""
 
 
+def key_problem(name) -> str | None:
+    """What is wrong with ``name`` as a dotted case key (``"wear.mu"``), or None if declared."""
+    section, _, key = str(name).partition(".")
+    if not isinstance(name, str) or not key or "." in key:
+        return "a key must be section.key, e.g. wear.mu"
+    if section not in SECTIONS:
+        return (f"unknown section '{section}'{did_you_mean(section, SECTIONS)}; allowed: "
+                + ", ".join(SECTIONS))
+    names = [f.name for f in dataclasses.fields(SECTIONS[section])]
+    if key not in names:
+        return (f"unknown key '{name}'{did_you_mean(key, names)}; allowed in [{section}]: "
+                + ", ".join(names))
+    return None
+
+
 def build_section(section: str, raw: dict) -> Any:
     """Build one section from its raw TOML table; unknown and missing keys are errors."""
     cls = SECTIONS[section]
