@@ -44,6 +44,29 @@ class Case:
     #: non-fatal remarks on the case (e.g. elastic similarity violated)
     warnings: tuple[str, ...] = ()
 
+    def __repr__(self) -> str:
+        """One line per section: the keys given (defaults filled in), with units."""
+        head = f"Case({toml_string(Path(self.source).name) if self.source else ''})"
+        return "\n".join([head] + [f"  [{name}] " + ", ".join(
+            f"{k} = {v}" + (f" {u}" if u else "") for k, v, u, _ in rows)
+            for name, rows in _shown(self)])
+
+    def _repr_html_(self) -> str:
+        """The case as a table per section (key, value, unit, meaning) in Jupyter."""
+        import html
+        title = html.escape(Path(self.source).name if self.source else "case")
+        parts = [f"<details open><summary><b>Case</b> {title}</summary>"]
+        for name, rows in _shown(self):
+            parts.append(f"<table><caption style='text-align:left'><code>[{name}]</code>"
+                         "</caption>")
+            for k, v, u, f in rows:
+                parts.append("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in (
+                    k, v, u, f.metadata.get("doc", ""))) + "</tr>")
+            parts.append("</table>")
+        if self.warnings:
+            parts.append("<p>" + "<br>".join(html.escape(w) for w in self.warnings) + "</p>")
+        return "".join(parts) + "</details>"
+
     # -- derived material constants (paper Eqs. 5-7) ------------------------
     @property
     def E_star(self) -> float:
@@ -371,6 +394,33 @@ def key_reference() -> str:
                 doc += " (" + " \\| ".join(f"`{c}`" for c in meta["choices"]) + ")"
             rows.append(f"| `{section}.{name}` | {meta['unit'] or ''} | {default} | {doc} |")
     return "\n".join(rows)
+
+
+def _shown(case: Case):
+    """(section, [(key, value text, unit, Field)]) of the sections a case has (numbers
+    to 6 significant digits: a display, not the resolved case file)."""
+    out = []
+    for name in SECTIONS:
+        obj = getattr(case, name, None)
+        if obj is None:
+            continue
+        rows = []
+        for f in fields(obj):
+            value = getattr(obj, f.name)
+            if value is None:
+                continue
+            unit = f.metadata.get("unit", "") if f.metadata else ""
+            rows.append((f.name, _shown_value(value), "" if unit == "1" else unit, f))
+        out.append((name, rows))
+    return out
+
+
+def _shown_value(value) -> str:
+    if isinstance(value, tuple):
+        return "[" + ", ".join(_shown_value(v) for v in value) + "]"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return format_value(value)
 
 
 def _section_dict(obj) -> dict:

@@ -101,18 +101,61 @@ class Result:
                 f"steps={steps}, stages={len(self.stages['s'])}, F/F0 at the end={end:.4g}, "
                 f"solve_seconds={self.solve_seconds:.3g}{where})")
 
+    def _repr_html_(self) -> str:
+        """Scales, stages reached and the final values, as tables in Jupyter."""
+        import html
+        sc, h = self.scales, self.history
+        units = dict(a0="m", d0="m", F0="N", p0="Pa", E_star="Pa", G_star="Pa",
+                     s_hat_per_m="1/m")
+
+        def table(caption, rows):
+            body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r)
+                           + "</tr>" for r in rows)
+            return (f"<table><caption style='text-align:left'>{caption}</caption>{body}"
+                    "</table>")
+
+        from wearcheck.comparisons.present import frames
+        hu = frames.dictionary(self)["history_csv"]
+        end = [(k, f"{float(np.asarray(v)[-1]):.6g}", hu.get(k, {}).get("unit", ""))
+               for k, v in h.items() if np.size(v)]
+        parts = [f"<details open><summary><b>Result</b> {html.escape(self.solver)}, "
+                 f"{html.escape(Path(self.case.source).name)}</summary>",
+                 table("scales of the unworn contact",
+                       [(k, f"{v:.6g}", units.get(k, "")) for k, v in sc.items()]),
+                 table(f"{len(self.stages['s'])} of {len(self.case.stages.s_hat)} stages "
+                       "reached", [("ŝ", ", ".join(f"{v:.3g}" for v in self.stages["s_hat"]))]),
+                 table(f"at the end ({len(h['s']) - 1} steps, "
+                       f"{self.solve_seconds:.3g} s)", end)]
+        if self.warnings:
+            parts.append("<p>" + "<br>".join(html.escape(str(w)) for w in self.warnings)
+                         + "</p>")
+        if self.path:
+            parts.append(f"<p>run directory: <code>{html.escape(str(self.path))}</code></p>")
+        return "".join(parts) + "</details>"
+
     @property
     def scales(self) -> dict:
         """E*, G*, a0, d0, F0, p0 of the unworn contact and ŝ per metre of sliding."""
         return reference.scales(self.case)
 
     def history_frame(self):
-        """The history as a pandas DataFrame (needs pandas)."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("history_frame() needs pandas: pip install pandas") from None
-        return pd.DataFrame({k: np.asarray(v) for k, v in self.history.items()})
+        """The history as a pandas DataFrame indexed by the sliding distance s [m];
+        ``attrs`` holds each column's unit and meaning, the solver and the scales
+        (needs pandas: ``pip install "wearcheck[xarray]"``)."""
+        from wearcheck.comparisons.present import frames
+        return frames.history_frame(self)
+
+    def to_xarray(self):
+        """History and stages as an xarray Dataset with units, meanings and provenance
+        as attributes (needs xarray: ``pip install "wearcheck[xarray]"``)."""
+        from wearcheck.comparisons.present import frames
+        return frames.to_xarray(self)
+
+    def to_netcdf(self, path: str | Path) -> Path:
+        """Write :meth:`to_xarray` as a netCDF file (atomically; never over a file that
+        is not a wearcheck netCDF file)."""
+        from wearcheck.comparisons.present import frames
+        return frames.write_netcdf(self, path)
 
     def write(self, out: str | Path) -> Path:
         """Write the run directory ``out`` atomically (as ``wearcheck run`` does)."""
