@@ -366,3 +366,18 @@ def test_a_list_written_without_brackets_is_shown_with_them():
         cases.load(cases.shipped("paper"), ["stages.s_hat=0,1"])
     # and the spelling it shows is read
     assert cases.load(cases.shipped("paper"), ["stages.s_hat=[0, 1]"]).stages.s_hat == (0, 1)
+
+
+def test_the_end_condition_says_how_each_kind_of_run_ends():
+    """Case.end_condition (the reason a stage was not reached, in ``wearcheck run``'s note
+    and the API's warning) names the key that ends the run; under until = "cycles" the
+    distance is 2·stroke·cycles."""
+    base = cases.from_dict(BASE)
+    assert base.end_condition == f"it stops once F < {base.sliding.force_fraction:g} F0"
+    assert base.derive({"sliding.until": "distance", "sliding.distance": 0.002}) \
+        .end_condition == "it stops at s = 0.002 m"
+    cyc = base.derive({"sliding.until": "cycles", "sliding.stroke": 1e-3,
+                       "sliding.cycles": 50.0})
+    assert cyc.end_condition == "it stops after 50 cycles (s = 0.1 m)"
+    fretting = base.derive({"fretting.amplitude": 1e-8, "fretting.cycles": 7})
+    assert fretting.end_condition == "it stops after 7 fretting cycles"

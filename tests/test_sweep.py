@@ -256,3 +256,24 @@ def test_study_errors_name_the_python_argument_or_the_flag(tmp_path, capsys, mon
     err = [l for l in capsys.readouterr().err.splitlines() if not l.startswith("note:")]
     assert len(err) == 1 and f"error: {said_on_the_command_line}" in err[0], err
     assert not (tmp_path / "py").exists() and not (tmp_path / "cli").exists()
+
+
+def test_the_command_line_reads_a_varied_table_file_as_set_does(tmp_path, monkeypatch):
+    """``--set indenter.file=t.csv`` is relative to the case file; so is ``--vary``'s, typed
+    once on the command line. From Python a relative file is relative to the working
+    directory (as ``Case.derive`` reads it), made absolute before it goes to a worker,
+    whose working directory may differ."""
+    from types import SimpleNamespace
+    from wearcheck.comparisons.cli._common import varied
+    from wearcheck.comparisons.studies.sweep import task_changes
+    case_file = tmp_path / "sub" / "case.toml"
+    args = SimpleNamespace(case=case_file, overrides=["wear.mu=0.3"],
+                           vary=["indenter.file=a.csv,/abs/b.csv", "wear.k=1e-5"])
+    assert varied(args) == {"indenter.file": [str(tmp_path / "sub" / "a.csv"), "/abs/b.csv"],
+                            "wear.k": [1e-5]}
+    args.vary.append("wear.mu=0.2")
+    with pytest.raises(cases.CaseError, match="wear.mu is both in --set and --vary"):
+        varied(args)
+    monkeypatch.chdir(tmp_path)
+    assert task_changes({"indenter.file": "a.csv", "wear.k": 1e-5}) == {
+        "indenter.file": str(tmp_path / "a.csv"), "wear.k": 1e-5}
