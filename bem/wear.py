@@ -35,6 +35,7 @@ from wearcheck.cases.result import scar_radius
 
 from . import contact
 from .operator import HalfSpace
+from .tangential import ShearToNormal
 
 #: BDF2: largest ratio of consecutive steps (zero-stable below 1 + √2)
 BDF2_MAX_RATIO = 2.0
@@ -45,6 +46,43 @@ BDF2_FIRST_STEP = 1.0 / 16.0
 #: estimate grows as h², fourfold per doubling)
 ADAPTIVE_FIRST_STEP_HAT = 2.0 ** -7
 ADAPTIVE_GROW_BELOW = 0.2
+
+
+@dataclass
+class Coupling:
+    """The friction traction τx = μp moving the surface normally (bodies not elastically similar).
+
+    shear : the normal displacement of a traction along x (Dundurs' β in it).
+    mu : friction coefficient; the traction on the worn body points along +x,
+        the direction the counterface slides relative to it.
+    reciprocating : strokes alternate +x, -x. The wear of a step is then the
+        mean of the two strokes' (the stroke is short against the wear's time
+        scale): the pressure of the -x stroke is the mirror image x -> -x of
+        the +x stroke's on a profile symmetric in x, which the symmetric
+        wear keeps (the unworn profiles are all symmetric in x).
+    """
+
+    shear: ShearToNormal
+    mu: float
+    reciprocating: bool = False
+
+
+def stroke_mean(model: "Model", field_: np.ndarray) -> np.ndarray:
+    """The mean of a +x stroke's field and its mirror image (the -x stroke's); itself otherwise.
+
+    The mirror of pixel i is 2·(n//2) - i (the tip sits on pixel n//2); for
+    even n pixel 0 has none and keeps its value (it carries no load: the
+    contact may not reach the box's edge).
+    """
+    c = model.coupling
+    if c is None or not c.reciprocating:
+        return field_
+    n = field_.shape[0]
+    m = 2 * (n // 2)
+    out = field_.copy()
+    lo = m - (n - 1)           # first pixel whose mirror is inside the box
+    out[lo:] = 0.5 * (field_[lo:] + field_[lo:][::-1])
+    return out
 
 
 @dataclass
@@ -63,6 +101,7 @@ class Model:
     centre: tuple[int, int] = (0, 0)
     exponent: float = 1.0      # n of the wear law dw/ds = K σ0 (p/σ0)^n
     hardness: float = 1.0      # σ0 [Pa]; enters only when exponent != 1
+    coupling: Coupling | None = None   # bem.coupling: friction traction into the normal problem
 
 
 @dataclass
@@ -77,9 +116,14 @@ class State:
     stats: dict = field(default_factory=dict)
 
 
-def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
+def local_wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
     """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard): :func:`cases.wear_law.speed`."""
     return wear_law.speed(p, model.wear_rate, model.exponent, model.hardness)
+
+
+def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
+    """The wear speed of the pressure p, averaged over the two strokes when reciprocating."""
+    return stroke_mean(model, local_wear_speed(model, p))
 
 
 def wear_speed_slope(model: Model, p: np.ndarray) -> np.ndarray:
@@ -126,13 +170,23 @@ def contact_state(model: Model, base: np.ndarray, sigma: float = 0.0,
                   p_init=None) -> State:
     """Contact of the profile ``base`` (+ wear compliance σ) under the model's load.
 
-    The returned profile is base + σ p (the worn profile of an implicit step).
+    The returned profile is base + σ p (the worn profile of an implicit step),
+    base + σ·(stroke mean of p) when reciprocating with coupling: the
+    contact is solved for the +x stroke with the wear compliance on its own
+    pressure and the wear is the two strokes' mean. The antisymmetric part
+    of the wear is so treated explicitly (an O(h) difference in the
+    pressure of the step, the order of backward Euler itself), and the
+    profile stays exactly symmetric in x.
     """
-    c = contact.solve(model.op, base, depth=model.depth, force=model.force, sigma=sigma,
-                      p_init=p_init, p_scale=model.p_scale, g_scale=model.g_scale,
-                      tol=model.tol, maxiter=model.maxiter)
+    kw = dict(depth=model.depth, force=model.force, sigma=sigma, p_init=p_init,
+              p_scale=model.p_scale, g_scale=model.g_scale, tol=model.tol,
+              maxiter=model.maxiter)
+    if model.coupling is None:
+        c = contact.solve(model.op, base, **kw)
+    else:
+        c = contact.solve_coupled(model.op, model.coupling.shear, base, model.coupling.mu, **kw)
     check_edge(c.pressure)
-    f = base + sigma * c.pressure if np.any(sigma) else base
+    f = base + stroke_mean(model, sigma * c.pressure) if np.any(sigma) else base
     return State(f=f, p=c.pressure, gap=c.gap, depth=c.depth, force=c.force,
                  iterations=c.iterations, residual=c.residual)
 
@@ -156,7 +210,8 @@ def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> 
     BDF2). n = 1: one contact solve with wear compliance eff·K. n != 1: the
     wear speed is linearised about the last iterate (Newton: per-pixel wear
     compliance eff K n (p_k/σ0)^(n-1), base shifted by eff (r(p_k) - r'(p_k)
-    p_k)) until p settles; the profile is then base + eff r(p).
+    p_k)) until p settles; the profile is then base + eff r(p) (reciprocating
+    with coupling: the stroke mean of r(p), as :func:`contact_state`).
     """
     K = model.wear_rate
     if model.exponent == 1.0:
@@ -169,7 +224,7 @@ def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> 
         # enter unworn and leave worn, iterate after iterate (any slope leaves
         # the fixed point p = p_k unchanged)
         slope = wear_speed_slope(model, np.maximum(p_k, NEWTON_FLOOR * np.max(p_k)))
-        shift = eff * (wear_speed(model, p_k) - K * slope * p_k)
+        shift = eff * (local_wear_speed(model, p_k) - K * slope * p_k)
         new = contact_state(model, base + shift, eff * K * slope, p_k)
         iterations += new.iterations
         change = float(np.max(np.abs(new.p - p_k))) / float(np.max(new.p))
