@@ -29,6 +29,10 @@ the root-mean-square radius of its pixels (:func:`bem.solver.ring_radii`);
 ``wear_depth``, ``pressure``, ``gap`` (K, n, n) per stage, x along the
 first axis; ``info["anisotropy"]``: per stage the largest deviation of the
 pressure and of the wear from their ring averages, over p0 and d.
+``bem.coupling = true``: the friction traction μp (Cerruti's (1 − 2ν) term,
+Dundurs' β) moves the surface normally in every contact solve
+(:func:`bem.contact.solve_coupled`); one sliding direction, or reciprocating
+strokes when sliding.stroke is given (docs/bem-tangential.md §6).
 Not modelled: wear.tangential_correction.
 """
 
