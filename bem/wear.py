@@ -59,7 +59,10 @@ class Coupling:
         mean of the two strokes' (the stroke is short against the wear's time
         scale): the pressure of the -x stroke is the mirror image x -> -x of
         the +x stroke's on a profile symmetric in x, which the symmetric
-        wear keeps (the unworn profiles are all symmetric in x).
+        wear keeps (the unworn profiles are all symmetric in x). An implicit
+        step solves the +x stroke's contact on base + σ·(stroke mean of p):
+        the wear compliance acts on the stroke mean (:func:`contact.solve`
+        ``stroke_mean``), so the step is backward Euler of the averaged law.
     """
 
     shear: ShearToNormal
@@ -70,19 +73,17 @@ class Coupling:
 def stroke_mean(model: "Model", field_: np.ndarray) -> np.ndarray:
     """The mean of a +x stroke's field and its mirror image (the -x stroke's); itself otherwise.
 
-    The mirror of pixel i is 2·(n//2) - i (the tip sits on pixel n//2); for
-    even n pixel 0 has none and keeps its value (it carries no load: the
-    contact may not reach the box's edge).
+    :func:`contact.mirror_x` (for even n pixel 0 keeps its value: it carries
+    no load, the contact may not reach the box's edge).
     """
-    c = model.coupling
-    if c is None or not c.reciprocating:
+    if not reciprocating(model):
         return field_
-    n = field_.shape[0]
-    m = 2 * (n // 2)
-    out = field_.copy()
-    lo = m - (n - 1)           # first pixel whose mirror is inside the box
-    out[lo:] = 0.5 * (field_[lo:] + field_[lo:][::-1])
-    return out
+    return 0.5 * (field_ + contact.mirror_x(field_))
+
+
+def reciprocating(model: "Model") -> bool:
+    """Coupled with reciprocating strokes: the wear is the two strokes' mean."""
+    return model.coupling is not None and model.coupling.reciprocating
 
 
 @dataclass
@@ -116,14 +117,13 @@ class State:
     stats: dict = field(default_factory=dict)
 
 
-def local_wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
-    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard): :func:`cases.wear_law.speed`."""
-    return wear_law.speed(p, model.wear_rate, model.exponent, model.hardness)
-
-
 def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
-    """The wear speed of the pressure p, averaged over the two strokes when reciprocating."""
-    return stroke_mean(model, local_wear_speed(model, p))
+    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard): :func:`cases.wear_law.speed`.
+
+    Reciprocating with coupling: averaged over the two strokes (:func:`stroke_mean`).
+    """
+    return stroke_mean(model, wear_law.speed(p, model.wear_rate, model.exponent,
+                                             model.hardness))
 
 
 def wear_speed_slope(model: Model, p: np.ndarray) -> np.ndarray:
@@ -171,16 +171,14 @@ def contact_state(model: Model, base: np.ndarray, sigma: float = 0.0,
     """Contact of the profile ``base`` (+ wear compliance σ) under the model's load.
 
     The returned profile is base + σ p (the worn profile of an implicit step),
-    base + σ·(stroke mean of p) when reciprocating with coupling: the
-    contact is solved for the +x stroke with the wear compliance on its own
-    pressure and the wear is the two strokes' mean. The antisymmetric part
-    of the wear is so treated explicitly (an O(h) difference in the
-    pressure of the step, the order of backward Euler itself), and the
-    profile stays exactly symmetric in x.
+    base + σ·(stroke mean of p) when reciprocating with coupling: the +x
+    stroke's contact is solved with the wear compliance on the stroke mean,
+    so p is the +x stroke's pressure on the returned profile, which stays
+    exactly symmetric in x (σ must be symmetric in x).
     """
     kw = dict(depth=model.depth, force=model.force, sigma=sigma, p_init=p_init,
               p_scale=model.p_scale, g_scale=model.g_scale, tol=model.tol,
-              maxiter=model.maxiter)
+              maxiter=model.maxiter, stroke_mean=reciprocating(model))
     if model.coupling is None:
         c = contact.solve(model.op, base, **kw)
     else:
@@ -211,7 +209,8 @@ def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> 
     wear speed is linearised about the last iterate (Newton: per-pixel wear
     compliance eff K n (p_k/σ0)^(n-1), base shifted by eff (r(p_k) - r'(p_k)
     p_k)) until p settles; the profile is then base + eff r(p) (reciprocating
-    with coupling: the stroke mean of r(p), as :func:`contact_state`).
+    with coupling: r(p) and its linearisation averaged over the two strokes,
+    as :func:`contact_state`).
     """
     K = model.wear_rate
     if model.exponent == 1.0:
@@ -224,7 +223,11 @@ def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> 
         # enter unworn and leave worn, iterate after iterate (any slope leaves
         # the fixed point p = p_k unchanged)
         slope = wear_speed_slope(model, np.maximum(p_k, NEWTON_FLOOR * np.max(p_k)))
-        shift = eff * (local_wear_speed(model, p_k) - K * slope * p_k)
+        # reciprocating: the wear is the stroke mean S r(p), linearised with a
+        # slope symmetric in x (S·diag(slope) is then symmetric, as the
+        # solve needs; Newton's fixed point does not depend on the slope)
+        slope = stroke_mean(model, slope)
+        shift = eff * (wear_speed(model, p_k) - stroke_mean(model, K * slope * p_k))
         new = contact_state(model, base + shift, eff * K * slope, p_k)
         iterations += new.iterations
         change = float(np.max(np.abs(new.p - p_k))) / float(np.max(new.p))
