@@ -533,13 +533,21 @@ def _warnings(case: Case) -> tuple[str, ...]:
     out = []
     beta = dundurs_beta(case.indenter, case.counterface)
     if abs(beta) > 1e-9:
+        beta_mu = beta * case.wear.mu
+        # the sizes measured by benchmarks/bench_coupling.py (docs/bem-tangential.md §6.5)
         out.append(
             f"elastic similarity (paper Eq. 7) does not hold: Dundurs' beta = {beta:.4f} "
-            "(0 when similar). The normal and tangential problems are coupled in reality; "
-            "they are treated as uncoupled here"
-            + (", and the tangential correction is approximate" if case.wear.tangential_correction
+            f"(0 when similar), beta·mu = {beta_mu:.3f}. The normal and tangential problems "
+            "are treated as uncoupled: the friction traction moves each stroke's pressure "
+            f"against the sliding direction by 3·beta·mu/(2π) = {3 * abs(beta_mu) / (2 * math.pi):.3f} "
+            "contact radii, which bem.coupling = true solves (docs/bem-tangential.md §6). "
+            "Measured so on paper.toml and ball_on_flat.toml (beta·mu = 0.086): with "
+            "reciprocating strokes F/F0 changes by at most RECIP_F of itself and the worn "
+            "profile by RECIP_P; in one sliding direction F/F0 by ONE_F, the profile by "
+            "ONE_P, worn asymmetrically (up to ONE_ASYM of the central wear)"
+            + ("; the tangential correction is approximate" if case.wear.tangential_correction
                else "")
-            + (", and the partial-slip (fretting) solution is approximate"
+            + ("; the partial-slip (fretting) solution is approximate"
                if case.fretting is not None else "") + ".")
     return tuple(out)
 

@@ -194,7 +194,7 @@ def test_reciprocating_is_the_limit_of_alternating_strokes():
     # The reciprocating model wears by the mean of the two strokes' pressures.
     # Against strokes simulated one by one (backward Euler steps alternately
     # with the traction along +x and -x, each step one stroke): they differ
-    # by O(stroke), halving with it (measured max |Δf| 3.5e-3, 1.8e-3 d at
+    # by O(stroke), halving with it (measured max |Δf| 3.6e-3, 1.8e-3 d at
     # ŝ = 3 for strokes of 0.05 and 0.025 in ŝ; here to ŝ = 1 with ratio in
     # [1.6, 2.4]); and the mean's profile is exactly symmetric in x
     raw = paper(32)
