@@ -203,9 +203,9 @@ def shear_to_normal_kernel(n, spacing, beta, E_star, m=None):
 
     The (1 − 2ν) term of Cerruti's solution: a tangential point force Q_x
     moves the surface normally by (1 − 2ν)/(4πG) Q_x X/ρ² into the solid
-    (Johnson 1985, Eq. 2.19, with z into the solid; Betti's theorem with
-    Boussinesq's radial displacement gives the sign: ahead of the force the
-    surface sinks). For two bodies the relative normal displacement is
+    (Betti's theorem with Boussinesq's radial displacement, which points
+    towards a normal load, gives the sign: ahead of the force the surface
+    sinks; Tamaas's operator agrees, tests/test_bem_coupling.py). For two bodies the relative normal displacement is
     β/(π E*) Q_x X/ρ², β Dundurs' second parameter (rigid counterface:
     β/(πE*) = (1 − 2ν)/(4πG)). Laid out as :func:`cerruti_kernels` on the
     m × m wrap-around grid.

@@ -318,3 +318,13 @@ def test_gross_slip_shift_against_tamaas_partial_slip_extrapolated():
                               h, mu, force=F_HERTZ, p_scale=P0, g_scale=A * A / R, tol=1e-8)
     ours = np.sum(X * c.pressure) / np.sum(c.pressure)
     assert ours == pytest.approx(tamaas_gross, rel=0.04)
+
+
+def test_the_similarity_note_gives_the_case_its_first_order_shift():
+    # the note every command prints names the coupling key and this case's
+    # first-order shift 3βμ/(2π) (docs/bem-tangential.md §6.2), here for μ = 0.5
+    raw = paper(32)
+    raw["wear"]["mu"] = 0.5
+    note = cases.from_dict(raw).warnings[0]
+    assert "bem.coupling = true" in note
+    assert f"{3 * BETA_STEEL * 0.5 / (2 * math.pi):.3f} contact radii" in note
