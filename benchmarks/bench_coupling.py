@@ -2,6 +2,7 @@
 
     python benchmarks/bench_coupling.py [--grid 128] [--ball-grid 256] [--tolerance 1e-5]
                                         [--static 64,128,256] [--quick]
+                                        [--scaling-grid 64] [--only scaling]
 
 Table 1, the closed form: a Hertz contact (force control) in gross slip with
 the friction traction μp along +x coupled into the normal problem. The centre
@@ -23,6 +24,13 @@ the edge pixels move with the contact's shift); the largest change of the
 wear depth over the stage's central wear, and the wear's antisymmetric part
 (w - its mirror image in x)/2 over the same; the largest change of the
 ring-averaged profile (what `compare` sees) over d (d0 under force control).
+
+Table 3, the second order of reciprocating strokes: paper.toml with
+reciprocating strokes at μ = 0.15, 0.3, 0.6 (βμ = 0.043, 0.086, 0.171; the
+wear coefficient kμ/σ0 changes with μ, the run in ŝ does not) against one
+uncoupled run. Per stage ΔF/F and the ring-averaged profile's change over d,
+each divided by (βμ)²: the constants of the O((βμ)²) law, which collapse
+when it holds; and the slope of log|ΔF/F| on log βμ.
 """
 
 from __future__ import annotations
@@ -169,6 +177,42 @@ def wear_table(name, trio):
         print("| " + " | ".join(cells) + " |")
 
 
+def scaling_table(grid, tol, mus=(0.15, 0.3, 0.6)):
+    """Reciprocating strokes on paper.toml at three βμ against one uncoupled run."""
+    raw = tomllib.loads(cases.shipped("paper").read_text())
+    raw["bem"] = dict(grid=grid)
+    raw["sliding"]["tolerance"] = tol
+    off = cases.from_dict(raw)
+    runs = [stage_rows(off, bem.solve(off))]
+    beta = cases.dundurs_beta(off.indenter, off.counterface)
+    t0 = time.perf_counter()
+    for mu in mus:
+        rec = cases.from_dict(dict(raw, bem=dict(grid=grid, coupling=True),
+                                   wear=dict(raw["wear"], mu=mu),
+                                   sliding=dict(raw["sliding"], stroke=1e-3)))
+        runs.append(stage_rows(rec, bem.solve(rec)))
+    bm = [beta * mu for mu in mus]
+    d = off.loading.depth
+    print(f"\n## Table 3: paper.toml, reciprocating, grid {grid}, sliding.tolerance {tol:g}; "
+          f"ΔF/F and max Δf_ring/d over (βμ)² at βμ = "
+          + ", ".join(f"{b:.4f}" for b in bm)
+          + f"; slope of log|ΔF/F| on log βμ ({time.perf_counter() - t0:.0f} s)")
+    print("| ŝ | F/F0 (β = 0) | ΔF/F/(βμ)² | Δf_ring/d/(βμ)² | slope ΔF | slope Δf_ring |")
+    print("|---|---|---|---|---|---|")
+    sc = reference.scales(off)
+    for k, ref in enumerate(runs[0]):
+        dF = [r[k]["F"] / ref["F"] - 1 for r in runs[1:]]
+        df = [float(np.max(np.abs(r[k]["f"] - ref["f"]))) / d for r in runs[1:]]
+
+        def slope(v):
+            v = np.abs(v)
+            return f"{np.polyfit(np.log(bm), np.log(v), 1)[0]:.2f}" if np.all(v > 0) else "–"
+        print(f"| {ref['s_hat']:.4g} | {ref['F'] / sc['F0']:.5f} | "
+              + ", ".join(f"{x / b**2:+.3f}" for x, b in zip(dF, bm)) + " | "
+              + ", ".join(f"{x / b**2:.3f}" for x, b in zip(df, bm))
+              + f" | {slope(dF)} | {slope(df)} |")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--grid", type=int, default=128, help="paper.toml's pixels per side")
@@ -178,15 +222,22 @@ def main(argv=None):
                     help="sliding.tolerance of every run (time error well below the effect)")
     ap.add_argument("--static", default="64,128,256", help="grids of table 1")
     ap.add_argument("--quick", action="store_true", help="grids 32/128, table 1 at 64 only")
+    ap.add_argument("--scaling-grid", type=int, default=64, help="paper.toml's grid in table 3")
+    ap.add_argument("--only", choices=("static", "wear", "scaling"),
+                    help="print one table only")
     args = ap.parse_args(argv)
     grid, ball, static = args.grid, args.ball_grid, [int(g) for g in args.static.split(",")]
     if args.quick:
         grid, ball, static = 32, 128, [64]
     print("# Normal-tangential coupling in the BEM (" + load() + "; shared 2-core machine)")
     print("# " + " ".join(sys.argv))
-    static_table(static)
-    wear_table("paper.toml", paper_cases(grid, args.tolerance))
-    wear_table("ball_on_flat.toml", ball_cases(ball, args.tolerance))
+    if args.only in (None, "static"):
+        static_table(static)
+    if args.only in (None, "wear"):
+        wear_table("paper.toml", paper_cases(grid, args.tolerance))
+        wear_table("ball_on_flat.toml", ball_cases(ball, args.tolerance))
+    if args.only in (None, "scaling"):
+        scaling_table(args.scaling_grid, args.tolerance)
     print("# " + load())
 
 

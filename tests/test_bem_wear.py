@@ -97,9 +97,10 @@ def test_paper_case_against_mdr():
     # size: force 2e-3 F0 (static collocation error <= (Δ/a0)² = 3e-3;
     # measured 3.3e-4), contact
     # radius one pixel (measured 0.19 Δ), wear at the centre and worn volume
-    # 1e-3 (measured 1e-4), ring-averaged pressure inside 0.9 a 1e-2 p0
-    # (measured 4e-3), profile 2e-2 d (ring averages across the worn edge's
-    # kink; measured 1.0e-2; 4.5e-3 at 128²)
+    # 1e-3 (measured 1e-4), ring-averaged pressure inside 0.9 a 2e-3 p0
+    # (measured 4.4e-4 with the rings at their rms radii; 4e-3 with ring k
+    # placed at kΔ, which this fails), profile 2e-2 d (ring averages across
+    # the worn edge's kink; measured 7.5e-3, 1.0e-2 with the rings at kΔ)
     case = paper(64)
     sc = reference.scales(case)
     rb, rm = bem.solve(case), mdr.solve(case)
@@ -121,7 +122,7 @@ def test_paper_case_against_mdr():
         inner = rb.r < 0.9 * a
         pm = np.interp(rb.r, rm.r, rm.p[k])
         fm = np.interp(rb.r, rm.r, rm.f[k])
-        assert np.max(np.abs(rb.p[k] - pm)[inner]) < 1e-2 * sc["p0"]
+        assert np.max(np.abs(rb.p[k] - pm)[inner]) < 2e-3 * sc["p0"]
         assert np.max(np.abs(rb.f[k] - fm)) < 2e-2 * d
 
 
