@@ -177,8 +177,8 @@ def _generate(params: SphereMeshParameters, msh_path: Path) -> dict:
     return arrays
 
 
-def _atomic_save(path: Path, write) -> None:
-    """Write ``path`` through a temporary file in its directory, then rename."""
+def atomic_save(path: Path, write) -> None:
+    """Write ``path`` through a temporary file in its directory, then rename (caches use it)."""
     fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     try:
@@ -227,9 +227,9 @@ def sphere_mesh(params: SphereMeshParameters, use_cache: bool = True) -> SphereM
     def write_msh(tmp):
         arrays.update(_generate(params, tmp))
 
-    _atomic_save(msh, write_msh)
+    atomic_save(msh, write_msh)
     seconds = time.perf_counter() - t0
-    _atomic_save(npz, lambda tmp: np.savez(tmp, **arrays))
+    atomic_save(npz, lambda tmp: np.savez(tmp, **arrays))
     mesh = _from_arrays(arrays, params, msh)
     mesh.generate_seconds = seconds
     return mesh
@@ -247,4 +247,5 @@ def contact_edges_for(contact_nodes: int, element_order: int) -> int:
 
 
 __all__ = ["SphereMesh", "SphereMeshParameters", "sphere_mesh", "contact_edges_for", "cache_dir",
+           "atomic_save",
            "GROUPS"]

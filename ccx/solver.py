@@ -1,0 +1,239 @@
+"""``solve(case)``: CalculiX's sphere, from case to RunResult; ``supports(case)``."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from threadpoolctl import threadpool_limits
+
+from wearcheck import meshes
+from wearcheck.cases import CaseError, SolverError, reference
+from wearcheck.cases.profiles import height
+
+from . import compliance as compliance_mod
+from . import deck, in_loop, run
+from .model import cax6_sphere
+from .output import read_frd, stage_fields
+
+#: fewest arc nodes required inside the unworn contact radius
+MIN_NODES_IN_CONTACT = 5
+#: most CalculiX jobs an in-loop run may take (one per step, 1-8 s each)
+MAX_IN_LOOP_STEPS = 2000
+#: largest Poisson ratio before volumetric locking shows (as the FEM's quadratic elements)
+MAX_POISSON_RATIO = 0.495
+
+
+def supports(case) -> str | None:
+    """None when CalculiX's sphere can run ``case`` here, else the reason it cannot.
+
+    The model's limits (those of the FEM: an elastic sphere against a rigid
+    plane) come first, then the mode's, then the ``ccx`` executable.
+    """
+    if getattr(case, "fretting", None) is not None:
+        return ("fretting (partial slip) needs a one-directional tangential load, which the "
+                "axisymmetric CalculiX model cannot carry; use the MDR solver")
+    ind, cf = case.indenter, case.counterface
+    if ind.profile == "ellipsoid":
+        return ("indenter.profile = \"ellipsoid\": the CalculiX model is axisymmetric; use "
+                "the BEM (or the MDR, approximately)")
+    if ind.radius is None:
+        return (f"CalculiX needs 'indenter.radius' (the radius of its sphere) for profile "
+                f"\"{ind.profile}\"; it is not given")
+    if not cf.rigid:
+        return ("counterface.rigid = false: the CalculiX model is an elastic sphere against "
+                "a rigid plane; set counterface.rigid = true or use the MDR solver")
+    if ind.rigid:
+        return ("indenter.rigid = true: the CalculiX body is the elastic sphere; a rigid "
+                "indenter has nothing to deform (use the MDR solver)")
+    if ind.poisson_ratio > MAX_POISSON_RATIO:
+        return (f"key 'indenter.poisson_ratio' = {ind.poisson_ratio!r}: CalculiX's CAX6 "
+                f"displacement elements lock beyond ν = {MAX_POISSON_RATIO}; use the MDR solver")
+    if case.ccx.mode == "in_loop" and case.sliding.scheme != "explicit":
+        return (f"ccx.mode = \"in_loop\" steps by explicit Euler (one CalculiX solve per "
+                f"step); key 'sliding.scheme' = \"{case.sliding.scheme}\": set it to "
+                "\"explicit\", or use ccx.mode = \"superelement\"")
+    return run.unavailable(case.ccx.executable)
+
+
+def mesh_parameters(case) -> meshes.SphereMeshParameters:
+    """The gmsh mesh of a case (the FEM's recipe: P2 grading, the arc sized for the
+    predicted final contact radius), after checking the arc resolves the contact."""
+    settings, R = case.ccx, case.indenter.radius
+    a0 = reference.scales(case)["a0"]
+    predicted = reference.predicted_scar_radius(case, case.end_distance or 0.0)
+    rc = settings.contact_factor * predicted
+    if rc <= a0:
+        raise CaseError(f"key 'ccx.contact_factor' = {settings.contact_factor!r}: the "
+                        f"candidate contact arc ends at r = {rc:.4g} m, inside the unworn "
+                        f"contact radius a0 = {a0:.4g} m; must be > {a0 / predicted:.4f}")
+    edges = meshes.contact_edges_for(settings.contact_nodes, 2)
+    inside = int(a0 / (rc / (2 * edges))) + 1
+    if inside < MIN_NODES_IN_CONTACT:
+        need = math.ceil((MIN_NODES_IN_CONTACT - 1) * rc / a0) + 1
+        raise CaseError(f"key 'ccx.contact_nodes' = {settings.contact_nodes}: only {inside} "
+                        f"nodes would lie inside the unworn contact (a0 = {a0:.4g} m); at least "
+                        f"{MIN_NODES_IN_CONTACT} are needed, i.e. ccx.contact_nodes >= {need}")
+    if rc >= R:
+        raise CaseError(f"key 'ccx.contact_factor' = {settings.contact_factor!r}: the "
+                        f"candidate arc would reach r = {rc:.4g} m, beyond indenter.radius = "
+                        f"{R:.4g} m (predicted final scar radius {predicted:.4g} m)")
+    return meshes.SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges,
+                                       growth=meshes.GROWTH)
+
+
+def solve(case, progress=None) -> run.CcxResult:
+    """Run ``case`` on CalculiX's sphere in the mode ``ccx.mode``; see :mod:`ccx`."""
+    reason = supports(case)
+    if reason is not None:
+        raise CaseError(reason)
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _solve(case, progress)
+
+
+def axis_weights(r) -> np.ndarray:
+    """Weights of the loaded nodes' values giving the value on the axis: the even
+    extrapolation v(0) = (v1 r2² − v2 r1²)/(r2² − r1²) from the first two."""
+    w = np.zeros(len(r) - 1)
+    r1, r2 = r[1], r[2]
+    w[:2] = r2**2 / (r2**2 - r1**2), -r1**2 / (r2**2 - r1**2)
+    return w
+
+
+def _solve(case, progress):
+    t_start = time.perf_counter()
+    sc = reference.scales(case)
+    d0, F0, p0, per_m = sc["d0"], sc["F0"], sc["p0"], sc["s_hat_per_m"]
+    sl, settings = case.sliding, case.ccx
+    params = mesh_parameters(case)
+    if progress:
+        progress(0.0, "mesh")
+    sm = meshes.sphere_mesh(params)
+    sphere = cax6_sphere(sm)
+    E, nu = case.indenter.youngs_modulus, case.indenter.poisson_ratio
+    executable = run.find(settings.executable)
+    version = run.version(executable)
+    jobs = run.Jobs(executable=executable,
+                    model=deck.model(sphere, E, nu, nonlinear=settings.mode == "in_loop",
+                                     title=f"wearcheck case {case.source}"))
+    if progress:
+        progress(0.0, "compliance (CalculiX)")
+    C, compliance_info = compliance_mod.compliance(sphere, E, nu, jobs, version)
+    r_all = sphere.r
+    r, area = r_all[1:], sphere.area[1:]
+    z_all = height(case.indenter, r_all, case.table)
+    rate, n_exp, hardness = case.wear_rate, case.wear.pressure_exponent, case.wear.hardness
+    center = axis_weights(r_all)
+    limit_hat = explicit_limit(C, area, rate) * per_m
+    if n_exp != 1.0:
+        limit_hat /= n_exp * (1.5 * p0 / hardness) ** (n_exp - 1.0)
+    if sl.step_hat == "auto":
+        step_hat = 0.5 * limit_hat
+    else:
+        step_hat = float(sl.step_hat)
+        if step_hat > limit_hat:
+            raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: beyond the explicit "
+                            f"Euler stability limit of this mesh, {limit_hat:.4g}; use a step "
+                            f"<= {limit_hat:.4g}")
+    s_end = case.end_distance
+    stage_s = [sh / per_m for sh in case.stages.s_hat]
+    if s_end is not None:
+        stage_s = [s for s in stage_s if s <= s_end * (1 + 1e-12)]
+        if s_end * per_m / step_hat > MAX_IN_LOOP_STEPS:
+            raise CaseError(f"ccx.mode = \"in_loop\": the run would take "
+                            f"{s_end * per_m / step_hat:.3g} steps of Δŝ = {step_hat:.3g} "
+                            f"(one CalculiX job each; at most {MAX_IN_LOOP_STEPS}); shorten "
+                            "the run or use ccx.mode = \"superelement\"")
+    stiffness = in_loop.gap_stiffness(area, p0, d0)
+    tension = in_loop.TENSION * F0 / deck.WEDGES
+    t0 = time.perf_counter()
+    out = in_loop.run(jobs, sphere, z_all, control=case.loading.control,
+                      value=getattr(case.loading, case.loading.control), rate=rate,
+                      exponent=n_exp, hardness=hardness, step=step_hat / per_m,
+                      stage_s=stage_s,
+                      until="force_fraction" if sl.until == "force_fraction" else "distance",
+                      distance=s_end, force_fraction=sl.force_fraction, center=center,
+                      force_scale=F0, depth_scale=d0, stiffness=stiffness, tension=tension,
+                      max_steps=MAX_IN_LOOP_STEPS,
+                      progress=(lambda x, t: progress(0.05 + 0.9 * x, t)) if progress else None)
+    t_loop = time.perf_counter() - t0
+    fields = _fields(sphere, out.stages, [read_frd(st[5])[1] for st in out.stages])
+    info = dict(mode="in_loop", scheme="explicit", step_hat=step_hat, step=step_hat / per_m,
+                explicit_limit_step_hat=float(limit_hat), steps=out.steps,
+                gap_stiffness=dict(value=stiffness, unit="N/m on the 2° wedge"),
+                gap_tension=dict(value=tension, unit="N on the 2° wedge"),
+                max_penetration=dict(value=out.max_penetration, unit="d0"),
+                max_equilibrium_error=dict(value=out.max_equilibrium_error, unit="F0"))
+    return _result(case, sphere, out, z_all, fields, jobs, version, compliance_info, info,
+                   params, sm, t_start, t_loop)
+
+
+def explicit_limit(C, area, rate) -> float:
+    """Largest stable explicit Euler step Δs [m]: 2 λ_min(A^½ C A^½) / rate (docs/theory.md §7)."""
+    from scipy import linalg
+    sa = np.sqrt(area)
+    lam = linalg.eigvalsh(sa[:, None] * C * sa[None, :], subset_by_index=[0, 0])[0]
+    return 2.0 * lam / rate
+
+
+def _fields(sphere, stages, frd_steps) -> dict:
+    """Mesh, displacement and nodal stress at the stages, from CalculiX's .frd results."""
+    K, Np = len(stages), len(sphere.points)
+    disp = np.zeros((K, Np, 2))
+    stress = np.zeros((K, Np, 4))
+    for k, results in enumerate(frd_steps):
+        disp[k], stress[k] = stage_fields(results, Np)
+    return dict(points=sphere.points.copy(), cells=sphere.elements.astype(np.int64),
+                displacement=disp, stress=stress,
+                contact_nodes=sphere.contact.astype(np.int64))
+
+
+def _result(case, sphere, out, z_all, fields, jobs, version, compliance_info, info, params,
+            sm, t_start, t_loop) -> run.CcxResult:
+    """The RunResult of either mode from its history and stage states."""
+    sc = reference.scales(case)
+    per_m = sc["s_hat_per_m"]
+    area = sphere.area[1:]
+    K, nc = len(out.stages), len(sphere.contact)
+    f_nodes, w_nodes = np.zeros((K, nc)), np.zeros((K, nc))
+    for k, stage in enumerate(out.stages):
+        f_nodes[k, 1:], w_nodes[k, 1:] = stage[1], stage[2]
+    p = np.zeros((K, nc))
+    p[:, 1:] = f_nodes[:, 1:] / area
+    center = axis_weights(sphere.r)
+    for arr in (p, w_nodes):
+        arr[:, 0] = arr[:, 1:] @ center
+    fields.update(contact_pressure=p, wear_depth=w_nodes)
+    history = {k: np.array(getattr(out, k)) for k in
+               ("s", "force", "depth", "contact_radius", "wear_center", "wear_volume",
+                "scar_radius")}
+    history["s_hat"] = history["s"] * per_m
+    cpm = case.cycles_per_metre
+    history["cycles"] = history["s"] * (cpm if cpm is not None else math.nan)
+    info.update(
+        solver="ccx", ccx=dict(executable=jobs.executable, version=".".join(map(str, version)),
+                               jobs=len(jobs.seconds), seconds=sum(jobs.seconds.values()),
+                               threads=1),
+        pressure_exponent=case.wear.pressure_exponent,
+        compliance=compliance_info,
+        mesh=dict(contact_nodes=nc, nodes=len(sphere.points), elements=len(sphere.elements),
+                  element="CAX6", growth=params.growth,
+                  contact_arc_radius=params.contact_radius, cache_file=str(sm.path)),
+        timings=dict(wear_loop=t_loop, ccx=dict(jobs.seconds) if len(jobs.seconds) <= 20
+                     else dict(total=sum(jobs.seconds.values()))),
+        decks="ccx/ in the run directory: sphere.inp (the model) and one deck per CalculiX job",
+        axis_node=("the axis node has zero 2πr-weighted area: no contact there, its pressure "
+                   "and wear are the even extrapolation from the next two nodes"),
+        tangential_correction=("not modelled: frictionless normal contact, "
+                               f"wear.tangential_correction = "
+                               f"{str(case.wear.tangential_correction).lower()} ignored"),
+        body=("elastic sphere of radius indenter.radius (CAX6, the FEM's mesh) clamped on "
+              "its flat top face, against a rigid plane; the initial gap is the case's "
+              "profile f(r_i)"),
+        predicted_scar_radius=reference.predicted_scar_radius(case, case.end_distance or 0.0))
+    decks = {deck.MODEL_FILE: jobs.model, **jobs.decks}
+    return run.CcxResult(history=history, stage_s=np.array([st[0] for st in out.stages]),
+                         r=sphere.r.copy(), f=z_all[None, :] + w_nodes, p=p,
+                         solve_seconds=time.perf_counter() - t_start, info=info,
+                         fields=fields, decks=decks)
