@@ -115,6 +115,8 @@ COMPARISON_FILES = (
 METRICS = (
     Item("reference", "", "the solver every other is compared with"),
     Item("solvers", "", "the compared solvers, reference first"),
+    Item("skipped", "", "the registered solvers not compared, each with the reason (it cannot "
+                        "run the case or here, not selected, or opt-in)"),
     Item("pairs", "", "per solver: stages (list of STAGE_METRICS), stages_compared, worst "
                       "(largest share of each tolerance), history (over the common sliding "
                       "range), checks (stages_reached: the same number of stages as the "

@@ -63,6 +63,8 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
                       + f"; compared: {K}. Runs ended at "
                       + ", ".join(f"ŝ = {e['s_hat']:.4g} with F/F0 = {e['force']:.4g} ({title(n)})"
                                   for n, e in m["run_end"].items()) + ".")]
+    for n, why in m.get("skipped", {}).items():
+        blocks.append(R.para(f"Skipped: {title(n)} — {why}."))
     for w in case.warnings:
         blocks.append(R.para(f"Note: {w}"))
     for n, text in m.get("approximate", {}).items():
@@ -353,4 +355,7 @@ def print_summary(m, out, stream=None) -> None:
                   f"{st['pressure_interior_max']:.2e} (edge {st['pressure_edge_max']:.2e})  "
                   f"|Δa|/a0 {st['contact_radius']:.2e}  {'ok' if st['passed'] else 'FAIL'}",
                   file=stream)
+    for name, why in m.get("skipped", {}).items():
+        if why != "not selected":   # the user left it out: no news
+            print(f"{title(name)} skipped: {why}", file=stream)
     print(f"compare: {'PASS' if m['passed'] else 'FAIL'} -> {out}/report.html", file=stream)

@@ -42,7 +42,8 @@ def _progress(label, quiet):
 def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tuple[str, ...]]:
     """The reference and the solvers of a comparison (reference first).
 
-    ``solvers`` None: every registered solver that supports the case. A named
+    ``solvers`` None: every registered solver that supports the case, but for
+    opt-in ones (``Solver.default`` False), which run when named. A named
     solver that does not support it is refused with its reason.
     """
     if solvers:
@@ -52,7 +53,7 @@ def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tupl
             if reason is not None:
                 raise cases.CaseError(f"solver '{name}' cannot run this case: {reason}")
     else:
-        chosen = registry.supporting(case)
+        chosen = tuple(n for n in registry.supporting(case) if registry.get(n).default)
     ref = reference_solver or (DEFAULT_REFERENCE if DEFAULT_REFERENCE in chosen else chosen[0]
                                if chosen else DEFAULT_REFERENCE)
     registry.get(ref)
@@ -63,11 +64,26 @@ def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tupl
                               f"({', '.join(chosen) or 'none'})"
                               + (f"; it cannot run this case: {reason}" if reason else ""))
     if len(chosen) < 2:
-        why = "; ".join(f"{n}: {registry.get(n).supports(case) or 'not selected'}"
-                        for n in registry.names() if n not in chosen)
+        why = "; ".join(f"{n}: {reason}" for n, reason in skipped(case, chosen).items())
         raise cases.CaseError("a comparison needs two solvers that support the case; only "
                               f"{', '.join(chosen) or 'none'} can ({why})")
     return ref, (ref,) + tuple(n for n in chosen if n != ref)
+
+
+def skipped(case, chosen) -> dict:
+    """{name: why} for every registered solver not among ``chosen``."""
+    out = {}
+    for name in registry.names():
+        if name in chosen:
+            continue
+        entry = registry.get(name)
+        reason = entry.supports(case)
+        if reason is None:
+            reason = ("not selected" if entry.default else
+                      f"opt-in (an external program): name it to compare it, e.g. --solvers "
+                      f"{','.join(list(chosen) + [name])}")
+        out[name] = reason
+    return out
 
 
 def run_solvers(case, names, *, solve=None, quiet=True, label="") -> dict:
@@ -276,6 +292,7 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
             ref = exact[0]
             results = {ref: results[ref], **{n: r for n, r in results.items() if n != ref}}
     m = analyse(case, results, ref)
+    m["skipped"] = skipped(case, names)
     if switched:
         m["reference_note"] = (f"{registry.get(switched[0]).title} solved an approximation "
                                f"of this case, so {registry.get(switched[1]).title} is the "
