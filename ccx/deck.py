@@ -120,8 +120,8 @@ def recovery(sphere, stages, title: str = "") -> str:
 
 
 def gap_step(sphere, clearance, *, control: str, value: float, stiffness: float,
-             tension: float, fields: bool = False, iterations: int = 200,
-             title: str = "") -> str:
+             tension: float, depth_guess: float | None = None, fields: bool = False,
+             iterations: int = 200, title: str = "") -> str:
     """One contact solve against the rigid plane with a gap element per contact node.
 
     Parameters
@@ -134,15 +134,23 @@ def gap_step(sphere, clearance, *, control: str, value: float, stiffness: float,
     stiffness : gap stiffness [N/m] on the wedge; tension : the gap's force at
         infinite opening [N] on the wedge (CalculiX's default, 1e-3, would
         pull every open gap; see docs/ccx.md).
+    depth_guess : force control: a first step lowers the top face by this
+        depth [m] (the last known depth); the force step starts from its
+        solution. Started from nothing, the sphere hangs free until a gap
+        closes and Newton's method cuts back for minutes (measured).
     fields : also write U and S to the .frd file.
     iterations : most Newton iterations of the increment before CalculiX
-        cuts it back (its default 16 cuts back on fine meshes, where the
-        contact's edge moves by a node or two per iteration).
+        cuts it back (its default, 16, was enough at 101-501 contact nodes:
+        8-10 iterations measured; raised for meshes whose contact edge moves
+        by a node or two per iteration).
 
     Ground node Np + i sits on the plane under contact node i (i >= 1); gap
     element Ne + i joins them with direction -z: it closes when the contact
-    node has come down by its clearance.
+    node has come down by its clearance. The results are printed in the last
+    step.
     """
+    if control not in ("depth", "force"):
+        raise ValueError(f"control {control!r}: must be 'depth' or 'force'")
     pts = sphere.points
     n_points, n_elements = len(pts), len(sphere.elements)
     nodes = sphere.contact[1:]
@@ -159,20 +167,23 @@ def gap_step(sphere, clearance, *, control: str, value: float, stiffness: float,
         out.append(f"*ELEMENT,TYPE=GAPUNI,ELSET={name}\n{n_elements + e + 1},{i + 1},{g}\n"
                    f"*GAP,ELSET={name}\n{number(ci * MM)},0.,-1.,0.,,"
                    f"{number(stiffness / MM)},{number(tension)}\n")
-    out.append("*BOUNDARY\nGROUND,1,3\nTOP,1,1\n")
     top = np.asarray(sphere.top) + 1
-    if control == "force":
+    supports = "GROUND,1,3\nAXIS,1,1\nTOP,1,1\n"
+    out.append("*BOUNDARY\n" + supports)
+    controls = (f"*CONTROLS,PARAMETERS=TIME INCREMENTATION\n{iterations},{iterations},"
+                f"{iterations},{iterations},{iterations},4,,20\n")
+    if control == "depth":
+        out.append(f"*STEP,INC=100\n*STATIC\n{controls}*BOUNDARY\n"
+                   f"TOP,2,2,{number(-value * MM)}\n")
+    else:
         # the top face stays flat: every top node moves axially with the first
         out.append("*EQUATION\n" + "".join(f"2\n{t},2,1.,{top[0]},2,-1.\n" for t in top[1:])
-                   + f"*NSET,NSET=TOPREF\n{top[0]}\n")
-    elif control != "depth":
-        raise ValueError(f"control {control!r}: must be 'depth' or 'force'")
-    out.append(f"*STEP,INC=1000\n*STATIC\n*CONTROLS,PARAMETERS=TIME INCREMENTATION\n"
-               f"{iterations},{iterations},{iterations},{iterations},{iterations},4,,20\n")
-    if control == "depth":
-        out.append(f"*BOUNDARY\nTOP,2,2,{number(-value * MM)}\n")
-    else:
-        out.append(f"*CLOAD\n{top[0]},2,{number(-value)}\n*NODE PRINT,NSET=TOPREF\nU\n")
+                   + f"*NSET,NSET=TOPREF\n{top[0]}\n"
+                   f"** first the last known depth, then the force from there\n"
+                   f"*STEP,INC=100\n*STATIC\n{controls}*BOUNDARY\n"
+                   f"TOPREF,2,2,{number(-depth_guess * MM)}\n*END STEP\n"
+                   f"*STEP,INC=100\n*STATIC\n{controls}*BOUNDARY,OP=NEW\n{supports}"
+                   f"*CLOAD\nTOPREF,2,{number(-value)}\n*NODE PRINT,NSET=TOPREF\nU\n")
     out.append("*NODE PRINT,NSET=CONTACT\nU\n*NODE PRINT,NSET=GROUND\nRF\n"
                "*NODE PRINT,NSET=TOP,TOTALS=ONLY\nRF\n")
     if fields:

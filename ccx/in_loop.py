@@ -12,8 +12,9 @@ for short runs on coarse meshes (docs/ccx.md).
 The gap elements are penalty springs: a loaded node sinks by f/k into the
 plane. :func:`gap_stiffness` makes that at most :data:`PENETRATION` of the
 depth scale at twice the Hertz pressure on the largest node; each solve's
-largest penetration is recorded, and the forces must balance the top face's
-reaction (:data:`EQUILIBRIUM_TOLERANCE`).
+largest penetration is recorded and must stay below :data:`PENETRATION_LIMIT`,
+and the forces must balance the top face's reaction
+(:data:`EQUILIBRIUM_TOLERANCE`): either failing is a SolverError.
 """
 
 from __future__ import annotations
@@ -36,6 +37,9 @@ PENETRATION = 1e-6
 TENSION = 1e-12
 #: |Σ f - top reaction| allowed, relative to F0 (the .dat's seven digits allow ~1e-6)
 EQUILIBRIUM_TOLERANCE = 1e-5
+#: a node sunk deeper than this (relative to d0) into the plane means the gap elements did
+#: not act (100 times the penalty's design value; a linear step ignores them silently)
+PENETRATION_LIMIT = 1e-4
 
 
 def gap_stiffness(area, pressure_scale: float, depth_scale: float) -> float:
@@ -47,20 +51,29 @@ def gap_stiffness(area, pressure_scale: float, depth_scale: float) -> float:
 class GapSolution:
     """One CalculiX contact solve: ring forces f [N] and gaps [m] of the loaded nodes
     (the contact nodes off the axis), the depth [m], the top face's reaction [N],
-    the .frd file when fields were asked for."""
+    the deepest node's sinking into the plane [d0], |Σ f − top reaction| [F0], the
+    .frd file when fields were asked for."""
 
     f: np.ndarray
     gap: np.ndarray
     depth: float
     top_force: float
+    penetration: float
+    equilibrium_error: float
     frd: object = None
 
 
 def contact_solve(jobs, name, sphere, clearance, *, control, value, stiffness, tension,
-                  fields=False) -> GapSolution:
-    """Run one gap-element job; ``clearance`` (Nc,) [m] for every contact node."""
+                  force_scale, depth_scale, depth_guess=None, fields=False) -> GapSolution:
+    """Run one gap-element job; ``clearance`` (Nc,) [m] for every contact node.
+
+    Checked: the deepest node sinks at most :data:`PENETRATION_LIMIT` d0 into
+    the plane, the forces balance the top face's reaction to
+    :data:`EQUILIBRIUM_TOLERANCE` F0; else SolverError.
+    """
     text = deck.gap_step(sphere, clearance, control=control, value=value, stiffness=stiffness,
                          tension=tension, fields=fields,
+                         depth_guess=depth_scale if depth_guess is None else depth_guess,
                          title=f"wearcheck in-loop contact solve {name}")
     job = jobs.run(name, text, keep_frd=fields)
     blocks = dat_blocks(job.dat, f"{name}.dat")
@@ -71,8 +84,10 @@ def contact_solve(jobs, name, sphere, clearance, *, control, value, stiffness, t
     except IndexError:
         raise SolverError(f"CalculiX job '{name}': its .dat file lacks the contact "
                           "displacements or forces") from None
-    if abs(u.time - 1.0) > 1e-6:
-        raise SolverError(f"CalculiX job '{name}' ended its step at time {u.time:g}, not 1")
+    steps = 1 if control == "depth" else 2
+    if abs(u.time - steps) > 1e-6:
+        raise SolverError(f"CalculiX job '{name}' ended at time {u.time:g}, not {steps} (its "
+                          "last step did not finish)")
     n = len(sphere.contact)
     uz = np.full(n, np.nan)
     uz[u.ids - 1] = u.values[:, 1] / deck.MM
@@ -87,8 +102,19 @@ def contact_solve(jobs, name, sphere, clearance, *, control, value, stiffness, t
         ref = select(blocks, "displacements", "TOPREF")[-1]
         depth = -float(ref.values[0, 1]) / deck.MM
     gap = np.asarray(clearance, float)[1:] + uz[1:]
-    return GapSolution(f=np.maximum(f, 0.0), gap=gap, depth=depth,
-                       top_force=-float(top.values[0, 1]) * deck.WEDGES, frd=job.frd)
+    f = np.maximum(f, 0.0)
+    top_force = -float(top.values[0, 1]) * deck.WEDGES
+    sunk = float(-np.min(gap)) / depth_scale
+    if not sunk <= PENETRATION_LIMIT:
+        raise SolverError(f"CalculiX job {name}: a contact node lies {sunk:.3g} d0 inside the "
+                          f"plane (the gap elements allow {PENETRATION:g}); they did not act "
+                          "(a linear step ignores them)")
+    error = abs(f.sum() - top_force) / force_scale
+    if not error <= EQUILIBRIUM_TOLERANCE:
+        raise SolverError(f"CalculiX job {name}: the gap forces ({f.sum():.7g} N) do not "
+                          f"balance the top face's reaction ({top_force:.7g} N)")
+    return GapSolution(f=f, gap=gap, depth=depth, top_force=top_force, penetration=sunk,
+                       equilibrium_error=error, frd=job.frd)
 
 
 @dataclass
@@ -147,16 +173,13 @@ def run(jobs, sphere, height, *, control, value, rate, exponent, hardness, step,
         clearance = np.asarray(height, float) + np.concatenate([[0.0], w])
         sol = contact_solve(jobs, f"step-{k:05d}", sphere, clearance, control=control,
                             value=value, stiffness=stiffness, tension=tension,
-                            fields=at_stage)
+                            force_scale=force_scale, depth_scale=depth_scale,
+                            depth_guess=out.depth[-1] if out.depth else None, fields=at_stage)
         if sol.f[-1] > 0:
             raise SolverError(f"the contact reached the end of the candidate arc (r = "
                               f"{r[-1]:.4g} m) at s = {s:.4g} m; increase ccx.contact_factor")
-        out.max_penetration = max(out.max_penetration, float(-np.min(sol.gap)) / depth_scale)
-        error = abs(sol.f.sum() - sol.top_force) / force_scale
-        out.max_equilibrium_error = max(out.max_equilibrium_error, error)
-        if not error <= EQUILIBRIUM_TOLERANCE:
-            raise SolverError(f"CalculiX job step-{k:05d}: the gap forces ({sol.f.sum():.7g} N) "
-                              f"do not balance the top face's reaction ({sol.top_force:.7g} N)")
+        out.max_penetration = max(out.max_penetration, sol.penetration)
+        out.max_equilibrium_error = max(out.max_equilibrium_error, sol.equilibrium_error)
         return sol
 
     def at_stage():
