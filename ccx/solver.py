@@ -15,7 +15,7 @@ from wearcheck.cases.profiles import height
 from . import compliance as compliance_mod
 from . import deck, in_loop, run
 from .model import cax6_sphere
-from .output import read_frd, stage_fields
+from .output import dat_blocks, read_frd, select, stage_fields
 
 #: fewest arc nodes required inside the unworn contact radius
 MIN_NODES_IN_CONTACT = 5
@@ -237,3 +237,40 @@ def _result(case, sphere, out, z_all, fields, jobs, version, compliance_info, in
                          r=sphere.r.copy(), f=z_all[None, :] + w_nodes, p=p,
                          solve_seconds=time.perf_counter() - t_start, info=info,
                          fields=fields, decks=decks)
+
+
+#: recovered gaps of loaded nodes allowed, relative to d0: the fields come from a fresh
+#: static solve with the contact forces; a loaded node must come out on the plane
+RECOVERY_TOLERANCE = 1e-4
+
+
+def recover_fields(jobs, sphere, height, stages, depth_scale) -> tuple[list, float]:
+    """The .frd results of each stage, from one CalculiX job applying its contact forces.
+
+    ``stages``: (s, f (Nc-1,), w (Nc-1,), depth, gap) per stage, as the wear
+    run stored them; ``height`` (Nc,) the initial gaps. Returns the results
+    per stage and the largest |gap| of a loaded node in the recovered state,
+    relative to ``depth_scale`` (SolverError above :data:`RECOVERY_TOLERANCE`:
+    the compliance does not belong to this sphere).
+    """
+    forces = [(st[3], np.concatenate([[0.0], st[1]])) for st in stages]
+    job = jobs.run("recovery", deck.recovery(sphere, forces, title="wearcheck: the fields at "
+                                                                   "the stages"), keep_frd=True)
+    _, results = read_frd(job.frd)
+    per_stage = [[b for b in results if b.step == k + 1] for k in range(len(stages))]
+    blocks = select(dat_blocks(job.dat, "recovery.dat"), "displacements", "CONTACT")
+    if len(blocks) != len(stages):
+        raise SolverError(f"CalculiX job 'recovery': {len(blocks)} steps printed for "
+                          f"{len(stages)} stages")
+    worst = 0.0
+    for st, b in zip(stages, blocks):
+        uz = b.values[np.argsort(b.ids), 1] / deck.MM
+        gap = height[1:] + st[2] + uz[1:]
+        loaded = st[1] > 0
+        if np.any(loaded):
+            worst = max(worst, float(np.max(np.abs(gap[loaded]))) / depth_scale)
+    if not worst <= RECOVERY_TOLERANCE:
+        raise SolverError(f"CalculiX's recovery of the stages leaves loaded contact nodes "
+                          f"{worst:.3g} d0 off the plane: the cached compliance does not "
+                          "belong to this sphere (delete it from the cache)")
+    return per_stage, worst
