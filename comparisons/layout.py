@@ -3,9 +3,9 @@ column, array and field with its unit and meaning.
 
 This is the one definition. ``rundir`` writes and reads by it, every
 ``meta.json`` carries the part that applies to its run (``data_dictionary``),
-``metrics.json`` carries the comparison's, and the README's output tables are
-generated from it (``python -c "from wearcheck.comparisons import layout;
-layout.update_readme('README.md')"``). A solver documents its own extra history
+``metrics.json`` carries the comparison's, and the output tables of the
+documentation (``docs/outputs.md``) are generated from it at every docs build
+(:func:`doc_tables`). A solver documents its own extra history
 columns and ``fields.npz`` arrays in its registry entry.
 """
 
@@ -115,13 +115,19 @@ COMPARISON_FILES = (
 METRICS = (
     Item("reference", "", "the solver every other is compared with"),
     Item("solvers", "", "the compared solvers, reference first"),
-    Item("skipped", "", "the registered solvers not compared, each with the reason (it cannot "
-                        "run the case or here, not selected, or opt-in)"),
     Item("pairs", "", "per solver: stages (list of STAGE_METRICS), stages_compared, worst "
                       "(largest share of each tolerance), history (over the common sliding "
                       "range), checks (stages_reached: the same number of stages as the "
-                      "reference), passed"),
+                      "reference), diagnosis (as `diagnosis`, for this solver; null when it "
+                      "passed), passed"),
     Item("passed", "", "the verdict: every check of every solver within its tolerance"),
+    Item("skipped", "", "per registered solver left out of the comparison: why (the "
+                        "reason it cannot run the case or here, opt-in, or not asked for)"),
+    Item("diagnosis", "", "null when passed; else for the worst failed check: setting (the "
+                          "case key most likely to fix it, or null), value (its current "
+                          "value), suggestion, solver, reason, otherwise (the runner-up), "
+                          "rule, measures (per solver: points across the stage's contact "
+                          "radius, share of the tolerance its time-error estimate uses)"),
     Item("stages_compared", "", "stages reached by every solver"),
     Item("scales", "", "as in meta.json"),
     Item("profile_scale_depth", "m", "the depth d profiles are measured in (held depth, or d0)"),
@@ -167,11 +173,19 @@ STAGE_METRICS = (
     Item("contact_radius", "", "|Δa|/a0"),
     Item("profile_max", "", "max |Δf|/d over the compared solver's radii"),
     Item("profile_rms", "", "RMS Δf/d"),
+    Item("profile_contact_max", "", "max |Δf|/d over the contact and its edge band, r <= "
+                                    "(1 + edge_band)·a (the larger a of the two)"),
+    Item("profile_contact_rms", "", "RMS Δf/d there"),
     Item("pressure_interior_max", "", "max |Δp|/p0 in r < (1 - edge_band)·a"),
     Item("pressure_interior_rms", "", "RMS Δp/p0 there"),
     Item("pressure_edge_max", "", "max |Δp|/p0 in the edge band"),
     Item("pressure_edge_rms", "", "RMS Δp/p0 there"),
-    Item("checks", "", "each check's value, tolerance and pass"),
+    Item("stage_scales", "", "per check, the stage's own scale in the unworn unit: the "
+                             "reference's depth (or central wear, if larger) /d, force /F0, "
+                             "peak pressure /p0, contact radius /a0"),
+    Item("checks", "", "per check: value (the difference over scale), tolerance, scale "
+                       "(max(the stage's own scale, the floor), in unit), scale_from ('stage' "
+                       "or 'floor'), unit, unworn (the difference in unit), passed"),
     Item("passed", "", "every check of the stage within tolerance"),
 )
 
@@ -219,14 +233,15 @@ def comparison_dictionary() -> dict:
 
 
 def markdown(items, first="name") -> str:
-    """A Markdown table of items (the README's output tables)."""
+    """A Markdown table of items (the documentation's output tables)."""
     rows = [f"| {first} | unit | meaning |", "|---|---|---|"]
     rows += [f"| `{i.name}` | {i.unit} | {i.meaning} |" for i in items]
     return "\n".join(rows)
 
 
-def readme_sections() -> dict[str, str]:
-    """The README's generated output tables, by marker name."""
+def doc_tables() -> dict[str, str]:
+    """The documentation's output tables, by name (``docs/outputs.md`` includes
+    each as ``_generated/layout-NAME.md``, written at every docs build)."""
     return {
         "run-files": markdown(RUN_FILES, "file"),
         "history": markdown(HISTORY, "column"),
@@ -236,19 +251,3 @@ def readme_sections() -> dict[str, str]:
         "metrics": markdown(METRICS, "key"),
         "stage-metrics": markdown(STAGE_METRICS, "key"),
     }
-
-
-def update_readme(path) -> bool:
-    """Rewrite the generated tables between ``<!-- layout:NAME -->`` and
-    ``<!-- /layout:NAME -->`` in the README at ``path``; True if it changed."""
-    import re
-    from pathlib import Path
-    path = Path(path)
-    text = path.read_text(encoding="utf-8")
-    new = text
-    for name, table in readme_sections().items():
-        new = re.sub(rf"(<!-- layout:{name} -->\n).*?(<!-- /layout:{name} -->)",
-                     lambda m: m.group(1) + table + "\n" + m.group(2), new, flags=re.S)
-    if new != text:
-        path.write_text(new, encoding="utf-8")
-    return new != text

@@ -2,7 +2,7 @@
 
 One test per class of misuse found by hand; each failed on the code before
 the fix (a deleted file, a hang, a traceback, a wrong exit code) and checks
-the behaviour the README's "Reliability" table promises. Subprocesses are
+the behaviour the "Reliability" table of docs/reliability.md promises. Subprocesses are
 used where the failure is a hang, a signal or a process limit.
 """
 

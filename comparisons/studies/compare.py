@@ -26,7 +26,7 @@ import numpy as np
 from wearcheck import cases
 from wearcheck.cases import reference
 from wearcheck.comparisons import layout, registry, rundir
-from wearcheck.comparisons.analysis import edge_peak, metrics
+from wearcheck.comparisons.analysis import diagnosis, edge_peak, metrics
 
 #: how a solver is run; tests replace it with analytic stand-ins
 solve_case = registry.solve
@@ -64,26 +64,10 @@ def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tupl
                               f"({', '.join(chosen) or 'none'})"
                               + (f"; it cannot run this case: {reason}" if reason else ""))
     if len(chosen) < 2:
-        why = "; ".join(f"{n}: {reason}" for n, reason in skipped(case, chosen).items())
+        why = "; ".join(f"{n}: {reason}" for n, reason in skipped_solvers(case, chosen).items())
         raise cases.CaseError("a comparison needs two solvers that support the case; only "
                               f"{', '.join(chosen) or 'none'} can ({why})")
     return ref, (ref,) + tuple(n for n in chosen if n != ref)
-
-
-def skipped(case, chosen) -> dict:
-    """{name: why} for every registered solver not among ``chosen``."""
-    out = {}
-    for name in registry.names():
-        if name in chosen:
-            continue
-        entry = registry.get(name)
-        reason = entry.supports(case)
-        if reason is None:
-            reason = ("not selected" if entry.default else
-                      f"opt-in (an external program): name it to compare it, e.g. --solvers "
-                      f"{','.join(list(chosen) + [name])}")
-        out[name] = reason
-    return out
 
 
 def run_solvers(case, names, *, solve=None, quiet=True, label="") -> dict:
@@ -155,8 +139,15 @@ def truncated_reference(case, results, scales) -> dict | None:
             metrics.max_rms(dp[interior & ~near_b])
         row["pressure_near_b_max"], _, _ = metrics.max_rms(dp[near_b])
         row["pressure_edge_max"], _, _ = metrics.max_rms(dp[edge])
-        tol = metrics.verdict(dict(row, profile_max=0.0), dataclasses.asdict(cmp))
-        tol.pop("profile_max")
+        # judged as a stage is: against the reference's own force, contact radius and
+        # peak pressure (away from the singularity); no profile is compared here
+        own = dict(profile_contact_max=1.0, force=out["force"],
+                   contact_radius=out["contact_radius"],
+                   pressure_interior_max=metrics.peak_pressure(r, p_ref, b, cmp.edge_band * a)
+                   / scales["p0"])
+        tol = metrics.verdict(dict(row, profile_contact_max=0.0, stage_scales=own),
+                              dataclasses.asdict(cmp))
+        tol.pop("profile_contact_max")
         row["checks"] = tol
         row["passed"] = all(c["passed"] for c in tol.values())
         out["solvers"][name] = row
@@ -226,7 +217,79 @@ def analyse(case, results, reference_solver=None) -> dict:
         m["truncated_reference"] = tr
         m["passed"] = bool(m["passed"] and tr["passed"])
     m["edge_peaks"] = {k: peaks_of(v, sc) for k, v in results.items()}
+    diagnose(case, results, m)
     return m
+
+
+def skipped_solvers(case, chosen) -> dict:
+    """The registered solvers a comparison leaves out, each with its reason: why it cannot
+    run the case (or here), that it is opt-in (``Solver.default`` False: named to run), or
+    that it was not among the solvers asked for."""
+    out = {}
+    for name in registry.names():
+        if name in chosen:
+            continue
+        entry = registry.get(name)
+        reason = entry.supports(case)
+        if reason is None:
+            reason = ("not among the solvers asked for" if entry.default else
+                      "opt-in (an external program): name it to compare it, e.g. --solvers "
+                      + ",".join(list(chosen) + [name]))
+        out[name] = reason
+    return out
+
+
+def _resolution(case, name, result, stage) -> diagnosis.Resolution:
+    """How finely one run resolved its stage ``stage`` (its own contact radius there)."""
+    try:
+        entry = registry.get(name)
+        title, key = entry.title, entry.resolution_key
+    except cases.CaseError:      # a result that no registered solver made
+        title, key = name.upper(), None
+    value = None
+    if key is not None:
+        section, field = key.split(".")
+        value = getattr(getattr(case, section, None), field, None)
+    points = math.nan
+    if stage < len(result.stage_s):
+        a = float(metrics.at_stages(result.history["s"], result.history["contact_radius"],
+                                    result.stage_s[stage:stage + 1])[0])
+        points = diagnosis.points_across(result.r, a)
+    err = result.info.get("time_error")
+    err = err.get("estimate") if isinstance(err, dict) else None
+    return diagnosis.Resolution(solver=name, title=title, key=key, value=value,
+                                points_across=points,
+                                time_error=float(err) if err is not None else None,
+                                approximate=result.info.get("approximate") or None)
+
+
+def diagnose(case, results, m) -> None:
+    """Add to each failed pair (and to a failed reference check) the setting most
+    likely to fix its worst check; ``m["diagnosis"]``: the worst of them."""
+    sl = case.sliding
+    found = []
+
+    def advice(failure, names):
+        runs = [_resolution(case, n, results[n], failure["stage"]) for n in names]
+        return diagnosis.advise(failure, runs, scheme=sl.scheme, tolerance=sl.tolerance,
+                                step_hat=sl.step_hat)
+
+    for name, pair in m["pairs"].items():
+        failure = diagnosis.worst_failure(pair["stages"])
+        pair["diagnosis"] = None
+        if failure is not None:
+            pair["diagnosis"] = dict(advice(failure, [name, m["reference"]]), pair=name,
+                                     used=failure["used"])
+            found.append(pair["diagnosis"])
+    tr = m.get("truncated_reference")
+    for name, row in (tr or {}).get("solvers", {}).items():
+        failure = diagnosis.worst_failure([dict(index=0, s_hat_reference=0.0,
+                                                checks=row["checks"])])
+        if failure is not None:
+            row["diagnosis"] = dict(advice(failure, [name]), pair=f"{name} / reference",
+                                    used=failure["used"])
+            found.append(row["diagnosis"])
+    m["diagnosis"] = max(found, key=lambda d: d["used"], default=None)
 
 
 def scar_tables(case, results) -> dict:
@@ -292,7 +355,7 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
             ref = exact[0]
             results = {ref: results[ref], **{n: r for n, r in results.items() if n != ref}}
     m = analyse(case, results, ref)
-    m["skipped"] = skipped(case, names)
+    m["skipped"] = skipped_solvers(case, names)
     if switched:
         m["reference_note"] = (f"{registry.get(switched[0]).title} solved an approximation "
                                f"of this case, so {registry.get(switched[1]).title} is the "
