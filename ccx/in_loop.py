@@ -9,6 +9,10 @@ by forward Euler, w += Δs K σ0 (p/σ0)^n with p = f/A (the lumped areas of
 (``*RESTART,READ`` crashes), so every step is a fresh job; the mode is meant
 for short runs on coarse meshes (docs/ccx.md).
 
+The steps are :mod:`numerics.stepping`'s explicit Euler (:class:`InLoop`
+supplies the step), the history is recorded as the superelement's
+(:class:`numerics.superelement.WearRun`).
+
 The gap elements are penalty springs: a loaded node sinks by f/k into the
 plane. :func:`gap_stiffness` makes that at most :data:`PENETRATION` of the
 depth scale at twice the Hertz pressure on the largest node; each solve's
@@ -20,12 +24,13 @@ and the forces must balance the top face's reaction
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from wearcheck.cases import SolverError, wear_law
-from wearcheck.cases.result import scar_radius
+from wearcheck.cases import CaseError, SolverError, wear_law
+from wearcheck.numerics import stepping
+from wearcheck.numerics.superelement import WearRun
 
 from . import deck
 from .output import dat_blocks, select
@@ -52,7 +57,7 @@ class GapSolution:
     """One CalculiX contact solve: ring forces f [N] and gaps [m] of the loaded nodes
     (the contact nodes off the axis), the depth [m], the top face's reaction [N],
     the deepest node's sinking into the plane [d0], |Σ f − top reaction| [F0], the
-    .frd file when fields were asked for."""
+    .frd file's nodal results when fields were asked for."""
 
     f: np.ndarray
     gap: np.ndarray
@@ -118,112 +123,114 @@ def contact_solve(jobs, name, sphere, clearance, *, control, value, stiffness, t
 
 
 @dataclass
-class InLoopRun:
-    """History and stage states of an in-loop run (lists, one entry per step)."""
+class State:
+    """The wear of the loaded contact nodes and CalculiX's contact solve on it."""
 
-    s: list = field(default_factory=list)
-    force: list = field(default_factory=list)
-    depth: list = field(default_factory=list)
-    contact_radius: list = field(default_factory=list)
-    wear_center: list = field(default_factory=list)
-    wear_volume: list = field(default_factory=list)
-    scar_radius: list = field(default_factory=list)
-    stages: list = field(default_factory=list)   # (s, f, w, depth, gap, frd)
-    steps: int = 0
-    max_penetration: float = 0.0
-    max_equilibrium_error: float = 0.0
+    w: np.ndarray
+    contact: GapSolution
 
 
-def contact_radius(r, f, gap) -> float:
-    """Contact radius between the last loaded node i and the next, from the gaps of the
-    first two free nodes: near a smooth edge gap ∝ (r − a)^{3/2}, so gap^{2/3} is
-    extrapolated linearly to zero, clamped to [r_i, r_{i+1}]."""
-    loaded = np.flatnonzero(f > 0)
-    if len(loaded) == 0:
-        return 0.0
-    i = loaded[-1]
-    j = i + 1
-    if j + 1 >= len(r):
-        return float(r[i])
-    t1, t2 = np.cbrt(max(gap[j], 0.0)) ** 2, np.cbrt(max(gap[j + 1], 0.0)) ** 2
-    if t2 <= t1:
-        return float(r[i])
-    a = r[j] - t1 * (r[j + 1] - r[j]) / (t2 - t1)
-    return float(min(max(a, r[i]), r[j]))
+class InLoop(stepping.Problem):
+    """Forward Euler with one CalculiX contact solve per step, for :func:`numerics.stepping.run`.
 
-
-def run(jobs, sphere, height, *, control, value, rate, exponent, hardness, step, stage_s,
-        until, distance, force_fraction, center, force_scale, depth_scale, stiffness,
-        tension, max_steps, progress=None) -> InLoopRun:
-    """Slide and wear by forward Euler with one CalculiX solve per step.
-
-    ``height`` (Nc,) initial gaps of the contact nodes [m]; ``step`` Δs [m];
-    ``center`` (Nc-1,) weights of the loaded nodes' wear giving the wear at
-    r = 0; the rest as :func:`wearcheck.fem.wear.run` takes them. The fields
-    (.frd) are written at the stages.
+    ``height`` (Nc,) initial gaps of the contact nodes [m]; ``stage_s`` the
+    distances [m] where the fields (.frd) are written; ``center`` (Nc-1,)
+    weights of the loaded nodes' wear giving the wear at r = 0; ``max_steps``
+    CalculiX jobs at most (SolverError beyond). Only the explicit scheme:
+    there is no implicit step (CalculiX's contact has no wear compliance).
     """
-    r = sphere.r[1:]
-    area = sphere.area[1:]
-    w = np.zeros(len(r))
-    out = InLoopRun()
-    stages = list(stage_s)
-    s = 0.0
 
-    def solve(k, at_stage):
-        clearance = np.asarray(height, float) + np.concatenate([[0.0], w])
-        sol = contact_solve(jobs, f"step-{k:05d}", sphere, clearance, control=control,
-                            value=value, stiffness=stiffness, tension=tension,
-                            force_scale=force_scale, depth_scale=depth_scale,
-                            depth_guess=out.depth[-1] if out.depth else None, fields=at_stage)
+    def __init__(self, jobs, sphere, height, *, control, value, rate, exponent, hardness,
+                 stage_s, center, force_scale, depth_scale, stiffness, tension, max_steps):
+        self.jobs, self.sphere, self.height = jobs, sphere, np.asarray(height, float)
+        self.r, self.area, self.center = sphere.r[1:], sphere.area[1:], center
+        self.control, self.value = control, value
+        self.rate, self.exponent, self.hardness = rate, exponent, hardness
+        self.pending = list(stage_s)
+        self.scales = dict(force_scale=force_scale, depth_scale=depth_scale)
+        self.stiffness, self.tension, self.max_steps = stiffness, tension, max_steps
+        self.solves = 0
+        self.max_penetration = 0.0
+        self.max_equilibrium_error = 0.0
+        self._depth = None
+
+    def _at_stage(self, s) -> bool:
+        """Whether ``s`` completes a stage (the stepper's rule), consuming it."""
+        hit = False
+        while self.pending and self.pending[0] <= s * (1 + 1e-12) + 1e-300:
+            self.pending.pop(0)
+            hit = True
+        return hit
+
+    def solve(self, w, s) -> GapSolution:
+        """CalculiX's contact of the sphere worn by ``w`` at sliding distance ``s``."""
+        if self.solves > self.max_steps:
+            raise SolverError(f"no end after {self.max_steps} in-loop steps (s = {s:.4g} m); "
+                              "use ccx.mode = \"superelement\"")
+        clearance = self.height + np.concatenate([[0.0], w])
+        sol = contact_solve(self.jobs, f"step-{self.solves:05d}", self.sphere, clearance,
+                            control=self.control, value=self.value, stiffness=self.stiffness,
+                            tension=self.tension, depth_guess=self._depth,
+                            fields=self._at_stage(s), **self.scales)
+        self.solves += 1
         if sol.f[-1] > 0:
             raise SolverError(f"the contact reached the end of the candidate arc (r = "
-                              f"{r[-1]:.4g} m) at s = {s:.4g} m; increase ccx.contact_factor")
-        out.max_penetration = max(out.max_penetration, sol.penetration)
-        out.max_equilibrium_error = max(out.max_equilibrium_error, sol.equilibrium_error)
+                              f"{self.r[-1]:.4g} m) at s = {s:.4g} m; increase "
+                              "ccx.contact_factor")
+        self._depth = sol.depth
+        self.max_penetration = max(self.max_penetration, sol.penetration)
+        self.max_equilibrium_error = max(self.max_equilibrium_error, sol.equilibrium_error)
         return sol
 
-    def at_stage():
-        return bool(stages) and abs(s - stages[0]) <= 1e-12 * max(abs(s), step)
+    def unworn(self) -> State:
+        """The contact of the unworn sphere."""
+        w = np.zeros(len(self.r))
+        sol = self.solve(w, 0.0)
+        if not sol.f.sum() > 0:
+            raise SolverError("the unworn sphere carries no force")
+        return State(w, sol)
 
-    def record(sol):
-        out.s.append(s)
-        out.force.append(float(sol.f.sum()))
-        out.depth.append(sol.depth)
-        out.contact_radius.append(contact_radius(r, sol.f, sol.gap))
-        out.wear_center.append(float(center @ w))
-        out.wear_volume.append(float(area @ w))
-        out.scar_radius.append(scar_radius(r, w))
-        if at_stage():
-            out.stages.append((s, sol.f.copy(), w.copy(), sol.depth, sol.gap.copy(), sol.frd))
-            stages.pop(0)
+    def implicit(self, origin, base, h, c, sub):
+        raise SolverError("ccx.mode = \"in_loop\" steps by explicit Euler only")
 
-    sol = solve(0, at_stage())
-    F_start = float(sol.f.sum())
-    if not F_start > 0:
-        raise SolverError("the unworn sphere carries no force")
-    record(sol)
-    s_end = distance if until == "distance" else math.inf
-    while True:
-        if until == "distance" and s >= s_end:
-            break
-        if until == "force_fraction" and out.force[-1] < force_fraction * F_start:
-            break
-        if out.steps >= max_steps:
-            raise SolverError(f"no end after {max_steps} in-loop steps (s = {s:.4g} m, F = "
-                              f"{out.force[-1]:.4g} N); use ccx.mode = \"superelement\"")
-        target = min(stages[0] if stages else math.inf, s_end)
-        land = target - s <= step * (1 + 1e-9)
-        ds = target - s if land else step
-        w = w + ds * wear_law.speed(sol.f / area, rate, exponent, hardness)
-        s = target if land else s + ds
-        out.steps += 1
-        sol = solve(out.steps, at_stage())
-        record(sol)
-        if progress is not None:
-            if until == "distance":
-                progress(min(s / s_end, 1.0) if s_end > 0 else 1.0, f"s = {s:.3g} m")
-            else:
-                F = max(out.force[-1], 1e-300)
-                progress(min(max(math.log(F / F_start) / math.log(force_fraction), 0.0), 1.0),
-                         f"F/F0 = {F / F_start:.3g}")
-    return out
+    def explicit(self, state, h, sub):
+        """Wear by the pressure at the start of the step, then CalculiX's contact."""
+        w = state.w + h * wear_law.speed(state.contact.f / self.area, self.rate,
+                                         self.exponent, self.hardness)
+        return State(w, self.solve(w, sub.s + h))
+
+    def profile(self, state):
+        return state.w
+
+    def measures(self, state):
+        c = state.contact
+        return float(c.f.sum()), c.depth, float(self.center @ state.w)
+
+
+def run(problem: InLoop, plan: stepping.Plan, progress=None) -> tuple[WearRun, list]:
+    """Slide and wear ``problem`` as ``plan`` (explicit) says: the history and stages, and
+    the .frd results of each stage.
+
+    A run stopped by the force is refused after its first step when, projected
+    from it, it would take more than ``problem.max_steps`` CalculiX jobs.
+    """
+    out, frds = WearRun(), []
+
+    def observe(state, s, stages):
+        c = state.contact
+        out.record(s, c.f, c.gap, c.depth, state.w, stages, r=problem.r, area=problem.area,
+                   center=problem.center)
+        frds.extend([c.frd] * stages)
+        if len(out.s) == 2 and plan.force_fraction is not None:
+            fallen = (1.0 - out.force[1] / out.force[0]) / (1.0 - plan.force_fraction)
+            projected = s / fallen / plan.step if fallen > 0 else math.inf
+            if projected > problem.max_steps:
+                raise CaseError(f"ccx.mode = \"in_loop\": the run would take about "
+                                f"{projected:.3g} steps of Δŝ = {plan.step * plan.per_m:.3g} "
+                                f"to F < {plan.force_fraction:g} F0, projected from its first "
+                                f"(one CalculiX job each; at most {problem.max_steps}); use "
+                                "ccx.mode = \"superelement\" or a coarser mesh")
+
+    outcome = stepping.run(problem, problem.unworn(), plan, observe, progress)
+    out.steps, out.outcome = outcome.steps, outcome
+    return out, frds

@@ -26,6 +26,7 @@ from pathlib import Path
 from wearcheck.cases import RunResult, SolverError
 
 from .deck import MODEL_FILE
+from .output import read_frd
 
 #: oldest CalculiX this package was built and checked with
 MINIMUM_VERSION = (2, 20)
@@ -91,12 +92,13 @@ def _environment() -> dict:
 
 @dataclass
 class Job:
-    """One finished CalculiX job: its deck, outputs and cost."""
+    """One finished CalculiX job: its deck, .dat text, .frd nodal results (when kept),
+    standard output and cost."""
 
     name: str
     deck: str
     dat: str
-    frd: Path | None
+    frd: list | None
     stdout: str
     seconds: float
 
@@ -113,7 +115,8 @@ class Jobs:
     def run(self, name: str, deck: str, *, keep_frd: bool = False) -> Job:
         """Run ``deck`` as job ``name`` in a fresh directory; the outputs parsed by the caller.
 
-        The .frd file (``keep_frd``) is copied out before the directory goes.
+        With ``keep_frd`` the .frd file's nodal results are read
+        (:func:`ccx.output.read_frd`) before the directory goes.
         Raises SolverError on failure, naming the kept directory.
         """
         workdir = Path(tempfile.mkdtemp(prefix=f"wearcheck-ccx-{name}-"))
@@ -141,12 +144,7 @@ class Jobs:
             (workdir / f"{name}.stdout").write_text(done.stdout + done.stderr)
             raise SolverError(f"CalculiX job '{name}' failed: {failure}; deck, output and "
                               f"CalculiX's messages ({name}.stdout) are in {workdir}")
-        frd = None
-        if keep_frd and (workdir / f"{name}.frd").is_file():
-            fd, tmp = tempfile.mkstemp(prefix=f"wearcheck-ccx-{name}-", suffix=".frd")
-            os.close(fd)
-            shutil.copyfile(workdir / f"{name}.frd", tmp)
-            frd = Path(tmp)
+        frd = read_frd(workdir / f"{name}.frd")[1] if keep_frd else None
         job = Job(name=name, deck=deck, dat=dat.read_text(errors="replace"), frd=frd,
                   stdout=done.stdout, seconds=seconds)
         shutil.rmtree(workdir, ignore_errors=True)

@@ -9,14 +9,19 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from wearcheck import meshes
-from wearcheck.cases import CaseError, SolverError, reference
+from wearcheck.cases import CaseError, SolverError, programme, reference
 from wearcheck.cases.profiles import height
+from wearcheck.numerics import stepping, superelement
 
 from . import compliance as compliance_mod
 from . import deck, in_loop, run
 from .model import cax6_sphere
-from .output import dat_blocks, read_frd, select, stage_fields
+from .output import dat_blocks, select, stage_fields
 
+#: implicit Euler's and BDF2's step in ŝ when sliding.step_hat = "auto": the FEM's
+#: (fem/solver.py, measured there), since the mesh and the superelement are the same
+IMPLICIT_AUTO_STEP_HAT = 0.02
+BDF2_AUTO_STEP_HAT = 0.01
 #: fewest arc nodes required inside the unworn contact radius
 MIN_NODES_IN_CONTACT = 5
 #: most CalculiX jobs an in-loop run may take (one per step, 1-8 s each)
@@ -54,10 +59,6 @@ def supports(case) -> str | None:
         return (f"ccx.mode = \"in_loop\" steps by explicit Euler (one CalculiX solve per "
                 f"step); key 'sliding.scheme' = \"{case.sliding.scheme}\": set it to "
                 "\"explicit\", or use ccx.mode = \"superelement\"")
-    if case.ccx.mode == "superelement":
-        # interim: the superelement wear loop is written once numerics/ is merged
-        return ("ccx.mode = \"superelement\" waits for the shared numerics package (not merged "
-                "yet on this branch); use ccx.mode = \"in_loop\"")
     return run.unavailable(case.ccx.executable)
 
 
@@ -105,11 +106,30 @@ def axis_weights(r) -> np.ndarray:
     return w
 
 
+def step_hat_for(case, limit_hat: float) -> float:
+    """The step in ŝ of the case's scheme (``sliding.step_hat``, or its "auto"); an
+    explicit step beyond the stability limit ``limit_hat`` is refused naming the key."""
+    sl = case.sliding
+    if sl.scheme == "adaptive":
+        return math.inf if sl.step_hat == "auto" else float(sl.step_hat)
+    if sl.step_hat == "auto":
+        return {"explicit": 0.5 * limit_hat, "implicit": IMPLICIT_AUTO_STEP_HAT,
+                "bdf2": BDF2_AUTO_STEP_HAT}[sl.scheme]
+    step_hat = float(sl.step_hat)
+    if sl.scheme == "explicit" and step_hat > limit_hat:
+        raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: beyond the explicit Euler "
+                        f"stability limit of this mesh, {limit_hat:.4g}; use a step <= "
+                        f"{limit_hat:.4g}" + ("" if case.ccx.mode == "in_loop" else
+                                              " or sliding.scheme = \"implicit\""))
+    return step_hat
+
+
 def _solve(case, progress):
     t_start = time.perf_counter()
     sc = reference.scales(case)
     d0, F0, p0, per_m = sc["d0"], sc["F0"], sc["p0"], sc["s_hat_per_m"]
-    sl, settings = case.sliding, case.ccx
+    settings = case.ccx
+    in_loop_mode = settings.mode == "in_loop"
     params = mesh_parameters(case)
     if progress:
         progress(0.0, "mesh")
@@ -119,7 +139,7 @@ def _solve(case, progress):
     executable = run.find(settings.executable)
     version = run.version(executable)
     jobs = run.Jobs(executable=executable,
-                    model=deck.model(sphere, E, nu, nonlinear=settings.mode == "in_loop",
+                    model=deck.model(sphere, E, nu, nonlinear=in_loop_mode,
                                      title=f"wearcheck case {case.source}"))
     if progress:
         progress(0.0, "compliance (CalculiX)")
@@ -128,57 +148,72 @@ def _solve(case, progress):
     r, area = r_all[1:], sphere.area[1:]
     z_all = height(case.indenter, r_all, case.table)
     rate, n_exp, hardness = case.wear_rate, case.wear.pressure_exponent, case.wear.hardness
+    control = case.loading.control
     center = axis_weights(r_all)
-    limit_hat = explicit_limit(C, area, rate) * per_m
+    limit_hat = superelement.explicit_limit(C, area, rate) * per_m
     if n_exp != 1.0:
+        # the rate's derivative n (p/σ0)^(n-1) scales the stiffness; bound p by 1.5 p0
         limit_hat /= n_exp * (1.5 * p0 / hardness) ** (n_exp - 1.0)
-    if sl.step_hat == "auto":
-        step_hat = 0.5 * limit_hat
-    else:
-        step_hat = float(sl.step_hat)
-        if step_hat > limit_hat:
-            raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: beyond the explicit "
-                            f"Euler stability limit of this mesh, {limit_hat:.4g}; use a step "
-                            f"<= {limit_hat:.4g}")
-    s_end = case.end_distance
-    stage_s = [sh / per_m for sh in case.stages.s_hat]
-    if s_end is not None:
-        stage_s = [s for s in stage_s if s <= s_end * (1 + 1e-12)]
-        if s_end * per_m / step_hat > MAX_IN_LOOP_STEPS:
-            raise CaseError(f"ccx.mode = \"in_loop\": the run would take "
-                            f"{s_end * per_m / step_hat:.3g} steps of Δŝ = {step_hat:.3g} "
-                            f"(one CalculiX job each; at most {MAX_IN_LOOP_STEPS}); shorten "
-                            "the run or use ccx.mode = \"superelement\"")
-    stiffness = in_loop.gap_stiffness(area, p0, d0)
-    tension = in_loop.TENSION * F0 / deck.WEDGES
+    step_hat = step_hat_for(case, limit_hat)
+    plan, until = programme.stepping_plan(case, step_hat, sc)
+    info = dict(mode=settings.mode, scheme=case.sliding.scheme,
+                step_hat=step_hat if math.isfinite(step_hat) else "unlimited",
+                step=plan.step if math.isfinite(plan.step) else "unlimited",
+                explicit_limit_step_hat=float(limit_hat))
+
+    def loop_progress(frac, text):
+        if progress:
+            progress(0.05 + 0.85 * frac, text)
+
     t0 = time.perf_counter()
-    out = in_loop.run(jobs, sphere, z_all, control=case.loading.control,
-                      value=getattr(case.loading, case.loading.control), rate=rate,
-                      exponent=n_exp, hardness=hardness, step=step_hat / per_m,
-                      stage_s=stage_s,
-                      until="force_fraction" if sl.until == "force_fraction" else "distance",
-                      distance=s_end, force_fraction=sl.force_fraction, center=center,
-                      force_scale=F0, depth_scale=d0, stiffness=stiffness, tension=tension,
-                      max_steps=MAX_IN_LOOP_STEPS,
-                      progress=(lambda x, t: progress(0.05 + 0.9 * x, t)) if progress else None)
-    t_loop = time.perf_counter() - t0
-    fields = _fields(sphere, out.stages, [read_frd(st[5])[1] for st in out.stages])
-    info = dict(mode="in_loop", scheme="explicit", step_hat=step_hat, step=step_hat / per_m,
-                explicit_limit_step_hat=float(limit_hat), steps=out.steps,
-                gap_stiffness=dict(value=stiffness, unit="N/m on the 2° wedge"),
-                gap_tension=dict(value=tension, unit="N on the 2° wedge"),
-                max_penetration=dict(value=out.max_penetration, unit="d0"),
-                max_equilibrium_error=dict(value=out.max_equilibrium_error, unit="F0"))
-    return _result(case, sphere, out, z_all, fields, jobs, version, compliance_info, info,
-                   params, sm, t_start, t_loop)
+    if in_loop_mode:
+        if until == "distance" and plan.end / plan.step > MAX_IN_LOOP_STEPS * (1 + 1e-9):
+            raise CaseError(f"ccx.mode = \"in_loop\": the run would take "
+                            f"{plan.end / plan.step:.3g} steps of Δŝ = {step_hat:.3g} (one "
+                            f"CalculiX job each; at most {MAX_IN_LOOP_STEPS}); shorten the run "
+                            "or use ccx.mode = \"superelement\"")
+        problem = in_loop.InLoop(
+            jobs, sphere, z_all, control=control, value=getattr(case.loading, control),
+            rate=rate, exponent=n_exp, hardness=hardness, stage_s=plan.stages, center=center,
+            force_scale=F0, depth_scale=d0, stiffness=in_loop.gap_stiffness(area, p0, d0),
+            tension=in_loop.TENSION * F0 / deck.WEDGES, max_steps=MAX_IN_LOOP_STEPS)
+        out, frds = in_loop.run(problem, plan, loop_progress)
+        t_loop = time.perf_counter() - t0
+        frd_steps = frds
+        info.update(gap_stiffness=dict(value=problem.stiffness, unit="N/m on the 2° wedge"),
+                    gap_tension=dict(value=problem.tension, unit="N on the 2° wedge"),
+                    max_penetration=dict(value=problem.max_penetration, unit="d0"),
+                    max_equilibrium_error=dict(value=problem.max_equilibrium_error,
+                                               unit="F0"))
+    else:
+        problem = superelement.Superelement(
+            C, z_all[1:], r, area, rate, control=control, value=getattr(case.loading, control),
+            gap_scale=d0, force_scale=F0, pressure_scale=p0, center=center, exponent=n_exp,
+            hardness=hardness, arc_key="ccx.contact_factor")
+        out = superelement.run(problem, plan, loop_progress)
+        t_loop = time.perf_counter() - t0
+        if progress:
+            progress(0.9, "fields (CalculiX)")
+        frd_steps, recovered = recover_fields(jobs, sphere, z_all, out.stages, d0)
+        info.update(lcp_iterations=out.lcp_iterations, lcp_tolerance=superelement.LCP_TOL,
+                    max_complementarity_residual=out.max_residual,
+                    refactorisations=out.refactorisations, borderings=out.borderings,
+                    recovery_gap=dict(value=recovered, unit="d0", meaning=(
+                        "largest |gap| of a loaded contact node when CalculiX applies the "
+                        "stage's contact forces to the sphere (fields recovery)")))
+    info.update(stepping.info(out.outcome, plan))
+    fields = _fields(sphere, out.stages, frd_steps)
+    history = programme.finish_history(case, _history(out), until, plan.end, per_m)
+    if progress:
+        progress(1.0, "done")
+    return _result(case, sphere, out, history, z_all, fields, jobs, version, compliance_info,
+                   info, params, sm, t_start, t_loop)
 
 
-def explicit_limit(C, area, rate) -> float:
-    """Largest stable explicit Euler step Δs [m]: 2 λ_min(A^½ C A^½) / rate (docs/theory.md §7)."""
-    from scipy import linalg
-    sa = np.sqrt(area)
-    lam = linalg.eigvalsh(sa[:, None] * C * sa[None, :], subset_by_index=[0, 0])[0]
-    return 2.0 * lam / rate
+def _history(out) -> dict:
+    return {k: np.array(getattr(out, k), float) for k in
+            ("s", "force", "depth", "contact_radius", "wear_center", "wear_volume",
+             "scar_radius")}
 
 
 def _fields(sphere, stages, frd_steps) -> dict:
@@ -193,11 +228,9 @@ def _fields(sphere, stages, frd_steps) -> dict:
                 contact_nodes=sphere.contact.astype(np.int64))
 
 
-def _result(case, sphere, out, z_all, fields, jobs, version, compliance_info, info, params,
-            sm, t_start, t_loop) -> run.CcxResult:
+def _result(case, sphere, out, history, z_all, fields, jobs, version, compliance_info, info,
+            params, sm, t_start, t_loop) -> run.CcxResult:
     """The RunResult of either mode from its history and stage states."""
-    sc = reference.scales(case)
-    per_m = sc["s_hat_per_m"]
     area = sphere.area[1:]
     K, nc = len(out.stages), len(sphere.contact)
     f_nodes, w_nodes = np.zeros((K, nc)), np.zeros((K, nc))
@@ -209,12 +242,6 @@ def _result(case, sphere, out, z_all, fields, jobs, version, compliance_info, in
     for arr in (p, w_nodes):
         arr[:, 0] = arr[:, 1:] @ center
     fields.update(contact_pressure=p, wear_depth=w_nodes)
-    history = {k: np.array(getattr(out, k)) for k in
-               ("s", "force", "depth", "contact_radius", "wear_center", "wear_volume",
-                "scar_radius")}
-    history["s_hat"] = history["s"] * per_m
-    cpm = case.cycles_per_metre
-    history["cycles"] = history["s"] * (cpm if cpm is not None else math.nan)
     info.update(
         solver="ccx", ccx=dict(executable=jobs.executable, version=".".join(map(str, version)),
                                jobs=len(jobs.seconds), seconds=sum(jobs.seconds.values()),
@@ -260,8 +287,7 @@ def recover_fields(jobs, sphere, height, stages, depth_scale) -> tuple[list, flo
     forces = [(st[3], np.concatenate([[0.0], st[1]])) for st in stages]
     job = jobs.run("recovery", deck.recovery(sphere, forces, title="wearcheck: the fields at "
                                                                    "the stages"), keep_frd=True)
-    _, results = read_frd(job.frd)
-    per_stage = [[b for b in results if b.step == k + 1] for k in range(len(stages))]
+    per_stage = [[b for b in job.frd if b.step == k + 1] for k in range(len(stages))]
     blocks = select(dat_blocks(job.dat, "recovery.dat"), "displacements", "CONTACT")
     if len(blocks) != len(stages):
         raise SolverError(f"CalculiX job 'recovery': {len(blocks)} steps printed for "

@@ -192,7 +192,7 @@ def _solve(case, progress=None) -> RunResult:
     problem = superelement.Superelement(
         C, z, r, area, rate, control=control, value=getattr(case.loading, control),
         gap_scale=d0, force_scale=F0, pressure_scale=p0, center=center, exponent=n_exp,
-        hardness=case.wear.hardness)
+        hardness=case.wear.hardness, arc_key="fem.contact_factor")
 
     def loop_progress(frac, text):
         if progress:
