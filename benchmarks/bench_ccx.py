@@ -3,13 +3,16 @@
     python benchmarks/bench_ccx.py                    # every table
     python benchmarks/bench_ccx.py --only compliance  # the *GREEN job against contact nodes
     python benchmarks/bench_ccx.py --only in_loop     # one gap-element contact solve
-    python benchmarks/bench_ccx.py --only paper       # the paper case, CalculiX and the FEM
-    python benchmarks/bench_ccx.py --sizes 51 101     # other contact-node counts
+    python benchmarks/bench_ccx.py --only paper       # the paper case, superelement mode
+    python benchmarks/bench_ccx.py --only paper_in_loop  # the paper case in both modes
+    python benchmarks/bench_ccx.py --sizes 60 125     # other contact-node counts
 
 Every measurement runs in a fresh process with a fresh mesh and compliance
 cache (the paper table also with the cache warm); the FEM on the same case and
-mesh is the baseline of the same run. Not a test: the numbers depend on the
-machine and its load (``uptime`` is printed with the tables).
+mesh is the baseline of the same run. The paper case in the in-loop mode runs
+explicit Euler at ``--loop-nodes`` contact nodes (one CalculiX job per step),
+beside the superelement mode and the FEM with the same scheme and mesh. Not a
+test: the numbers depend on the machine and its load (printed with the tables).
 """
 
 from __future__ import annotations
@@ -74,20 +77,28 @@ def in_loop(n: int) -> dict:
     return dict(n=n, seconds=time.perf_counter() - t, F_over_F0=sol.f.sum() / sc["F0"])
 
 
-def paper(solver_name: str, n: int) -> dict:
-    """The paper case by ``solver_name`` at n contact nodes (cache as the caller left it)."""
+def paper(solver_name: str, n: int, changes: dict | None = None) -> dict:
+    """The paper case by ``solver_name`` at n contact nodes (cache as the caller left it),
+    with ``changes`` to the case; its history's force [F0] at the stages and at the end."""
+    import numpy as np
+
     import wearcheck
 
-    case = wearcheck.load_case(PAPER, {f"{solver_name}.contact_nodes": n})
+    case = wearcheck.load_case(PAPER, {f"{solver_name}.contact_nodes": n, **(changes or {})})
     t = time.perf_counter()
     res = wearcheck.solve(case, solver_name)
+    F0, h = res.scales["F0"], res.history
     out = dict(solver=solver_name, n=n, seconds=time.perf_counter() - t,
-               steps=len(res.history["s"]) - 1,
-               final_F_over_F0=float(res.history["force"][-1] / res.scales["F0"]),
-               s_hat_end=float(res.history["s_hat"][-1]))
+               steps=len(h["s"]) - 1, final_F_over_F0=float(h["force"][-1] / F0),
+               s_hat_end=float(h["s_hat"][-1]),
+               stage_F_over_F0=[float(np.interp(s, h["s"], h["force"]) / F0)
+                                for s in res.stages["s"]],
+               stage_s_hat=[float(x) for x in res.stages["s_hat"]],
+               s=[float(x) for x in h["s"]], force=[float(x / F0) for x in h["force"]])
     if solver_name == "ccx":
         out["compliance_cached"] = res.info["compliance"]["cached"]
         out["ccx_seconds"] = res.info["ccx"]["seconds"]
+        out["ccx_jobs"] = res.info["ccx"]["jobs"]
     return out
 
 
@@ -97,18 +108,29 @@ def child(function: str, *args, cache: str) -> dict:
             f"import bench_ccx as b; print(json.dumps(b.{function}(*{args!r})))")
     env = dict(os.environ, WEARCHECK_CACHE=cache)
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          env=env, check=True)
+                          env=env)
+    if done.returncode != 0:
+        raise SystemExit(f"{function}{args!r} failed:\n{done.stderr}")
     return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def load() -> str:
+    """The machine's load averages (uptime's) and its cores."""
+    one, five, fifteen = os.getloadavg()
+    return f"load {one:.2f} {five:.2f} {fifteen:.2f} (1, 5, 15 min), {os.cpu_count()} cores"
 
 
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--only", choices=("compliance", "in_loop", "paper"))
-    p.add_argument("--sizes", type=int, nargs="+", default=[51, 101, 251, 501])
-    p.add_argument("--paper-nodes", type=int, default=250)
+    p.add_argument("--only", choices=("compliance", "in_loop", "paper", "paper_in_loop"))
+    p.add_argument("--sizes", type=int, nargs="+", default=[60, 125, 250, 500])
+    p.add_argument("--paper-nodes", type=int, default=250,
+                   help="contact nodes of the paper case, superelement mode (default: the "
+                        "shipped ccx.contact_nodes)")
+    p.add_argument("--loop-nodes", type=int, default=51,
+                   help="contact nodes of the paper case in both modes (explicit Euler)")
     a = p.parse_args(argv)
-    print(f"load: {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} (1 and 5 min averages), "
-          f"{os.cpu_count()} cores\n")
+    print(f"{' '.join(sys.argv)}\n\n{load()}\n")
     if a.only in (None, "compliance"):
         print("| contact nodes | mesh nodes | CAX6 elements | *GREEN job [s] | build incl. "
               "parse [s] | from the cache [s] |\n|---|---|---|---|---|---|")
@@ -128,14 +150,41 @@ def main(argv=None) -> None:
     if a.only in (None, "paper"):
         n = a.paper_nodes
         print(f"paper case, {n} contact nodes, adaptive scheme (the case's)\n\n"
-              "| run | seconds | steps | ŝ at the end | F/F0 at the end |\n|---|---|---|---|---|")
+              "| run | seconds | of which CalculiX | steps | ŝ at the end | F/F0 at the end |\n"
+              "|---|---|---|---|---|---|")
         with tempfile.TemporaryDirectory() as cache:
             rows = [("FEM (baseline)", child("paper", "fem", n, cache=cache)),
                     ("CalculiX, compliance not cached", child("paper", "ccx", n, cache=cache)),
                     ("CalculiX, compliance cached", child("paper", "ccx", n, cache=cache))]
         for label, r in rows:
-            print(f"| {label} | {r['seconds']:.2f} | {r['steps']} | {r['s_hat_end']:.4f} | "
-                  f"{r['final_F_over_F0']:.6f} |", flush=True)
+            ccx = f"{r['ccx_seconds']:.2f}" if "ccx_seconds" in r else "—"
+            print(f"| {label} | {r['seconds']:.2f} | {ccx} | {r['steps']} | "
+                  f"{r['s_hat_end']:.4f} | {r['final_F_over_F0']:.6f} |", flush=True)
+        print(f"\n{load()}\n")
+    if a.only in (None, "paper_in_loop"):
+        n = a.loop_nodes
+        explicit = {"sliding.scheme": "explicit"}
+        with tempfile.TemporaryDirectory() as cache:
+            rows = [("FEM (baseline)", child("paper", "fem", n, explicit, cache=cache)),
+                    ("CalculiX superelement", child("paper", "ccx", n, explicit, cache=cache)),
+                    ("CalculiX in_loop", child("paper", "ccx", n,
+                                               dict(explicit, **{"ccx.mode": "in_loop"}),
+                                               cache=cache))]
+        stages = rows[0][1]["stage_s_hat"]
+        print(f"paper case, {n} contact nodes, explicit Euler (Δŝ half the stability limit), "
+              "to F < 0.01 F0\n\n| run | seconds | CalculiX jobs | steps | "
+              + " | ".join(f"F/F0 at ŝ = {s:g}" for s in stages) + " |\n|---|---|---|---|"
+              + "---|" * len(stages))
+        for label, r in rows:
+            print(f"| {label} | {r['seconds']:.1f} | {r.get('ccx_jobs', '—')} | {r['steps']} | "
+                  + " | ".join(f"{F:.6f}" for F in r["stage_F_over_F0"]) + " |", flush=True)
+        a_, b_ = rows[1][1], rows[2][1]
+        if a_["s"] == b_["s"]:
+            import numpy as np
+            diff = np.max(np.abs(np.subtract(a_["force"], b_["force"])))
+            print(f"\nin_loop against superelement over the whole history: max |ΔF| = "
+                  f"{diff:.2e} F0 ({len(a_['s'])} states)")
+        print(f"\n{load()}")
 
 
 if __name__ == "__main__":

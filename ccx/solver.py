@@ -177,9 +177,8 @@ def _solve(case, progress):
             rate=rate, exponent=n_exp, hardness=hardness, stage_s=plan.stages, center=center,
             force_scale=F0, depth_scale=d0, stiffness=in_loop.gap_stiffness(area, p0, d0),
             tension=in_loop.TENSION * F0 / deck.WEDGES, max_steps=MAX_IN_LOOP_STEPS)
-        out, frds = in_loop.run(problem, plan, loop_progress)
+        out, frd_steps = in_loop.run(problem, plan, loop_progress)
         t_loop = time.perf_counter() - t0
-        frd_steps = frds
         info.update(gap_stiffness=dict(value=problem.stiffness, unit="N/m on the 2° wedge"),
                     gap_tension=dict(value=problem.tension, unit="N on the 2° wedge"),
                     max_penetration=dict(value=problem.max_penetration, unit="d0"),
@@ -194,7 +193,8 @@ def _solve(case, progress):
         t_loop = time.perf_counter() - t0
         if progress:
             progress(0.9, "fields (CalculiX)")
-        frd_steps, recovered = recover_fields(jobs, sphere, z_all, out.stages, d0)
+        frd_steps, recovered = (recover_fields(jobs, sphere, z_all, out.stages, d0)
+                                if out.stages else ([], 0.0))
         info.update(lcp_iterations=out.lcp_iterations, lcp_tolerance=superelement.LCP_TOL,
                     max_complementarity_residual=out.max_residual,
                     refactorisations=out.refactorisations, borderings=out.borderings,

@@ -256,11 +256,7 @@ register(Solver(
     style=dict(ls="none", marker="^", ms=3.5, mfc="none", mew=0.9),
     export_vtk="wearcheck.comparisons.present.vtk:write_fem_fields",
     run_report="wearcheck.ccx.run:write_decks",
-    history_columns=(Item("scar_radius", "m", "outer radius of the worn region: the largest r "
-                                              "with wear >= 1e-3 of the largest wear"),
-                     Item("s_hat", "", "dimensionless sliding ŝ"),
-                     Item("cycles", "", "reciprocating cycles s/(2·sliding.stroke); NaN "
-                                        "without a stroke")),
+    history_columns=get("fem").history_columns,   # the FEM's sphere, the same columns
     fields=(Item("points", "m", "r, z of the CAX6 mesh nodes, undeformed (Np, 2); CalculiX "
                                 "node i + 1 is row i"),
             Item("cells", "", "CAX6 triangles, counter-clockwise, meshio triangle6 order (Nt, 6)"),

@@ -248,12 +248,14 @@ def test_the_two_modes_agree(control):
     assert abs(moved[-1] - moved[0]) > 1e-2
     # within 1e-5 F0, 1e-5 d0: the .dat prints seven digits (5e-7 of each force), the gap
     # elements' penalty lets a node sink 1e-6 d0 (about 1.5e-6 F0 of force at this depth),
-    # and stable explicit steps do not amplify either (measured 1.6e-7 F0, 9e-8 F0)
+    # and stable explicit steps do not amplify either (measured: force 1.4e-7 F0 under
+    # depth control, depth 2.5e-7 d0 under force control)
     for key, scale in (("force", sc["F0"]), ("depth", sc["d0"]), ("wear_center", sc["d0"]),
                        ("wear_volume", sc["d0"] * sc["a0"] ** 2)):
         assert np.max(np.abs(a.history[key] - b.history[key])) <= 1e-5 * scale, key
     assert np.max(np.abs(a.f - b.f)) <= 1e-5 * sc["d0"]
-    # the fields of both come from CalculiX's .frd (six digits: 1e-5 of the largest)
+    # the fields of both come from CalculiX's .frd, which prints six digits: 1e-5 of the
+    # largest displacement (measured 1e-6 and 9.7e-6)
     u = np.max(np.abs(a.fields["displacement"]))
     assert np.max(np.abs(a.fields["displacement"] - b.fields["displacement"])) <= 1e-4 * u
 
