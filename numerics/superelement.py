@@ -418,10 +418,12 @@ class WearRun:
             self.stages.append((s, f.copy(), w.copy(), depth, gap.copy()))
 
 
-def run(problem: Superelement, plan: stepping.Plan, progress=None) -> WearRun:
+def run(problem: Superelement, plan: stepping.Plan, progress=None, watch=None) -> WearRun:
     """Slide and wear ``problem`` as ``plan`` says; the history and the stored stages.
 
-    Raises SolverError when the unworn body carries no force.
+    ``watch(s, contact_radius, scar_radius)`` is called at every recorded step
+    (:class:`cases.validity.BodyWatch`). Raises SolverError when the unworn
+    body carries no force.
     """
     out = WearRun()
     r, area, center = problem.r, problem.area, problem.center
@@ -429,6 +431,8 @@ def run(problem: Superelement, plan: stepping.Plan, progress=None) -> WearRun:
     def observe(state, s, stages):
         res = state.contact
         out.record(s, res.f, res.gap, res.depth, state.w, stages, r=r, area=area, center=center)
+        if watch is not None:
+            watch(s, out.contact_radius[-1], out.scar_radius[-1])
 
     start = problem.unworn()
     if not start.contact.f.sum() > 0:
