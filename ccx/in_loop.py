@@ -207,9 +207,11 @@ class InLoop(stepping.Problem):
         return float(c.f.sum()), c.depth, float(self.center @ state.w)
 
 
-def run(problem: InLoop, plan: stepping.Plan, progress=None) -> tuple[WearRun, list]:
+def run(problem: InLoop, plan: stepping.Plan, progress=None, watch=None
+        ) -> tuple[WearRun, list]:
     """Slide and wear ``problem`` as ``plan`` (explicit) says: the history and stages, and
-    the .frd results of each stage.
+    the .frd results of each stage; ``watch(s, contact_radius, scar_radius)`` is called
+    at every recorded step (:class:`cases.validity.BodyWatch`).
 
     A run stopped by the force is refused after its first step when, projected
     from it, it would take more than ``problem.max_steps`` CalculiX jobs.
@@ -221,6 +223,8 @@ def run(problem: InLoop, plan: stepping.Plan, progress=None) -> tuple[WearRun, l
         out.record(s, c.f, c.gap, c.depth, state.w, stages, r=problem.r, area=problem.area,
                    center=problem.center)
         frds.extend([c.frd] * stages)
+        if watch is not None:
+            watch(s, out.contact_radius[-1], out.scar_radius[-1])
         if len(out.s) == 2 and plan.force_fraction is not None:
             fallen = (1.0 - out.force[1] / out.force[0]) / (1.0 - plan.force_fraction)
             projected = s / fallen / plan.step if fallen > 0 else math.inf

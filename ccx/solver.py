@@ -9,7 +9,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from wearcheck import meshes
-from wearcheck.cases import CaseError, SolverError, programme, reference
+from wearcheck.cases import CaseError, SolverError, programme, reference, validity
 from wearcheck.cases.profiles import height
 from wearcheck.numerics import stepping, superelement
 
@@ -64,7 +64,9 @@ def supports(case) -> str | None:
 
 def mesh_parameters(case) -> meshes.SphereMeshParameters:
     """The gmsh mesh of a case (the FEM's recipe: P2 grading, the arc sized for the
-    predicted final contact radius), after checking the arc resolves the contact."""
+    predicted final contact radius), after checking the run stays on the sphere and the
+    arc resolves the contact."""
+    validity.check_planned(case, fem_sphere=True)
     settings, R = case.ccx, case.indenter.radius
     a0 = reference.scales(case)["a0"]
     predicted = reference.predicted_scar_radius(case, case.end_distance or 0.0)
@@ -81,9 +83,12 @@ def mesh_parameters(case) -> meshes.SphereMeshParameters:
                         f"nodes would lie inside the unworn contact (a0 = {a0:.4g} m); at least "
                         f"{MIN_NODES_IN_CONTACT} are needed, i.e. ccx.contact_nodes >= {need}")
     if rc >= R:
+        # (a predicted scar past R itself was refused by validity.check_planned)
         raise CaseError(f"key 'ccx.contact_factor' = {settings.contact_factor!r}: the "
                         f"candidate arc would reach r = {rc:.4g} m, beyond indenter.radius = "
-                        f"{R:.4g} m (predicted final scar radius {predicted:.4g} m)")
+                        f"{R:.4g} m (predicted final scar radius {predicted:.4g} m); use "
+                        f"ccx.contact_factor < {math.floor(R / predicted * 1000) / 1000:g}, "
+                        "or shorten the run or lower the load")
     return meshes.SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges,
                                        growth=meshes.GROWTH)
 
@@ -165,6 +170,7 @@ def _solve(case, progress):
         if progress:
             progress(0.05 + 0.85 * frac, text)
 
+    watch = validity.BodyWatch(case, fem_sphere=True, spacing=float(np.mean(np.diff(r_all))))
     t0 = time.perf_counter()
     if in_loop_mode:
         if until == "distance" and plan.end / plan.step > MAX_IN_LOOP_STEPS * (1 + 1e-9):
@@ -177,7 +183,7 @@ def _solve(case, progress):
             rate=rate, exponent=n_exp, hardness=hardness, stage_s=plan.stages, center=center,
             force_scale=F0, depth_scale=d0, stiffness=in_loop.gap_stiffness(area, p0, d0),
             tension=in_loop.TENSION * F0 / deck.WEDGES, max_steps=MAX_IN_LOOP_STEPS)
-        out, frd_steps = in_loop.run(problem, plan, loop_progress)
+        out, frd_steps = in_loop.run(problem, plan, loop_progress, watch=watch)
         t_loop = time.perf_counter() - t0
         info.update(gap_stiffness=dict(value=problem.stiffness, unit="N/m on the 2° wedge"),
                     gap_tension=dict(value=problem.tension, unit="N on the 2° wedge"),
@@ -189,7 +195,7 @@ def _solve(case, progress):
             C, z_all[1:], r, area, rate, control=control, value=getattr(case.loading, control),
             gap_scale=d0, force_scale=F0, pressure_scale=p0, center=center, exponent=n_exp,
             hardness=hardness, arc_key="ccx.contact_factor")
-        out = superelement.run(problem, plan, loop_progress)
+        out = superelement.run(problem, plan, loop_progress, watch=watch)
         t_loop = time.perf_counter() - t0
         if progress:
             progress(0.9, "fields (CalculiX)")
@@ -202,6 +208,8 @@ def _solve(case, progress):
                         "largest |gap| of a loaded contact node when CalculiX applies the "
                         "stage's contact forces to the sphere (fields recovery)")))
     info.update(stepping.info(out.outcome, plan))
+    if watch.remarks:
+        info["warnings"] = watch.remarks
     fields = _fields(sphere, out.stages, frd_steps)
     history = programme.finish_history(case, _history(out), until, plan.end, per_m)
     if progress:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from wearcheck import cases, meshes
-from wearcheck.cases import CaseError, SolverError
+from wearcheck.cases import CaseError, SolverError, validity
 from wearcheck.ccx import deck, model, output, run, solver
 
 PAPER = cases.shipped("paper")
@@ -215,3 +215,16 @@ def test_a_contact_arc_too_coarse_is_refused_with_the_count_that_would_do():
     case = cases.load(PAPER, ["ccx.contact_nodes=5"])
     with pytest.raises(CaseError, match=r"'ccx.contact_nodes' = 5: .* ccx.contact_nodes >= "):
         solver.mesh_parameters(case)
+
+
+def test_a_run_past_the_ball_s_equator_is_refused_as_by_the_other_solvers():
+    # cases.validity.check_planned, the refusal every solver makes before its run
+    # (tests/test_validity.py), before CalculiX is looked for or a mesh is made
+    case = cases.load(cases.shipped("ball_on_flat"), ["loading.force=500", "wear.k=6e-3"])
+    with pytest.raises(CaseError) as err:
+        solver.mesh_parameters(case)
+    with pytest.raises(CaseError) as fem_err:
+        validity.check_planned(case, fem_sphere=True)
+    assert str(err.value) == str(fem_err.value)
+    assert str(err.value).startswith("key 'sliding.cycles' = 1000000.0: the run would wear "
+                                     "the sphere past its equator")
