@@ -67,30 +67,8 @@ def mesh_parameters(case) -> meshes.SphereMeshParameters:
     predicted final contact radius), after checking the run stays on the sphere and the
     arc resolves the contact."""
     validity.check_planned(case, fem_sphere=True)
-    settings, R = case.ccx, case.indenter.radius
-    a0 = reference.scales(case)["a0"]
-    predicted = reference.predicted_scar_radius(case, case.end_distance or 0.0)
-    rc = settings.contact_factor * predicted
-    if rc <= a0:
-        raise CaseError(f"key 'ccx.contact_factor' = {settings.contact_factor!r}: the "
-                        f"candidate contact arc ends at r = {rc:.4g} m, inside the unworn "
-                        f"contact radius a0 = {a0:.4g} m; must be > {a0 / predicted:.4f}")
-    edges = meshes.contact_edges_for(settings.contact_nodes, 2)
-    inside = int(a0 / (rc / (2 * edges))) + 1
-    if inside < MIN_NODES_IN_CONTACT:
-        need = math.ceil((MIN_NODES_IN_CONTACT - 1) * rc / a0) + 1
-        raise CaseError(f"key 'ccx.contact_nodes' = {settings.contact_nodes}: only {inside} "
-                        f"nodes would lie inside the unworn contact (a0 = {a0:.4g} m); at least "
-                        f"{MIN_NODES_IN_CONTACT} are needed, i.e. ccx.contact_nodes >= {need}")
-    if rc >= R:
-        # (a predicted scar past R itself was refused by validity.check_planned)
-        raise CaseError(f"key 'ccx.contact_factor' = {settings.contact_factor!r}: the "
-                        f"candidate arc would reach r = {rc:.4g} m, beyond indenter.radius = "
-                        f"{R:.4g} m (predicted final scar radius {predicted:.4g} m); use "
-                        f"ccx.contact_factor < {math.floor(R / predicted * 1000) / 1000:g}, "
-                        "or shorten the run or lower the load")
-    return meshes.SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges,
-                                       growth=meshes.GROWTH)
+    # quadratic elements: the FEM's P2 mesh (growth meshes.GROWTH, its GROWTH[2])
+    return meshes.contact_arc(case, "ccx", 2, meshes.GROWTH, MIN_NODES_IN_CONTACT)
 
 
 def solve(case, progress=None) -> run.CcxResult:
