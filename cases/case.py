@@ -12,7 +12,7 @@ import numpy as np
 
 from . import rules
 from .errors import ArgumentError, CaseError
-from .schema import (BEMSettings, did_you_mean, OPTIONAL_SECTIONS, REQUIRED_SECTIONS,
+from .schema import (BEMSettings, CCXSettings, did_you_mean, OPTIONAL_SECTIONS, REQUIRED_SECTIONS,
                      SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
                      Loading,
                      MDRSettings, Sliding, Stages, Wear, format_value, build_section,
@@ -33,6 +33,7 @@ class Case:
     mdr: MDRSettings
     fem: FEMSettings
     bem: BEMSettings
+    ccx: CCXSettings
     compare: CompareSettings
     #: partial-slip (fretting) programme; None for a gross-slip run
     fretting: Fretting | None = None
