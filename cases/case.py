@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import CaseError
+from .errors import CaseError, warn_once
 from .schema import (BEMSettings, did_you_mean, OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED,
                      REQUIRED_SECTIONS,
                      SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
@@ -41,6 +41,10 @@ class Case:
     table: tuple[np.ndarray, np.ndarray] | None = field(default=None, compare=False, repr=False)
     #: non-fatal remarks on the case (e.g. elastic similarity violated)
     warnings: tuple[str, ...] = ()
+    #: dotted keys the loader derived from their alternative (``wear.k`` from
+    #: ``wear.specific_rate`` or back, ``stages.s_hat`` from ``stages.s`` or
+    #: ``stages.cycles``): the resolved case names them as comments, not as keys
+    derived: tuple[str, ...] = field(default=(), compare=False)
 
     # -- derived material constants (paper Eqs. 5-7) ------------------------
     @property
@@ -55,8 +59,10 @@ class Case:
 
     @property
     def wear_rate(self) -> float:
-        """k_wear μ / σ0 [1/Pa]: wear depth per unit pressure and sliding distance."""
-        return self.wear.k * self.wear.mu / self.wear.hardness
+        """K = k_wear μ / σ0 [1/Pa = m³/(N·m)]: wear depth per unit pressure and sliding
+        distance (``wear.specific_rate``, given or derived)."""
+        w = self.wear
+        return w.specific_rate if w.specific_rate is not None else w.k * w.mu / w.hardness
 
     @property
     def end_distance(self) -> float | None:
@@ -85,8 +91,25 @@ class Case:
                             "; allowed: " + ", ".join(SECTIONS))
         raw = to_dict(self)
         for name, obj in sections.items():
-            raw[name] = _section_dict(obj)
+            raw[name] = self._given(name, obj)
         return from_dict(raw, source=self.source)
+
+    def _given(self, section: str, obj) -> dict:
+        """A replacing section as a file would give it: of keys given one way or another
+        (``wear.k`` or ``wear.specific_rate``), those changed from this case win, else
+        the one this case was given; the derived ones are dropped."""
+        raw = _section_dict(obj)
+        current = getattr(self, section, None)
+        for group in _ONE_OF.get(section, ()):
+            present = [n for n in group if n in raw]
+            if len(present) < 2 or current is None:
+                continue
+            changed = [n for n in present if getattr(obj, n) != getattr(current, n, None)]
+            keep = changed or [n for n in present if f"{section}.{n}" not in self.derived]
+            for n in present:
+                if n not in keep:
+                    raw.pop(n)
+        return raw
 
     def derive(self, changes=None, /, **keys) -> "Case":
         """A copy with some keys changed, validated like a case file.
@@ -134,10 +157,11 @@ class Case:
             if section in raw and not isinstance(raw[section], dict):
                 raise CaseError(f"'{section}' must be a table [{section}]")
             raw.setdefault(section, {})[key] = value
-            # a fretting amplitude given the other way replaces the case's
-            other = _OTHER_WAY.get((section, key)) if section == "fretting" else None
-            if other and f"{section}.{other}" not in items:
-                raw[section].pop(other, None)
+            # a key given the other way (a fretting amplitude, wear.specific_rate,
+            # stages in metres) replaces the case's
+            for other in _OTHER_WAY.get((section, key), ()):
+                if f"{section}.{other}" not in items:
+                    raw[section].pop(other, None)
         _drop_inapplicable(raw, {tuple(name.split(".")) for name in items})
         return from_dict(raw, source=self.source)
 
@@ -212,10 +236,12 @@ def read_raw(path: str | Path) -> dict:
         raise CaseError(f"case file '{path}': nested too deeply to be a case") from None
 
 
-#: keys of which a case gives one; setting one by an override drops the other
-_OTHER_WAY = {("stages", "s_hat"): "cycles", ("stages", "cycles"): "s_hat",
-              ("fretting", "amplitude"): "force_amplitude",
-              ("fretting", "force_amplitude"): "amplitude"}
+#: keys of which a case gives one (the others derived or unused), per section
+_ONE_OF = {"stages": (("s_hat", "s", "cycles"),), "wear": (("k", "specific_rate"),),
+           "fretting": (("amplitude", "force_amplitude"),)}
+#: setting one of them by an override drops the others
+_OTHER_WAY = {(section, name): tuple(o for o in group if o != name)
+              for section, groups in _ONE_OF.items() for group in groups for name in group}
 
 
 def _inapplicable(section: str, key: str, value) -> tuple[str, ...]:
@@ -269,19 +295,16 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
             raise CaseError(f"'{section}' must be a table [{section}]")
         raw[section][k] = value
         overridden.add((section, k))
-        # stages (a fretting amplitude) given one way by an override replace
-        # the file's other way
-        other = _OTHER_WAY.get((section, k))
-        if other and (section, other) not in overridden:
-            raw[section].pop(other, None)
+        # stages, the wear coefficient (a fretting amplitude) given one way by an
+        # override replace the file's other way
+        for other in _OTHER_WAY.get((section, k), ()):
+            if (section, other) not in overridden:
+                raw[section].pop(other, None)
     _drop_inapplicable(raw, overridden)
     for section in REQUIRED_SECTIONS:
         if section not in raw:
             raise CaseError(f"missing section [{section}]")
-    st = raw.get("stages", {})
-    if isinstance(st, dict) and "s_hat" in st and "cycles" in st:
-        raise CaseError(f"keys 'stages.s_hat' = {format_value(st['s_hat'])} and 'stages.cycles' = "
-                        f"{format_value(st['cycles'])} both given; give the stages one way only")
+    _check_one_way(raw)
     built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS
              if name not in OPTIONAL_SECTIONS or name in raw}
     if "fretting" in raw:
@@ -295,19 +318,62 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     base = Path(source).parent if source != "<dict>" else Path.cwd()
     built, table = _check_indenter(built, base)
     _check_materials(built)
+    built["wear"], derived = _derive_wear(built["wear"])
     _check_programme(built)
-    case = Case(**built, source=str(source), table=table)
+    case = Case(**built, source=str(source), table=table, derived=derived)
     _check_sphere_depth(case)
-    _check_scales(case)
-    if case.stages.cycles is not None:
+    sc = _check_scales(case)
+    st = case.stages
+    if st.cycles is not None or st.s is not None:
         # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
-        from . import reference
-        per_m = reference.scales(case)["s_hat_per_m"]
-        s_hat = tuple(c * 2.0 * case.sliding.stroke * per_m for c in case.stages.cycles)
-        case = replace(case, stages=replace(case.stages, s_hat=s_hat))
+        s = st.s if st.s is not None else [c * 2.0 * case.sliding.stroke for c in st.cycles]
+        s_hat = tuple(x * sc["s_hat_per_m"] for x in s)
+        case = replace(case, stages=replace(st, s_hat=s_hat))
+        derived += ("stages.s_hat",)
     if case.fretting is not None:
         _check_fretting(case)
-    return replace(case, warnings=_warnings(case))
+    return replace(case, warnings=_warnings(case, sc), derived=derived)
+
+
+def _check_one_way(raw: dict) -> None:
+    """Keys given one way or another (the stages in ŝ, metres or cycles; wear.k or
+    wear.specific_rate): at most one of each group."""
+    for section, groups in _ONE_OF.items():
+        table = raw.get(section)
+        if not isinstance(table, dict) or section == "fretting":   # (_check_fretting)
+            continue
+        for group in groups:
+            given = [n for n in group if n in table]
+            if len(given) < 2:
+                continue
+            keys = " and ".join(f"'{section}.{n}' = {format_value(table[n])}" for n in given)
+            if section == "stages":
+                raise CaseError(f"keys {keys} both given; give the stages one way only")
+            raise CaseError(f"keys {keys} both given; give one, the other is derived "
+                            "(k = K·σ0/μ with K = wear.specific_rate in m^3/(N m), "
+                            "σ0 = wear.hardness)")
+
+
+def _derive_wear(w: Wear) -> tuple[Wear, tuple[str, ...]]:
+    """Both wear coefficients from the one given: K = k μ/σ0 (V = K F s for n = 1)."""
+    if w.k is None and w.specific_rate is None:
+        raise CaseError("missing key 'wear.k' or 'wear.specific_rate': give the dimensionless "
+                        "coefficient k (paper Eq. 1) or the lab's specific wear rate K in "
+                        "m^3/(N m) (V = K·F·s; k = K·σ0/μ)")
+    if w.specific_rate is None:
+        name, value, other = "wear.k", w.k, "wear.specific_rate"
+        w = replace(w, specific_rate=w.k * w.mu / w.hardness)
+        derived = w.specific_rate
+    else:
+        name, value, other = "wear.specific_rate", w.specific_rate, "wear.k"
+        w = replace(w, k=w.specific_rate * w.hardness / w.mu)
+        derived = w.k
+    if not (math.isfinite(derived) and derived > 0):
+        raise CaseError(f"key '{name}' = {format_value(value)}: the derived '{other}' comes "
+                        f"out {derived!r} (k = K·σ0/μ, wear.mu = {w.mu!r}, wear.hardness = "
+                        f"{w.hardness!r} Pa), not a positive finite number; check the "
+                        "magnitudes (K in m^3/(N m), σ0 in Pa)")
+    return w, (other,)
 
 
 def _check_sphere_depth(case: Case) -> None:
@@ -320,8 +386,10 @@ def _check_sphere_depth(case: Case) -> None:
                         "smaller: d/R <= 0.01 gives a0/R <= 0.1)")
 
 
-def _check_scales(case: Case) -> None:
-    """The unworn contact must be computable: extreme (valid) numbers can underflow."""
+def _check_scales(case: Case) -> dict:
+    """The unworn contact must be computable: extreme (valid) numbers can underflow.
+
+    Returns the scales (:func:`reference.scales`)."""
     from . import reference
     def usable(value):
         return math.isfinite(value) and value > 0
@@ -341,7 +409,9 @@ def _check_scales(case: Case) -> None:
     if ok and not usable(sc["s_hat_per_m"]):
         # the contact is fine: the wear keys put the sliding scale out of range
         w = case.wear
-        raise CaseError(f"keys 'wear.k' = {w.k!r}, 'wear.mu' = {w.mu!r}, 'wear.hardness' = "
+        given = "k" if "wear.k" not in case.derived else "specific_rate"
+        raise CaseError(f"keys 'wear.{given}' = {getattr(w, given)!r}, 'wear.mu' = {w.mu!r}, "
+                        f"'wear.hardness' = "
                         f"{w.hardness!r}: the sliding scale k μ E*/(σ0 a0) comes out "
                         f"{sc['s_hat_per_m']!r} per metre (E* = {sc['E_star']:.4g} Pa, a0 = "
                         f"{sc['a0']:.4g} m), not a positive finite number; check their "
@@ -354,6 +424,7 @@ def _check_scales(case: Case) -> None:
                         "infinite); check the load against the profile's size"
                         + (f" (indenter.radius = {case.indenter.radius!r})"
                            if case.indenter.radius is not None else ""))
+    return sc
 
 
 def _check_indenter(built, base: Path):
@@ -492,6 +563,8 @@ def _check_programme(built):
                             "(one cycle slides 2·stroke)")
         if any(b <= a for a, b in zip(st.cycles, st.cycles[1:])):
             raise CaseError(f"key 'stages.cycles' = {list(st.cycles)}: must increase strictly")
+    if st.s is not None and any(b <= a for a, b in zip(st.s, st.s[1:])):
+        raise CaseError(f"key 'stages.s' = {list(st.s)}: must increase strictly")
     s = st.s_hat
     if any(b <= a for a, b in zip(s, s[1:])):
         raise CaseError(f"key 'stages.s_hat' = {list(s)}: must increase strictly")
@@ -529,8 +602,36 @@ def _check_fretting(case: Case) -> None:
                             "use fretting.amplitude for gross slip")
 
 
-def _warnings(case: Case) -> tuple[str, ...]:
+#: the onset of yield under a Hertz contact, p0 = 1.60 Y (von Mises, ν = 0.3;
+#: Johnson 1985, §6.2), with the yield stress Y from the indentation hardness H
+#: by Tabor's H ≈ 2.8-3 Y; the factor 3 (the lower Y) warns first
+YIELD_ONSET_P0_OVER_Y = 1.6
+HARDNESS_OVER_YIELD = 3.0
+
+
+def yield_remark(case: Case, scales: dict) -> str | None:
+    """The remark when the unworn contact's peak pressure passes a yield estimate, else None.
+
+    The peak pressure is p0 = 3F0/(2π a0²) (Hertz's maximum; 1.5 times the mean
+    pressure for other profiles), the estimate the onset of yield of the worn
+    body, 1.6 Y with Y = H/3 from ``wear.hardness`` = H.
+    """
+    p0, H = scales["p0"], case.wear.hardness
+    onset = YIELD_ONSET_P0_OVER_Y * H / HARDNESS_OVER_YIELD
+    if not p0 > onset:
+        return None
+    return (f"the peak pressure of the unworn contact, p0 = {p0:.4g} Pa, passes the onset of "
+            f"yield, p0 ≈ 1.6 Y = {onset:.4g} Pa with Y ≈ H/3 (Tabor, H ≈ 2.8-3 Y) from "
+            f"wear.hardness = {H:.4g} Pa: the worn body yields, which the elastic model leaves "
+            "out; results are approximate")
+
+
+def _warnings(case: Case, scales: dict) -> tuple[str, ...]:
     out = []
+    plastic = yield_remark(case, scales)
+    if plastic:
+        out.append(plastic)
+        warn_once(plastic)
     beta = dundurs_beta(case.indenter, case.counterface)
     if abs(beta) > 1e-9:
         out.append(
@@ -562,14 +663,19 @@ def to_toml(case: Case) -> str:
             value = getattr(obj, name)
             if value is None:
                 continue
-            if section == "stages" and name == "s_hat" and case.stages.cycles is not None:
-                continue  # derived from stages.cycles (giving both is an error)
+            if section == "stages" and name == "s_hat" and "stages.s_hat" in case.derived:
+                continue  # derived from stages.s or stages.cycles (giving both is an error)
             if isinstance(value, tuple):
                 text = "[" + ", ".join(repr(v) for v in value) + "]"
             else:
                 text = format_value(value)
             unit = f.metadata["unit"]
-            lines.append(f"{name} = {text}" + (f"  # {unit}" if unit and unit != "1" else ""))
+            line = f"{name} = {text}" + (f"  # {unit}" if unit and unit != "1" else "")
+            if f"{section}.{name}" in case.derived:
+                # recorded, as a comment: giving both is an error
+                how = "K = k μ/σ0" if name == "specific_rate" else "k = K σ0/μ"
+                line = f"# {line.replace('  # ', ' ')}, derived: {how}"
+            lines.append(line)
     return "\n".join(lines) + "\n"
 
 
@@ -612,6 +718,7 @@ def to_dict(case: Case) -> dict:
     if case.fretting is not None:  # a fretting run has no [sliding] or [stages]
         out.pop("sliding", None)
         out.pop("stages", None)
-    elif case.stages.cycles is not None:  # s_hat is derived from the cycles
-        out["stages"].pop("s_hat", None)
+    for name in case.derived:  # e.g. s_hat derived from the cycles
+        section, key = name.split(".")
+        out.get(section, {}).pop(key, None)
     return out

@@ -8,7 +8,8 @@ ships it as ``case.schema.json``; regenerate that file after changing a key::
 
 The schema states types, units, allowed values, ranges, defaults, unknown keys,
 which keys each profile, load control, end of run and rigid or elastic body
-needs or refuses. The loader's other checks (a table file's contents, flat
+needs or refuses, that wear takes one of ``k`` and ``specific_rate`` and the
+stages one of ``s_hat``, ``s`` and ``cycles``, and that cycles need a stroke. The loader's other checks (a table file's contents, flat
 radius below radius, strictly increasing stages, at least one elastic body,
 the unworn contact computable) stay with ``cases.load``, which remains the
 authority: a file the schema accepts may still be refused there, with a message.
@@ -126,6 +127,32 @@ def _sliding_rules() -> list[dict]:
              "else": {"properties": {"distance": False}}}]
 
 
+def _one_of_rules(section: str) -> list[dict]:
+    """Keys given one way or another (``case._ONE_OF``): never two of a group; wear needs
+    one of its pair (k or specific_rate), the stages take the default ŝ without any."""
+    from .case import _ONE_OF
+    rules = []
+    for group in _ONE_OF[section]:
+        pairs = [[a, b] for i, a in enumerate(group) for b in group[i + 1:]]
+        rules.append({"not": {"anyOf": [{"required": pair} for pair in pairs]}})
+        if section == "wear":
+            rules.append({"anyOf": [{"required": [name]} for name in group]})
+    return rules
+
+
+def _cycles_rules() -> list[dict]:
+    """Cycles need a stroke: until = cycles needs sliding.stroke and sliding.cycles (and
+    refuses sliding.cycles otherwise); stages.cycles needs sliding.stroke (across sections)."""
+    by_cycles = {"properties": {"until": {"const": "cycles"}}, "required": ["until"]}
+    sliding = [{"if": by_cycles, "then": {"required": ["stroke", "cycles"]},
+                "else": {"properties": {"cycles": False}}}]
+    stages = [{"if": {"properties": {"stages": {"required": ["cycles"]}},
+                      "required": ["stages"]},
+               "then": {"required": ["sliding"],
+                        "properties": {"sliding": {"required": ["stroke"]}}}}]
+    return sliding, stages
+
+
 def _body_rules(section: str) -> list[dict]:
     """A rigid body takes no elastic constants; an elastic one needs both."""
     default = dict(section_fields(section))["rigid"].default
@@ -143,9 +170,12 @@ def case_schema() -> dict:
     sections = {name: _section_schema(name) for name in SECTIONS}
     sections["indenter"]["allOf"] = _indenter_rules()
     sections["loading"]["allOf"] = _loading_rules()
-    sections["sliding"]["allOf"] = _sliding_rules()
+    sliding_cycles, stages_cycles = _cycles_rules()
+    sections["sliding"]["allOf"] = _sliding_rules() + sliding_cycles
     sections["indenter"]["allOf"] += _body_rules("indenter")
     sections["counterface"]["allOf"] = _body_rules("counterface")
+    sections["wear"]["allOf"] = _one_of_rules("wear")
+    sections["stages"]["allOf"] = _one_of_rules("stages")
     return {
         "$schema": DIALECT,
         "title": "wearcheck case file",
@@ -156,6 +186,7 @@ def case_schema() -> dict:
         "additionalProperties": False,
         "required": list(REQUIRED_SECTIONS),
         "properties": sections,
+        "allOf": stages_cycles,
     }
 
 

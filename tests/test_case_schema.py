@@ -197,6 +197,13 @@ GOOD = {
     "integral float for an integer": _with(("mdr", "elements", 1.6e3)),
     "step auto and stages": _with(("sliding", "step_hat", "auto"), ("stages", "s_hat", [0, 1.5])),
     "numeric step": _with(("sliding", "scheme", "bdf2"), ("sliding", "step_hat", 0.05)),
+    "specific wear rate instead of k": _with(("wear", "k", None),
+                                             ("wear", "specific_rate", 1e-14)),
+    "stages in metres": _with(("stages", "s", [0.0, 0.5, 2.0])),
+    "stages in cycles with a stroke, any until": _with(("sliding", "stroke", 1e-3),
+                                                       ("stages", "cycles", [0, 10])),
+    "until = cycles": _with(("sliding", "until", "cycles"), ("sliding", "stroke", 1e-3),
+                            ("sliding", "cycles", 100)),
 }
 
 BAD = {
@@ -225,6 +232,18 @@ BAD = {
     "until = distance without a distance": _with(("sliding", "until", "distance")),
     "rigid body with a modulus": _with(("counterface", "youngs_modulus", 70e9)),
     "elastic body without moduli": _with(("indenter", "youngs_modulus", None)),
+    "k and specific_rate both": _with(("wear", "specific_rate", 1e-14)),
+    "neither k nor specific_rate": _with(("wear", "k", None), ("wear", "specific_rate", None)),
+    "specific_rate not positive": _with(("wear", "k", None), ("wear", "specific_rate", 0.0)),
+    "stages in metres and in ŝ": _with(("stages", "s", [0.0, 1.0]), ("stages", "s_hat", [0.0])),
+    "stages in metres and cycles": _with(("sliding", "stroke", 1e-3), ("stages", "s", [0.0]),
+                                         ("stages", "cycles", [0.0])),
+    "negative stage in metres": _with(("stages", "s", [-1.0])),
+    "stages in cycles without a stroke": _with(("stages", "cycles", [0, 10])),
+    "until = cycles without a stroke": _with(("sliding", "until", "cycles"),
+                                             ("sliding", "cycles", 100)),
+    "cycles without until = cycles": _with(("sliding", "stroke", 1e-3),
+                                           ("sliding", "cycles", 100)),
 }
 
 

@@ -57,11 +57,14 @@ def test_effective_moduli_against_paper_eqs_5_6():
 def test_elastic_similarity_warning_quantifies_mismatch():
     # two identical materials are elastically similar: no warning
     same = with_("counterface", rigid=False, youngs_modulus=210e9, poisson_ratio=0.3)
-    assert cases.from_dict(same).warnings == ()
+    # (BASE's p0 passes the yield estimate from wear.hardness: a remark of its own)
+    def similarity(case):
+        return [w for w in case.warnings if "Dundurs" in w]
+    assert similarity(cases.from_dict(same)) == []
     # steel on a rigid plane: beta = (1-2ν)/(2(1-ν)) = 0.4/1.4
     case = cases.from_dict(BASE)
-    assert len(case.warnings) == 1
-    assert f"{0.4 / 1.4:.4f}" in case.warnings[0]
+    assert len(similarity(case)) == 1
+    assert f"{0.4 / 1.4:.4f}" in similarity(case)[0]
 
 
 def test_override_changes_and_is_validated():
