@@ -173,8 +173,14 @@ def _known(quantities) -> str:
 
 
 def _allowed(dimension: str) -> str:
-    units = [u for u in UNITS[dimension] if u and not u.endswith(("2", "3")) or "^" in u]
-    return ", ".join(dict.fromkeys(units)) or "none (a count)"
+    """The units of a dimension as messages list them (``m^3``; ``m3`` and ``m³`` also work)."""
+    power = {"length": 1, "area": 2, "volume": 3}.get(dimension)
+    if power is not None:
+        return ", ".join(f"{p}m" + (f"^{power}" if power > 1 else "")
+                         for p in _PREFIXES if p != "k")
+    if dimension == "count":
+        return "none, or 1"
+    return ", ".join(UNITS[dimension])
 
 
 def _example_unit(dimension: str) -> str:
@@ -220,7 +226,7 @@ def read_table(path: str | Path, quantities: Iterable[Quantity]) -> Table:
         raise CaseError(f"{where} does not exist")
     try:
         with open(path, newline="", encoding="utf-8-sig") as fh:
-            lines = list(csv.reader(fh))
+            lines = list(csv.reader(fh, skipinitialspace=True))
     except UnicodeDecodeError as exc:
         raise CaseError(f"{where} is not UTF-8 text ({exc.reason} at byte {exc.start}); save "
                         "it as UTF-8") from None

@@ -116,6 +116,11 @@ class Data:
     y: np.ndarray
     sigma: np.ndarray
 
+    def __post_init__(self):
+        # which entries hold which quantity, once (predict reads them at every call)
+        names = np.asarray(self.quantity)
+        object.__setattr__(self, "groups", tuple((str(q), names == q) for q in np.unique(names)))
+
     @property
     def weighted(self) -> bool:
         return bool(np.all(np.isfinite(self.sigma)))
@@ -131,9 +136,8 @@ def predict(curves: Curves, data: Data, log_K: float, s_hat_per_K_m: float) -> n
     """
     s_hat = math.exp(log_K) * s_hat_per_K_m * data.s
     out = np.empty(len(data))
-    for name in np.unique(data.quantity):
-        at = data.quantity == name
-        out[at] = curves(str(name), s_hat[at])
+    for name, at in data.groups:
+        out[at] = curves(name, s_hat[at])
     return out
 
 
@@ -172,7 +176,7 @@ def threshold(data: Data, s_min: float, n_parameters: int) -> float:
 
 # -- one-dimensional minimum and profile intervals ------------------------------
 
-def minimise(f, lo: float, hi: float, points: int = 121) -> tuple[float, float]:
+def minimise(f, lo: float, hi: float, points: int = 81) -> tuple[float, float]:
     """(x, f(x)) at the smallest f on [lo, hi]: a grid, then Brent's method in the
     best cell (f need not be unimodal across the whole range)."""
     xs = np.linspace(lo, hi, points)
@@ -292,13 +296,13 @@ def fit_rate(curves: Curves, data: Data, s_hat_per_K_m: float, lo: float, hi: fl
     """
     def S(u):
         return misfit(data, predict(curves, data, u, s_hat_per_K_m))
-    u, s_min = minimise(S, lo, hi, points=241)
+    u, s_min = minimise(S, lo, hi)
     level = threshold(data, s_min, 1)
     a, b = interval(S, u, level, lo, hi)
 
-    def trend():
+    def trend():   # (the trend moves K little: searched within a factor e³ of the estimate)
         return minimise(lambda v: trend_rss(data, predict(curves, data, v, s_hat_per_K_m)),
-                        lo, hi, points=241)[1]
+                        max(lo, u - 3.0), min(hi, u + 3.0), points=31)[1]
     return dict(log_K=u, interval=(a, b), misfit=s_min, level=level,
                 model=predict(curves, data, u, s_hat_per_K_m),
                 goodness_of_fit=_goodness(data, s_min, trend, 1))

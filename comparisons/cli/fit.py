@@ -4,8 +4,9 @@ Fits the ball's specific wear rate K (and the wear law's pressure exponent n)
 to measured scar diameters, ball volumes or central wear depths by least
 squares against the MDR (the ball alone, its elastic contact included), with
 95 % intervals, each measurement's residual, the lab formula's K beside it and
-a warning when the residuals say the model does not fit. The CSV names its
-columns with units, e.g. ``cycles, D [um], ± D [um]`` (docs/fitting.md).
+a warning when the residuals say the model does not fit (exit code 1, as a
+failed comparison). The CSV names its columns with units, e.g.
+``cycles, D [um], ± D [um]`` (docs/fitting.md).
 
 Examples::
 
@@ -64,8 +65,8 @@ def main(args) -> int:
     if args.json:
         from wearcheck.comparisons.rundir import jsonable
         print(json.dumps(jsonable(result.to_dict()), indent=2, allow_nan=True))
-        return 0
-    print(text(result))
-    if args.out is not None:
-        print(f"-> {args.out}")
-    return 0
+    else:
+        print(text(result))
+        if args.out is not None:
+            print(f"-> {args.out}")
+    return 0 if result.goodness_of_fit["fits"] else 1

@@ -58,12 +58,18 @@ MEASUREMENTS = (
     Quantity("track_volume", "volume", ("track volume",), "track volume", refused=_TRACK),
 )
 
-#: the first stage of a forward run, in ŝ: below it a measurement is read as the start
-#: of wear (the scar the unworn contact, volume and depth ∝ ŝ: ``fitting.Curves``)
+#: the first stage of a forward run, in ŝ, at most: below it a measurement is read as
+#: the start of wear (the scar the unworn contact, volume and depth ∝ ŝ:
+#: ``fitting.Curves``)
 S_HAT_START = 1e-3
-#: stages per decade of ŝ in a forward run: the steps land on them, so the curve
-#: between two is interpolated over at most a factor 10^(1/8) = 1.33 in ŝ
-STAGES_PER_DECADE = 8
+#: and at least this fraction of the ŝ of the first guess of K at the first measurement
+#: (the guess overstates K: the true ŝ lie above, and the decades below cost steps)
+START_BELOW_GUESS = 1e-3
+#: stages per decade of ŝ in a forward run: the steps land on them, so no gap of the
+#: curve spans more than a factor 10^(1/2) in ŝ. The adaptive steps are far denser
+#: (20-40 per decade); 8 stages per decade changed the curves by less than the scar's
+#: grid reading (docs/fitting.md)
+STAGES_PER_DECADE = 2
 #: a forward run reaches MARGIN times the ŝ of the first guess of K at the last measurement
 MARGIN = 3.0
 #: and at most the ŝ at which the long-run scar reaches this fraction of R (the sphere's
@@ -222,13 +228,14 @@ def read_measurements(data, case: cases.Case) -> tuple[fitting.Data, list, str]:
 
 # -- the model ---------------------------------------------------------------------
 
-def forward_changes(case: cases.Case, n: float, s_hat_top: float) -> dict:
+def forward_changes(case: cases.Case, n: float, s_hat_top: float,
+                    s_hat_start: float = S_HAT_START) -> dict:
     """The case changes of one forward run: exponent n, sliding to ŝ = s_hat_top with
-    stages (so steps) at STAGES_PER_DECADE per decade from S_HAT_START, adaptive steps."""
+    stages (so steps) at STAGES_PER_DECADE per decade from s_hat_start, adaptive steps."""
     per_m = reference.scales(case)["s_hat_per_m"]
-    decades = math.log10(s_hat_top / S_HAT_START)
+    decades = math.log10(s_hat_top / s_hat_start)
     count = max(int(math.ceil(decades * STAGES_PER_DECADE)), 4) + 1
-    stages = np.logspace(math.log10(S_HAT_START), math.log10(s_hat_top), count)
+    stages = np.logspace(math.log10(s_hat_start), math.log10(s_hat_top), count)
     return {"wear.pressure_exponent": float(n), "sliding.until": "distance",
             "sliding.distance": float(s_hat_top / per_m), "sliding.scheme": "adaptive",
             "stages.s_hat": [0.0] + [float(v) for v in stages]}
@@ -257,10 +264,18 @@ def s_hat_cap(case: cases.Case, n: float) -> float:
 def first_guess(case: cases.Case, data: fitting.Data, n: float) -> float:
     """K from the long-run law at each measurement, the largest (fitting.asymptotic_rate)."""
     R, F, H = case.indenter.radius, case.loading.force, case.wear.hardness
-    guesses = [fitting.asymptotic_rate(str(q), data.y[data.quantity == q], R, F,
-                                       data.s[data.quantity == q], n, H)
-               for q in np.unique(data.quantity)]
+    guesses = [fitting.asymptotic_rate(q, data.y[at], R, F, data.s[at], n, H)
+               for q, at in data.groups]
     return float(np.max(np.concatenate(guesses)))
+
+
+def plan(case: cases.Case, data: fitting.Data, c: float, n: float) -> tuple[float, float]:
+    """The ŝ range of the forward run at exponent n: (start, end)."""
+    guess = first_guess(case, data, n) * c
+    top = min(MARGIN * guess * float(np.max(data.s)), s_hat_cap(case, n))
+    start = min(max(S_HAT_START, START_BELOW_GUESS * guess * float(np.min(data.s))),
+                top / 10.0)
+    return start, top
 
 
 def _solve_here(case: cases.Case, quiet: bool, label: str):
@@ -331,11 +346,10 @@ def _rate_range(case, data, c, n, top) -> tuple[float, float]:
 def _fit_rate(case, data, c, quiet, notes):
     """n fixed: one forward run (longer ones if the fit needs them)."""
     n = case.wear.pressure_exponent
-    top = min(MARGIN * first_guess(case, data, n) * c * float(np.max(data.s)),
-              s_hat_cap(case, n))
+    start, top = plan(case, data, c, n)
     runs = []
     for attempt in range(MOST_RUNS):
-        forward = case.derive(forward_changes(case, n, top))
+        forward = case.derive(forward_changes(case, n, top, start))
         t = time.perf_counter()
         result = _solve_here(forward, quiet, f"mdr n = {n:g}")
         runs.append(_run_info(n, top, result, time.perf_counter() - t))
@@ -354,11 +368,11 @@ def _fit_rate(case, data, c, quiet, notes):
                          "): the upper end is extrapolated by the long-run law")
             break
         top = min(30.0 * need, cap)
-    found["resolution"] = _resolution(case, data, c, n, ran, curves, lo, hi, quiet)
+    found["resolution"] = _resolution(case, data, c, n, (start, ran), curves, lo, hi, quiet)
     return found, runs, curves
 
 
-def _resolution(case, data, c, n, top, curves, lo, hi, quiet) -> dict:
+def _resolution(case, data, c, n, span, curves, lo, hi, quiet) -> dict:
     """The fit at exponent n repeated with the model on half the elements.
 
     The scar's edge converges at first order in the element size (it is read
@@ -367,7 +381,7 @@ def _resolution(case, data, c, n, top, curves, lo, hi, quiet) -> dict:
     """
     N = case.mdr.elements
     half = max(N // 2, 2)
-    changes = dict(forward_changes(case, n, top), **{"mdr.elements": half})
+    changes = dict(forward_changes(case, n, span[1], span[0]), **{"mdr.elements": half})
     t = time.perf_counter()
     coarse = _solve_here(case.derive(changes), quiet, f"mdr N = {half}")
     seconds = time.perf_counter() - t
@@ -409,11 +423,10 @@ def _fit_exponent(case, data, c, exponents, scheduler, workers, quiet, notes):
     if len(exponents) < 4 or exponents[0] < 1.0 or exponents[-1] > 4.0:
         raise CaseError(f"exponents = {list(exponents)}: at least 4 values in [1, 4] (the "
                         "range of wear.pressure_exponent)")
-    tops = [min(MARGIN * first_guess(case, data, n) * c * float(np.max(data.s)),
-                s_hat_cap(case, n)) for n in exponents]
+    spans = [plan(case, data, c, n) for n in exponents]
     tasks = []
-    for n, top in zip(exponents, tops):
-        changes = forward_changes(case, n, top)
+    for n, (start, top) in zip(exponents, spans):
+        changes = forward_changes(case, n, top, start)
         overrides = tuple(f"{k}={_toml(v)}" for k, v in changes.items())
         tasks.append(Task(name=f"n-{n:g}", solver="mdr", overrides=overrides))
     scratch = Path(tempfile.mkdtemp(prefix="wearcheck-fit-"))
@@ -427,8 +440,8 @@ def _fit_exponent(case, data, c, exponents, scheduler, workers, quiet, notes):
         raise SolverError(f"the forward run at n = {failed[0].task.name[2:]} failed: "
                           f"{failed[0].message}")
     curves = tuple(curves_of(o.result.history, n) for o, n in zip(outcomes, exponents))
-    runs = [dict(_run_info(n, top, o.result, o.wall_seconds), worker=o.worker)
-            for n, top, o in zip(exponents, tops, outcomes)]
+    runs = [dict(_run_info(n, span[1], o.result, o.wall_seconds), worker=o.worker)
+            for n, span, o in zip(exponents, spans, outcomes)]
     family = fitting.ExponentCurves(exponents, curves)
     lo = min(_rate_range(case, data, c, n, cv.top)[0] for n, cv in zip(exponents, curves))
     hi = max(_rate_range(case, data, c, n, cv.top)[1] for n, cv in zip(exponents, curves))
@@ -441,7 +454,7 @@ def _fit_exponent(case, data, c, exponents, scheduler, workers, quiet, notes):
                      f"{curves[j].top:.4g}): extrapolated by the long-run law")
     # the resolution check at the scanned exponent nearest the estimate
     lo_j, hi_j = _rate_range(case, data, c, exponents[j], curves[j].top)
-    found["resolution"] = _resolution(case, data, c, exponents[j], tops[j], curves[j], lo_j,
+    found["resolution"] = _resolution(case, data, c, exponents[j], spans[j], curves[j], lo_j,
                                       hi_j, quiet)
     return found, runs, family
 
