@@ -103,7 +103,8 @@ def text(result) -> str:
     for key, p in result.parameters.items():
         lo, hi = p["ci95"]
         unit = "" if p["unit"] == "1" else f" {p['unit']}"
-        lines.append(f"{key:<24} {_g(p['value']):>11}  [{_g(lo)}, {_g(hi)}]{unit}")
+        lines.append(f"{key:<24} {_g(p['value']):>11}  [{_g(lo)}, "
+                     f"{_g(hi) if hi is not None else 'open'}]{unit}")
     lines.append(f"  ({result.interval_method})")
     for q, lab in result.lab.items():
         lines.append(f"lab formula from {LABELS[q][0]}: K = {_g(lab['K'])} m^3/(N m)  "

@@ -71,7 +71,8 @@ START_BELOW_GUESS = 1e-3
 #: grid reading (docs/fitting.md)
 STAGES_PER_DECADE = 2
 #: a forward run reaches MARGIN times the ŝ of the first guess of K at the last measurement
-MARGIN = 3.0
+#: (and at most half the MDR's cap on ŝ)
+MARGIN = 2.0
 #: and at most the ŝ at which the long-run scar reaches this fraction of R (the sphere's
 #: equator, where the model's body ends)
 MOST_B_OVER_R = 0.9
@@ -89,7 +90,7 @@ class FitResult:
     ----------
     case : the resolved case as given; ``fitted_case``: the same with the fitted values.
     parameters : {key: {"value", "ci95": [lo, hi], "unit", "note"}} (an open end of an
-        interval: 0 for K, or the end of the scan for n, with a note).
+        interval: 0 below or None above for K, the end of the scan for n, with a note).
     measurements : one dict per measurement: row, cycles, s, quantity, measured,
         uncertainty, model, residual, lab_K.
     lab : per quantity, the lab formula's K (V = K F s through the origin).
@@ -262,17 +263,24 @@ def s_hat_cap(case: cases.Case, n: float) -> float:
 
 
 def first_guess(case: cases.Case, data: fitting.Data, n: float) -> float:
-    """K from the long-run law at each measurement, the largest (fitting.asymptotic_rate)."""
+    """K from the long-run law (fitting.asymptotic_rate) at the last measurement of each
+    quantity, the largest: the scar is then most worn and nearest that law, which
+    it approaches from above (so the guess overstates K; earlier measurements, their
+    scar mostly the elastic contact, would overstate it far more)."""
     R, F, H = case.indenter.radius, case.loading.force, case.wear.hardness
-    guesses = [fitting.asymptotic_rate(q, data.y[at], R, F, data.s[at], n, H)
-               for q, at in data.groups]
-    return float(np.max(np.concatenate(guesses)))
+    guesses = []
+    for q, at in data.groups:
+        last = int(np.argmax(np.where(at, data.s, -np.inf)))
+        guesses.append(float(fitting.asymptotic_rate(q, data.y[last], R, F, data.s[last], n, H)))
+    return max(guesses)
 
 
 def plan(case: cases.Case, data: fitting.Data, c: float, n: float) -> tuple[float, float]:
     """The ŝ range of the forward run at exponent n: (start, end)."""
+    from wearcheck.mdr.solver import ADAPTIVE_MAX_S_HAT
     guess = first_guess(case, data, n) * c
-    top = min(MARGIN * guess * float(np.max(data.s)), s_hat_cap(case, n))
+    top = min(MARGIN * guess * float(np.max(data.s)), s_hat_cap(case, n),
+              0.5 * ADAPTIVE_MAX_S_HAT)
     start = min(max(S_HAT_START, START_BELOW_GUESS * guess * float(np.min(data.s))),
                 top / 10.0)
     return start, top
@@ -360,7 +368,8 @@ def _fit_rate(case, data, c, quiet, notes):
         ran = top
         if need <= curves.top:
             break
-        cap = s_hat_cap(case, n)
+        from wearcheck.mdr.solver import ADAPTIVE_MAX_S_HAT
+        cap = min(s_hat_cap(case, n), 0.5 * ADAPTIVE_MAX_S_HAT)
         if top >= cap or attempt == MOST_RUNS - 1:
             notes.append(f"the fit reads the model beyond its run's end (ŝ = {curves.top:.4g}"
                          + (f", where the long-run scar reaches {MOST_B_OVER_R:g} R"
@@ -399,7 +408,7 @@ def _resolution_note(resolution: dict, parameters: dict) -> str | None:
     p = parameters["wear.specific_rate"]
     K_half, K = resolution["specific_rate"]
     lo, hi = p["ci95"]
-    half_width = 0.5 * (hi - lo) if math.isfinite(hi) else math.inf
+    half_width = 0.5 * (hi - lo) if hi is not None else math.inf
     if abs(K - K_half) <= 0.2 * half_width:
         return None
     N = resolution["elements"][1]
@@ -472,7 +481,7 @@ def _result(case, keys, data, rows, source, found, runs, family, c, notes, secon
     lo, hi = found["interval"]
     parameters = {"wear.specific_rate": dict(
         value=K, ci95=[math.exp(lo) if lo is not None else 0.0,
-                       math.exp(hi) if hi is not None else math.inf],
+                       math.exp(hi) if hi is not None else None],
         unit=FIT_KEYS["wear.specific_rate"])}
     if lo is None:
         parameters["wear.specific_rate"]["note"] = (
