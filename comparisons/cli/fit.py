@@ -8,7 +8,7 @@ a warning when the residuals say the model does not fit (exit code 1, as a
 failed comparison). The CSV names its columns with units, e.g.
 ``cycles, D [um], ± D [um]`` (docs/fitting.md).
 
-Examples::
+Examples:
 
     wearcheck fit my_ball.toml sheet.csv --fit wear.specific_rate
     wearcheck fit ball_on_flat sheet.csv --fit wear.specific_rate --json
@@ -38,6 +38,10 @@ def add_parser(sub):
     p.add_argument("--fit", dest="keys", action="append", required=True, metavar="KEY",
                    help="a case key to fit (repeatable): wear.specific_rate, and optionally "
                         "wear.pressure_exponent (a scan over n on Dask)")
+    p.add_argument("--exponents", type=_exponents, default=None, metavar="N1,N2,...",
+                   help="with --fit wear.pressure_exponent: the exponents of the scan, at "
+                        "least 4 in [1, 4] (default 1,1.25,...,4; each is one MDR run, and "
+                        "runs with n != 1 are slow: docs/fitting.md)")
     p.add_argument("--out", type=Path, default=None, metavar="DIR",
                    help="also write a fit directory: fit.json, measurements.csv, fit.png, "
                         "the fitted case, meta.json")
@@ -48,6 +52,14 @@ def add_parser(sub):
     return p
 
 
+def _exponents(text):
+    try:
+        return [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}': numbers separated by commas, e.g. "
+                                         "1,1.5,2,2.5") from None
+
+
 def main(args) -> int:
     from wearcheck.comparisons.outputs import check_output
     from wearcheck.comparisons.present.fit_report import text
@@ -55,8 +67,11 @@ def main(args) -> int:
     case = load_case(args)
     if args.out is not None:
         check_output(args.out, "fit")   # before the runs: a path we may not write fails at once
-    result = fit(case, args.measurements, args.keys, scheduler=args.scheduler,
-                 workers=args.workers, quiet=args.quiet or args.json)
+    if args.exponents is not None and "wear.pressure_exponent" not in args.keys:
+        from wearcheck.cases import CaseError
+        raise CaseError("--exponents: the scan over n needs --fit wear.pressure_exponent")
+    result = fit(case, args.measurements, args.keys, exponents=args.exponents,
+                 scheduler=args.scheduler, workers=args.workers, quiet=args.quiet or args.json)
     if args.out is not None:
         write(result, args.out, data_path=args.measurements)
     for remark in result.warnings:
