@@ -29,7 +29,7 @@ from .refine import add_cluster_arguments
 
 def add_parser(sub):
     p = sub.add_parser("fit", help="fit K (and n) of a ball to measured scars, volumes or "
-                                   "depths, with 95 % intervals",
+                                   "depths, with 95 %% intervals",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_case_arguments(p)
     p.add_argument("measurements", type=Path, metavar="MEASUREMENTS.csv",
