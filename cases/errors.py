@@ -26,29 +26,10 @@ class SolverError(WearcheckError):
     exit_code = 3
 
 
-class CaseWarning(UserWarning):
-    """A remark on a valid case whose results are approximate (e.g. its load past a
-    yield estimate); also kept in ``Case.warnings``, which the command line prints
-    as ``note:`` lines and every output records."""
+class RunWarning(UserWarning):
+    """A remark on a run that still gives a result: half-space theory stretched, an approximation.
 
-
-#: the texts :func:`warn_once` has issued in this process
-_WARNED: set[str] = set()
-
-
-def warn_once(text: str, category=CaseWarning) -> None:
-    """Issue ``text`` as a warning once per process, pointing at the first caller
-    outside wearcheck (a case loaded, derived or swept many times warns once)."""
-    if text in _WARNED:
-        return
-    _WARNED.add(text)
-    import os
-    import sys
-    import warnings
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
-    inside = tuple(root + name + os.sep for name in
-                   ("cases", "mdr", "fem", "bem", "comparisons", "wearcheck", "numerics", "ccx"))
-    level, frame = 2, sys._getframe(1)
-    while frame is not None and frame.f_code.co_filename.startswith(inside):
-        level, frame = level + 1, frame.f_back
-    warnings.warn(text, category, stacklevel=level)
+    Issued once per run through :mod:`warnings`; the solver registry also
+    records it in the run's ``info["warnings"]`` (so ``meta.json`` has it) and
+    the command line prints it as a ``note:`` line.
+    """

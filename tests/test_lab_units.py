@@ -1,6 +1,7 @@
 """Lab units in the case file (issue 27 §3): wear.specific_rate, stages in metres and
 cycles, the warning past a yield estimate."""
 
+import json
 import math
 import tomllib
 import warnings
@@ -11,7 +12,7 @@ import pytest
 import wearcheck
 from wearcheck import cases
 from wearcheck.cases import CaseError, reference
-from wearcheck.cases import errors as case_errors
+from wearcheck.cases import RunWarning, validity
 from wearcheck.comparisons.cli import main as cli_main
 
 BALL = cases.shipped("ball_on_flat")   # k = 2e-5, μ = 0.3, σ0 = 6 GPa: K = 1e-15 m³/(N·m)
@@ -153,32 +154,46 @@ def test_two_forms_of_stages_in_one_file_are_one_error():
 
 # -- the warning past a yield estimate ----------------------------------------
 
-def test_peak_pressure_past_the_yield_estimate_warns_once(monkeypatch):
-    monkeypatch.setattr(case_errors, "_WARNED", set())
+def test_peak_pressure_past_the_yield_estimate_warns_once_per_run():
+    """The yield remark goes the way of the half-space remark (cases/validity.py): one
+    RunWarning at the run's first recorded step, kept in the watch's remarks (the run's
+    info["warnings"], meta.json, the note lines), not repeated, and not in the way of
+    the half-space remark."""
     # ball_on_flat: p0 = 0.94 GPa. The estimate: onset of yield at p0 = 1.6 Y, Y = H/3
     case = ball()
     p0 = reference.scales(case)["p0"]
     onset = 1.6 * case.wear.hardness / 3
-    assert p0 < onset and not any("yield" in w for w in case.warnings)
-    # a softer ball: σ0 just below the hardness at which p0 is the onset (3 p0/1.6)
-    soft = f"wear.hardness={3 * p0 / 1.6 * 0.99}"
-    with pytest.warns(case_errors.CaseWarning, match=r"p0 ≈ 1\.6 Y.*Y ≈ H/3") as caught:
-        case = ball(soft)
+    assert p0 < onset and validity.yield_remark(case) is None
+    # σ0 1 % either side of the hardness at which p0 is the onset (3 p0/1.6): the
+    # threshold is where the estimate puts it, not a rounded neighbour
+    assert validity.yield_remark(ball(f"wear.hardness={3 * p0 / 1.6 * 1.01}")) is None
+    soft = ball(f"wear.hardness={3 * p0 / 1.6 * 0.99}")
+    text = validity.yield_remark(soft)
+    assert "p0 ≈ 1.6 Y" in text and "Y ≈ H/3" in text
+    assert not any("yield" in w for w in soft.warnings)   # a remark on the run, not the case
+    R = soft.indenter.radius
+    watch = validity.BodyWatch(soft)
+    with pytest.warns(RunWarning, match=r"p0 ≈ 1\.6 Y.*Y ≈ H/3") as caught:
+        watch(0.0, 0.01 * R, 0.0)
+        watch(1.0, 0.02 * R, 0.01 * R)      # said once per run
     assert len(caught) == 1 and caught[0].filename == __file__   # points at the caller
-    assert sum("yield" in w for w in case.warnings) == 1        # kept for notes and outputs
+    assert watch.remarks == [text]
+    with pytest.warns(RunWarning, match="half-space theory is stretched"):
+        watch(2.0, 0.2 * R, 0.2 * R)        # the other remark still comes, once
+    assert len(watch.remarks) == 2
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        ball(soft)                  # once: loading it again does not warn again
-        case.derive(wear__k=3e-5)   # (nor does deriving it)
-    # just above the onset hardness: no warning
-    assert not any("yield" in w for w in ball(f"wear.hardness={3 * p0 / 1.6 * 1.01}").warnings)
+        watch(3.0, 0.3 * R, 0.3 * R)
+        validity.BodyWatch(case)(0.0, 0.01 * R, 0.0)   # the hard ball: no remark
 
 
-def test_the_cli_prints_the_yield_note(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr(case_errors, "_WARNED", set())
+def test_the_cli_prints_the_yield_note_once(tmp_path, capsys):
+    out = tmp_path / "run"
     code = cli_main(["run", "ball_on_flat", "--set", "wear.hardness=1e9",
                      "--set", "sliding.cycles=10.0", "--set", "stages.cycles=[0.0, 10.0]",
-                     "--set", "mdr.elements=100", "--out", str(tmp_path / "run")])
+                     "--set", "mdr.elements=100", "--out", str(out)])
     assert code == 0
     err = capsys.readouterr().err
     assert err.count("passes the onset of yield") == 1
+    meta = json.loads((out / "meta.json").read_text())
+    assert sum("onset of yield" in w for w in meta["warnings"]) == 1
