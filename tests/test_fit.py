@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import wearcheck
-from wearcheck.cases import CaseError, reference
+from wearcheck.cases import CaseError, RunWarning, reference
 from wearcheck.comparisons.analysis import fitting
 from wearcheck.comparisons.cli import main as cli_main
 from wearcheck.comparisons.studies import fit as fit_study
@@ -188,6 +188,37 @@ def test_the_verdict_fails_on_a_different_wear_law(tmp_path, case, model, truth,
     assert "the model does NOT fit" in captured.out
     with pytest.warns(UserWarning, match="does not fit"):
         wearcheck.fit(case.derive(mdr__elements=100), sheet)
+
+
+# -- the run's remarks over the measured range --------------------------------------------
+
+def test_the_fitted_scar_past_half_space_theory_and_a_soft_ball_are_said_once(case, model):
+    """The fit hands the fitted model's scar at each measured distance to the watch every
+    run has (cases/validity.py): at K_TRUE the scars stay within b/R = 0.055 (no remark);
+    at 40 K_TRUE they pass the unworn sphere's slope 0.1, r/√(R² − r²) > 0.1, first at a
+    measurement this test finds from that slope itself, and the remark names it, once;
+    a ball softer than its peak pressure's yield estimate gets that remark too."""
+    curves, c, *_ = model
+    R = case.indenter.radius
+    data = data_of({"scar_diameter": np.ones(len(S))})
+    quiet = {"log_K": math.log(K_TRUE)}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert fit_study._validity_remarks(case, curves, data, quiet, c) == []
+    worn = {"log_K": math.log(40 * K_TRUE)}
+    b = 0.5 * curves("scar_diameter", 40 * K_TRUE * c * S)
+    slope = b / np.sqrt(R**2 - b**2)
+    first = int(np.argmax(slope > 0.1))
+    assert 0 < first < len(S) - 1 and b[-1] < R      # the test's own premise
+    with pytest.warns(RunWarning, match="half-space theory is stretched") as caught:
+        remarks = fit_study._validity_remarks(case, curves, data, worn, c)
+    assert len(caught) == 1 and len(remarks) == 1
+    assert f"s = {S[first]:.4g} m" in remarks[0]
+    p0 = reference.scales(case)["p0"]
+    soft = case.derive({"wear.hardness": 3 * p0 / 1.6 * 0.9})
+    with pytest.warns(RunWarning, match="onset of yield"):
+        remarks = fit_study._validity_remarks(soft, curves, data, quiet, c)
+    assert len(remarks) == 1 and "onset of yield" in remarks[0]
 
 
 # -- the command line ---------------------------------------------------------------------

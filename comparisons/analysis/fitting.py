@@ -269,9 +269,9 @@ def lab_rate(V_lab, force: float, s) -> tuple[np.ndarray, float]:
 
 def asymptotic_rate(quantity: str, y, R: float, force: float, s, n: float,
                     hardness: float) -> np.ndarray:
-    """K from the long-run worn-sphere law (:func:`reference.worn_sphere_asymptote`:
-    b^(2(n+1)) ∝ K s), b from D = 2b, V = π b⁴/4R or h = b²/2R: a first guess that
-    sizes the forward run."""
+    """K from the long-run worn-paraboloid law (:func:`reference.worn_sphere_asymptote`
+    with ``profile="paraboloid"``: b^(2(n+1)) ∝ K s), b from D = 2b, V = π b⁴/4R or
+    h = b²/2R: a first guess that sizes the forward run."""
     y = np.asarray(y, float)
     b = (y / 2.0 if quantity == "scar_diameter" else
          (4.0 * R * y / math.pi) ** 0.25 if quantity == "ball_volume" else
@@ -280,9 +280,13 @@ def asymptotic_rate(quantity: str, y, R: float, force: float, s, n: float,
 
 
 def rate_for_scar(b, R: float, force: float, s, n: float, hardness: float):
-    """The K at which the long-run scar radius is b after sliding s (its K·s over s)."""
-    unit = reference.worn_sphere_asymptote(R, force, 1.0, 1.0, exponent=n,
-                                           hardness=hardness)["scar_radius"]
+    """The K at which the long-run scar radius is b after sliding s (its K·s over s).
+
+    The paraboloid's law, a power law in K·s (the sphere's exact cap needs a
+    larger K·s for the same b: the forward runs sized on it stop earlier, as
+    :func:`reference.predicted_scar_radius` predicts their scar)."""
+    unit = reference.worn_sphere_asymptote(R, force, 1.0, 1.0, exponent=n, hardness=hardness,
+                                           profile="paraboloid")["scar_radius"]
     return (np.asarray(b, float) / float(unit)) ** (2.0 * (n + 1.0)) / np.asarray(s, float)
 
 

@@ -16,14 +16,16 @@ import math
 import shutil
 import tempfile
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from wearcheck import cases
-from wearcheck.cases import CaseError, SolverError, reference
+from wearcheck.cases import CaseError, RunWarning, SolverError, reference, validity
 from wearcheck.comparisons.analysis import fitting
+from wearcheck.numerics.stepping import ADAPTIVE_MAX_S_HAT
 from wearcheck.user_tables import Quantity, from_columns, read_table
 
 #: the keys ``fit`` can fit, with their unit
@@ -277,7 +279,6 @@ def first_guess(case: cases.Case, data: fitting.Data, n: float) -> float:
 
 def plan(case: cases.Case, data: fitting.Data, c: float, n: float) -> tuple[float, float]:
     """The ŝ range of the forward run at exponent n: (start, end)."""
-    from wearcheck.mdr.solver import ADAPTIVE_MAX_S_HAT
     guess = first_guess(case, data, n) * c
     top = min(MARGIN * guess * float(np.max(data.s)), s_hat_cap(case, n),
               0.5 * ADAPTIVE_MAX_S_HAT)
@@ -291,7 +292,11 @@ def _solve_here(case: cases.Case, quiet: bool, label: str):
     from wearcheck.comparisons.present.progress import ProgressBar
     bar = ProgressBar(label, quiet=quiet)
     try:
-        return registry.solve(case, "mdr", progress=bar)
+        with warnings.catch_warnings():
+            # a forward run's remarks are on its own ŝ range, past the measurements;
+            # the fit judges the fitted model over the measured range (_validity_remarks)
+            warnings.simplefilter("ignore", RunWarning)
+            return registry.solve(case, "mdr", progress=bar)
     finally:
         bar.close()
 
@@ -368,8 +373,7 @@ def _fit_rate(case, data, c, quiet, notes):
         ran = top
         if need <= curves.top:
             break
-        from wearcheck.mdr.solver import ADAPTIVE_MAX_S_HAT
-        cap = min(s_hat_cap(case, n), 0.5 * ADAPTIVE_MAX_S_HAT)
+            cap = min(s_hat_cap(case, n), 0.5 * ADAPTIVE_MAX_S_HAT)
         if top >= cap or attempt == MOST_RUNS - 1:
             notes.append(f"the fit reads the model beyond its run's end (ŝ = {curves.top:.4g}"
                          + (f", where the long-run scar reaches {MOST_B_OVER_R:g} R"
@@ -381,40 +385,61 @@ def _fit_rate(case, data, c, quiet, notes):
     return found, runs, curves
 
 
+def coarse_elements(case: cases.Case) -> int:
+    """The elements of the resolution check's model: N/2, or the fewest the MDR accepts
+    (:mod:`wearcheck.mdr.resolution`) when N/2 is below them."""
+    from wearcheck.mdr import resolution
+    factor = case.mdr.domain_factor
+    fewest = max(math.ceil(resolution.MIN_CONTACT_CELLS * 2.0 * factor**2 * (1.0 - 1e-12)),
+                 resolution.MIN_ELEMENTS)
+    return max(case.mdr.elements // 2, fewest)
+
+
 def _resolution(case, data, c, n, span, curves, lo, hi, quiet) -> dict:
-    """The fit at exponent n repeated with the model on half the elements.
+    """The fit at exponent n repeated with the model on M = N/2 elements (or the fewest
+    the MDR accepts).
 
     The scar's edge converges at first order in the element size (it is read
-    between nodes), so the change of K from N/2 to N estimates the error of K
-    at N; the intervals do not include it.
+    between nodes), so K_N − K_M, over N/M − 1, estimates the error of K at N;
+    the intervals do not include it. Not checked when N is already the fewest.
     """
     N = case.mdr.elements
-    half = max(N // 2, 2)
-    changes = dict(forward_changes(case, n, span[1], span[0]), **{"mdr.elements": half})
-    t = time.perf_counter()
-    coarse = _solve_here(case.derive(changes), quiet, f"mdr N = {half}")
-    seconds = time.perf_counter() - t
-    K_half = math.exp(fitting.fit_rate(curves_of(coarse.history, n), data, c, lo, hi)["log_K"])
+    M = coarse_elements(case)
     K = math.exp(fitting.fit_rate(curves, data, c, lo, hi)["log_K"])
-    return dict(exponent=float(n), elements=[half, N], specific_rate=[K_half, K],
-                change=K / K_half - 1.0, seconds=seconds,
-                meaning="K fitted with the model on N/2 and on N elements at this exponent: "
-                        "the change estimates the discretisation error of K at N (first order)")
+    if M >= N:
+        return dict(exponent=float(n), elements=[N], specific_rate=[K], error=None,
+                    seconds=0.0, meaning=f"not checked: mdr.elements = {N} is the fewest the "
+                                         "MDR accepts for this case")
+    changes = dict(forward_changes(case, n, span[1], span[0]), **{"mdr.elements": M})
+    t = time.perf_counter()
+    coarse = _solve_here(case.derive(changes), quiet, f"mdr N = {M}")
+    seconds = time.perf_counter() - t
+    K_M = math.exp(fitting.fit_rate(curves_of(coarse.history, n), data, c, lo, hi)["log_K"])
+    return dict(exponent=float(n), elements=[M, N], specific_rate=[K_M, K],
+                change=K / K_M - 1.0, error=(K - K_M) / (N / M - 1.0), seconds=seconds,
+                meaning="K fitted with the model on M and on N elements at this exponent: "
+                        "error = (K_N − K_M)/(N/M − 1) estimates the discretisation error "
+                        "of K at N (first order)")
 
 
 def _resolution_note(resolution: dict, parameters: dict) -> str | None:
-    """A note when the model's discretisation moves K by more than a fifth of the
-    interval's half-width."""
+    """A note when the model's estimated discretisation error of K passes a fifth of the
+    interval's half-width, or when it was not checked."""
+    N = resolution["elements"][-1]
+    if resolution["error"] is None:
+        return (f"the model's resolution is not checked: mdr.elements = {N} is the fewest the "
+                f"MDR accepts here, so no coarser model exists to compare with; the intervals "
+                f"do not include its error (--set mdr.elements={2 * N} checks it)")
     p = parameters["wear.specific_rate"]
-    K_half, K = resolution["specific_rate"]
     lo, hi = p["ci95"]
     half_width = 0.5 * (hi - lo) if hi is not None else math.inf
-    if abs(K - K_half) <= 0.2 * half_width:
+    error = abs(resolution["error"])
+    if error <= 0.2 * half_width:
         return None
-    N = resolution["elements"][1]
-    return (f"the model's resolution matters: K moves by {100 * (K / K_half - 1):+.2g} % from "
-            f"mdr.elements = {resolution['elements'][0]} to {N}, "
-            f"{abs(K - K_half) / half_width:.2g} of the interval's half-width, which does not "
+    K_M, K = resolution["specific_rate"]
+    return (f"the model's resolution matters: K moves by {100 * (K / K_M - 1):+.2g} % from "
+            f"mdr.elements = {resolution['elements'][0]} to {N}, an estimated error at {N} "
+            f"of {error / half_width:.2g} of the interval's half-width, which does not "
             f"include it; raise mdr.elements (e.g. --set mdr.elements={2 * N})")
 
 
@@ -543,6 +568,7 @@ def _result(case, keys, data, rows, source, found, runs, family, c, notes, secon
               "profile t (nonlinear regression, Bates & Watts 1988 §6.1): relative errors of "
               "one unknown scatter, {θ: RSS_profile(θ) ≤ RSS_min (1 + F₁,ν(0.95)/ν)}, ν = N − P")
     curve = _curve(family, data, found, c)
+    notes += _validity_remarks(fitted, family, data, found, c)
     model_info = dict(solver="mdr", body="the ball alone (the flat does not wear)",
                       elements=case.mdr.elements, scheme="adaptive",
                       tolerance=case.sliding.tolerance, runs=runs,
@@ -555,18 +581,38 @@ def _result(case, keys, data, rows, source, found, runs, family, c, notes, secon
                      curve=curve)
 
 
+def _model_at(family, found, quantity: str, s, c) -> np.ndarray:
+    """The fitted model's ``quantity`` after sliding s [m]."""
+    probe = fitting.Data(s, np.full(len(s), quantity), np.ones(len(s)), np.full(len(s), np.nan))
+    if isinstance(family, fitting.ExponentCurves):
+        return fitting.predict_between(family, probe, found["log_K"], found["exponent"], c)
+    return fitting.predict(family, probe, found["log_K"], c)
+
+
 def _curve(family, data, found, c):
     """The fitted model along the measured range, for the figure."""
     s = np.geomspace(float(np.min(data.s)) / 3.0, float(np.max(data.s)) * 3.0, 200)
-    log_K = found["log_K"]
-    out = {}
-    for q in np.unique(data.quantity):
-        probe = fitting.Data(s, np.full(len(s), q), np.ones(len(s)), np.full(len(s), np.nan))
-        if isinstance(family, fitting.ExponentCurves):
-            out[str(q)] = fitting.predict_between(family, probe, log_K, found["exponent"], c)
-        else:
-            out[str(q)] = fitting.predict(family, probe, log_K, c)
-    return s, out
+    return s, {str(q): _model_at(family, found, str(q), s, c) for q in np.unique(data.quantity)}
+
+
+def _validity_remarks(fitted: cases.Case, family, data, found, c) -> list[str]:
+    """The remarks a run of the fitted case makes over the measured range.
+
+    :class:`cases.validity.BodyWatch`, as every solver calls it, at the fitted
+    model's scar at each measured sliding distance: the yield estimate, and
+    half-space theory from the first measurement whose scar passes b/R = 0.1
+    (one RunWarning each). A scar past the ball's equator is not handed to it
+    (the watch would stop a run; the fit says so in its own note on reading
+    the model beyond its run).
+    """
+    s = np.unique(data.s)
+    b = 0.5 * _model_at(family, found, "scar_diameter", s, c)
+    watch = validity.BodyWatch(fitted)
+    for s_i, b_i in zip(s, b):
+        if not b_i < fitted.indenter.radius:
+            break
+        watch(float(s_i), None, float(b_i))
+    return watch.remarks
 
 
 def file_digest(path) -> str | None:
