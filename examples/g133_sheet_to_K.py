@@ -96,8 +96,11 @@ print(f"fit:         K = {K['value']:.4g} m³/(N·m), 95 % interval "
 print(f"lab formula: K = {lab['K']:.4g} m³/(N·m) (π D⁴/64R over F·s, all measurements)")
 print(f"goodness of fit: χ² = {gof['statistic']:.3g} for {gof['dof']} degrees of freedom, "
       f"p = {gof['p_value']:.3g}")
-print(f"model: {len(result.model['runs'])} MDR run(s); K changes by "
-      f"{100 * result.model['resolution']['change']:+.2f} % from N/2 to N elements")
+check = result.model["resolution"]     # the fit repeated on a coarser model
+print(f"model: {len(result.model['runs'])} MDR run(s); "
+      + (check["meaning"] if check["error"] is None else
+         f"K changes by {100 * check['change']:+.2f} % from mdr.elements = "
+         f"{check['elements'][0]} to {check['elements'][1]}"))
 
 # %%
 # Measurement by measurement

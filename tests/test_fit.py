@@ -100,6 +100,28 @@ def test_exact_measurements_give_K_back(case, truth):
     assert result.lab["ball_volume"]["K"] == pytest.approx(K_TRUE, rel=1e-3)
 
 
+def test_the_resolution_check_uses_a_grid_the_mdr_accepts(case):
+    """N/2 when the MDR accepts it, else the fewest it accepts (10 cells in the unworn
+    contact: N/(2·1.25²) >= 10, N >= 32 on ball_on_flat's domain factor 1.25); none
+    coarser than N itself: the fit says the check was not made."""
+    from wearcheck.mdr import resolution
+    assert fit_study.coarse_elements(case) == 100                        # N = 200
+    assert fit_study.coarse_elements(case.derive(mdr__elements=50)) == 32
+    resolution.check(case.derive(mdr__elements=32))     # accepted, one fewer refused
+    with pytest.raises(CaseError, match="mdr.elements"):
+        resolution.check(case.derive(mdr__elements=31))
+    assert fit_study.coarse_elements(case.derive(mdr__elements=32)) == 32
+    unchecked = dict(elements=[32], specific_rate=[1e-15], error=None)
+    note = fit_study._resolution_note(unchecked, {})
+    assert "not checked" in note and "--set mdr.elements=64" in note
+    # the first-order estimate against a fifth of the interval's half-width
+    width = {"wear.specific_rate": {"ci95": [0.9e-15, 1.1e-15]}}
+    small = dict(elements=[32, 50], specific_rate=[0.99e-15, 1e-15], error=0.01e-15 / (50 / 32 - 1))
+    assert fit_study._resolution_note(small, width) is None             # 0.018e-15 < 0.02e-15
+    large = dict(small, error=0.03e-15)
+    assert "resolution matters" in fit_study._resolution_note(large, width)
+
+
 # -- coverage of the 95 % intervals ------------------------------------------------------
 
 def _coverage(model, make, seeds=100):
