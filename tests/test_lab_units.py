@@ -72,8 +72,10 @@ def test_cli_set_specific_rate_replaces_the_file_k(tmp_path):
 
 @pytest.mark.parametrize("raw_wear, pattern", [
     (dict(k=2e-5, specific_rate=1e-15, mu=0.3, hardness=6e9),
-     r"'wear\.k' = 2e-05 and 'wear\.specific_rate' = 1e-15 both given; give one"),
-    (dict(mu=0.3, hardness=6e9), r"missing key 'wear\.k' or 'wear\.specific_rate'"),
+     r"'wear\.k' = 2e-05 and 'wear\.specific_rate' = 1e-15 both given; give the paper's "
+     r"dimensionless k or the lab's specific wear rate K"),
+    (dict(mu=0.3, hardness=6e9), r"needs exactly one of 'wear\.k' and 'wear\.specific_rate'.*got "
+                                     r"neither.*the lab's specific wear rate K"),
     (dict(specific_rate=-1e-15, mu=0.3, hardness=6e9), r"'wear\.specific_rate' = -1e-15.*> 0"),
     (dict(specific_rate="1e-15 m3/Nm", mu=0.3, hardness=6e9),
      r"'wear\.specific_rate'.*m\^3/\(N m\).*without a unit"),
