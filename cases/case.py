@@ -461,7 +461,10 @@ def _shown(case: Case):
             if value is None:
                 continue
             unit = f.metadata.get("unit", "") if f.metadata else ""
-            rows.append((f.name, _shown_value(value), "" if unit == "1" else unit, f))
+            text = _shown_value(value)
+            if f"{name}.{f.name}" in case.derived:   # (e.g. k from specific_rate)
+                text += " (derived)"
+            rows.append((f.name, text, "" if unit == "1" else unit, f))
         out.append((name, rows))
     return out
 
