@@ -99,8 +99,13 @@ RULES = (
              Absent("fretting")),
             why="a force-controlled run cannot end on a falling force (the force does not "
                 "fall)", hint="set sliding.until = \"distance\" or \"cycles\""),
+    # the wear coefficient: the paper's k or the lab's K (the other derived)
+    OneOf(("wear.k", "wear.specific_rate"), required=True,
+          why="k = K·σ0/μ, σ0 = wear.hardness",
+          hint="give the paper's dimensionless k or the lab's specific wear rate K in "
+               "m^3/(N m) (V = K·F·s), the other is derived"),
     # the stages, and what needs a stroke
-    OneOf(("stages.s_hat", "stages.cycles"), hint="give the stages one way only"),
+    OneOf(("stages.s_hat", "stages.s", "stages.cycles"), hint="give the stages one way only"),
     Requires(Given("stages.cycles"), "sliding.stroke", why="one cycle slides 2·stroke"),
     Requires(Is("wear.tangential_correction", True), "sliding.stroke",
              why="the correction is the sliding each stroke end loses while the tangential "
@@ -114,13 +119,14 @@ RULES = (
     LoaderOnly(("indenter.flat_radius", "indenter.radius"),
                "`indenter.flat_radius` < `indenter.radius`", lc.flat_radius_below_radius),
     *(LoaderOnly((key,), f"`{key}` increases strictly", lc.increasing(key))
-      for key in ("stages.s_hat", "stages.cycles", "fretting.stage_cycles")),
+      for key in ("stages.s_hat", "stages.s", "stages.cycles", "fretting.stage_cycles")),
     LoaderOnly(("loading.depth", "indenter.radius"),
                "a sphere's `loading.depth` < `indenter.radius`", lc.sphere_depth),
     LoaderOnly(("loading.force", "indenter.radius"),
                "a sphere's `loading.force` presses it less deep than `indenter.radius`",
                lc.sphere_force),
-    LoaderOnly(("loading.depth", "loading.force", "wear.k", "wear.mu", "wear.hardness"),
+    LoaderOnly(("loading.depth", "loading.force", "wear.k", "wear.specific_rate", "wear.mu",
+                "wear.hardness"),
                "the unworn contact and the sliding scale are finite and positive "
                "(a tabulated profile: the load within the table)", lc.unworn_contact),
     LoaderOnly(("sliding.stroke", "wear.tangential_correction"),

@@ -103,7 +103,15 @@ class Loading:
 
 @dataclass(frozen=True)
 class Wear:
-    k: float = key(unit="1", positive=True, doc="dimensionless wear coefficient k_wear (paper Eq. 1)")
+    k: float | None = key(None, unit="1", positive=True,
+                          doc="dimensionless wear coefficient k_wear (paper Eq. 1), per unit "
+                              "friction work; give this or wear.specific_rate (k = K·σ0/μ), "
+                              "the other is derived")
+    specific_rate: float | None = key(None, unit="m^3/(N m)", positive=True,
+                                      doc="the laboratory's specific wear rate K of the worn "
+                                          "body, V = K·F·s for n = 1; K = k μ/σ0, the "
+                                          "dimensional coefficient of the wear law; give this "
+                                          "or wear.k, the other is derived")
     mu: float = key(unit="1", positive=True, doc="coefficient of friction μ, τ = μ p (paper Eq. 14)")
     hardness: float = key(unit="Pa", positive=True, doc="hardness σ0 of the worn indenter")
     tangential_correction: bool = key(False,
@@ -163,10 +171,15 @@ class Stages:
                                    doc="dimensionless sliding distances ŝ at which profiles "
                                        "and pressures are kept (increasing); stages after "
                                        "the end of the run are not reached")
+    s: tuple[float, ...] | None = key(None, unit="m", minimum=0.0,
+                                      doc="the stages as sliding distances instead (not "
+                                          "together with s_hat or cycles; s_hat is then "
+                                          "derived from them)")
     cycles: tuple[float, ...] | None = key(None, minimum=0.0,
                                            doc="the stages as numbers of cycles instead "
-                                               "(needs sliding.stroke; not together with "
-                                               "s_hat, which is then derived from them)")
+                                               "(needs sliding.stroke, with any "
+                                               "sliding.until; not together with s_hat or s, "
+                                               "s_hat is then derived from them)")
 
 
 @dataclass(frozen=True)

@@ -198,6 +198,35 @@ STAGE_METRICS = (
 )
 
 
+#: files of a fit directory (``wearcheck fit --out``)
+FIT_FILES = (
+    Item("case.toml", "", "the resolved case as given"),
+    Item("fitted_case.toml", "", "the same with the fitted values (wear.specific_rate, "
+                                 "wear.pressure_exponent)"),
+    Item("fit.json", "", "what --json prints: parameters with their 95 % intervals, the lab "
+                         "formula's K, the goodness of fit, the measurements, the model's runs"),
+    Item("measurements.csv", "", "one row per measured value: the columns of FIT_COLUMNS"),
+    Item("fit.png", "", "measured values and the fitted model against sliding, the lab "
+                        "formula's line, and the residual of each measurement"),
+    Item("meta.json", "", "resolved and fitted case, the measurement file (path, SHA-256), "
+                          "warnings, provenance and this data dictionary"),
+)
+#: columns of a fit's measurements.csv (SI)
+FIT_COLUMNS = (
+    Item("row", "", "the row of the measurement file (its line number)"),
+    Item("cycles", "", "cycles (empty when neither the sheet nor the stroke gives them)"),
+    Item("s", "m", "sliding distance"),
+    Item("quantity", "", "scar_diameter, ball_volume or wear_center"),
+    Item("unit", "", "the unit of measured, uncertainty and model: m or m^3"),
+    Item("measured", "(unit)", "the measured value"),
+    Item("uncertainty", "(unit)", "its ± uncertainty (empty when the sheet gives none)"),
+    Item("model", "(unit)", "the fitted model's value"),
+    Item("residual", "", "(measured − model)/uncertainty, or ln(measured/model) without "
+                         "uncertainties"),
+    Item("lab_K", "m^3/(N m)", "the lab formula's K = V_lab/(F s) of this measurement"),
+)
+
+
 def _table(items) -> dict:
     return {i.name: i.as_dict() for i in items}
 
@@ -244,6 +273,11 @@ def comparison_dictionary() -> dict:
                 stage_metrics=_table(STAGE_METRICS))
 
 
+def fit_dictionary() -> dict:
+    """The data dictionary of a fit directory (written into its meta.json)."""
+    return dict(files=_table(FIT_FILES), measurements_csv=_table(FIT_COLUMNS))
+
+
 def markdown(items, first="name") -> str:
     """A Markdown table of items (the documentation's output tables)."""
     rows = [f"| {first} | unit | meaning |", "|---|---|---|"]
@@ -262,4 +296,6 @@ def doc_tables() -> dict[str, str]:
         "comparison-files": markdown(COMPARISON_FILES, "file"),
         "metrics": markdown(METRICS, "key"),
         "stage-metrics": markdown(STAGE_METRICS, "key"),
+        "fit-files": markdown(FIT_FILES, "file"),
+        "fit-columns": markdown(FIT_COLUMNS, "column"),
     }
