@@ -20,6 +20,7 @@ from .schema import (BEMSettings, did_you_mean, OPTIONAL_SECTIONS, PROFILE_KEYS,
                      Loading,
                      MDRSettings, Sliding, Stages, Wear, format_value, build_section,
                      section_fields, toml_string)
+from . import both_bodies
 
 
 @dataclass(frozen=True)
@@ -70,13 +71,25 @@ class Case:
         if sl.until == "distance":
             return sl.distance
         if sl.until == "cycles":
-            return 2.0 * sl.stroke * sl.cycles
+            return self.cycle_length * sl.cycles
         return None
 
     @property
     def cycles_per_metre(self) -> float | None:
-        """Cycles per metre of sliding, 1/(2·stroke); None without a stroke."""
-        return None if self.sliding.stroke is None else 0.5 / self.sliding.stroke
+        """Cycles per metre of sliding, 1/(2·stroke) (1/(2π·track_radius) for a
+        unidirectional track); None without either."""
+        return None if self.cycle_length is None else 1.0 / self.cycle_length
+
+    @property
+    def cycle_length(self) -> float | None:
+        """Sliding distance of one cycle [m]: 2·stroke, or one revolution 2π·track_radius
+        (sliding.motion = "unidirectional"); None without either."""
+        return both_bodies.cycle_length(self.sliding)
+
+    @property
+    def counterface_wear_rate(self) -> float | None:
+        """K_flat [m³/(N·m) = 1/Pa] of a counterface that wears, else None."""
+        return both_bodies.counterface_wear_rate(self.counterface, self.wear)
 
     def replace(self, **sections) -> "Case":
         """A copy with whole sections replaced, validated like a case file.
@@ -234,6 +247,10 @@ def _inapplicable(section: str, key: str, value) -> tuple[str, ...]:
         return ("force",) if value == "depth" else ("depth",)
     if section in ("indenter", "counterface") and key == "rigid" and value is True:
         return ("youngs_modulus", "poisson_ratio")
+    if (section, key) == ("counterface", "wears") and value is False:
+        return ("specific_rate", "k", "hardness")
+    if (section, key) == ("sliding", "motion") and value in ("reciprocating", "unidirectional"):
+        return ("track_radius",) if value == "reciprocating" else ("stroke",)
     if (section, key) == ("indenter", "profile") and value in PROFILE_KEYS:
         return tuple(sorted(set().union(*PROFILE_KEYS.values()) - PROFILE_KEYS[value]))
     if (section, key) == ("sliding", "until") and isinstance(value, str):
@@ -311,7 +328,7 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
         # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
         from . import reference
         per_m = reference.scales(case)["s_hat_per_m"]
-        s_hat = tuple(c * 2.0 * case.sliding.stroke * per_m for c in case.stages.cycles)
+        s_hat = tuple(c * case.cycle_length * per_m for c in case.stages.cycles)
         case = replace(case, stages=replace(case.stages, s_hat=s_hat))
     if case.fretting is not None:
         _check_fretting(case)
@@ -509,6 +526,8 @@ def _check_materials(built):
     if ind.rigid and cf.rigid:
         raise CaseError("indenter.rigid = true and counterface.rigid = true: at least one body "
                         "must be elastic")
+    # the counterface's wear keys and the motion along its track
+    both_bodies.check(built)
 
 
 def _check_programme(built):
@@ -533,7 +552,7 @@ def _check_programme(built):
                         "(the force does not fall); use sliding.until = \"distance\" or "
                         "\"cycles\"")
     if sl.until == "cycles":
-        for name in ("stroke", "cycles"):
+        for name in ("stroke" if sl.motion != "unidirectional" else "track_radius", "cycles"):
             if getattr(sl, name) is None:
                 raise CaseError(f"missing key 'sliding.{name}', required by sliding.until = "
                                 "\"cycles\"")
@@ -545,7 +564,7 @@ def _check_programme(built):
                         f"\"{sl.until}\"; set sliding.until = \"cycles\" to stop after cycles")
     st = built["stages"]
     if st.cycles is not None:
-        if sl.stroke is None:
+        if both_bodies.cycle_length(sl) is None:
             raise CaseError(f"key 'stages.cycles' = {list(st.cycles)} needs 'sliding.stroke' "
                             "(one cycle slides 2·stroke)")
         if any(b <= a for a, b in zip(st.cycles, st.cycles[1:])):
