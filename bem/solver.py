@@ -10,7 +10,7 @@ from scipy import optimize
 
 from wearcheck.cases import CaseError, RunResult, profiles, programme, reference, validity
 
-from . import track, wear
+from . import moving, track, wear
 from .operator import HalfSpace
 
 #: implicit Euler's and BDF2's step in ŝ when sliding.step_hat = "auto" (as
@@ -115,8 +115,8 @@ def supports(case) -> str | None:
     counterface, in gross slip, with any pressure exponent of the wear law;
     not fretting (partial slip).
     """
-    if case.counterface.wears:       # both bodies wearing: bem.track
-        return track.supports(case)
+    if case.counterface.wears:       # both bodies wearing: bem.track, bem.moving
+        return (moving if case.bem.track_model == "moving" else track).supports(case)
     if getattr(case, "fretting", None) is not None:
         return ("the BEM's wear run is gross slip only: its partial-slip solver "
                 "(bem.tangential) solves a fretting cycle on a given profile without wear "
@@ -128,7 +128,7 @@ def supports(case) -> str | None:
 def solve(case, progress=None) -> RunResult:
     """Run the BEM wear simulation of ``case`` (see :mod:`bem`)."""
     if case.counterface.wears:
-        return track.solve(case, progress)
+        return (moving if case.bem.track_model == "moving" else track).solve(case, progress)
     reason = supports(case)
     if reason is not None:
         raise CaseError(reason)

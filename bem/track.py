@@ -319,8 +319,12 @@ def largest_track_radius(case, sc: dict) -> float:
     return math.hypot(a_ball, 0.5 * (12.0 * ind.radius * section) ** (1.0 / 3.0))
 
 
-def setup(case, sc: dict) -> tuple[TrackModel, np.ndarray]:
-    """The model of ``case`` on its grid, and the pixel-centre coordinates (n,)."""
+def setup(case, sc: dict, spacing: float | None = None) -> tuple[TrackModel, np.ndarray]:
+    """The model of ``case`` on its grid, and the pixel-centre coordinates (n,).
+
+    ``spacing``: a pixel side at most the case's (the moving-contact model's,
+    which divides the stroke), instead of the case's.
+    """
     from .solver import MIN_PIXELS_IN_CONTACT
     from wearcheck.cases import profiles
     n = case.bem.grid
@@ -335,6 +339,8 @@ def setup(case, sc: dict) -> tuple[TrackModel, np.ndarray]:
         raise CaseError(f"key 'bem.grid' = {n}: only {a_small / dx:.1f} pixels span the unworn "
                         f"contact radius in a box that holds the worn track; at least "
                         f"{MIN_PIXELS_IN_CONTACT} are needed, i.e. bem.grid >= {need}")
+    if spacing is not None:
+        dx = min(dx, spacing)
     x = (np.arange(n) - n // 2) * dx
     X, Y = np.meshgrid(x, x, indexing="ij")
     f0 = profiles.height_xy(case.indenter, X, Y, case.table)

@@ -53,6 +53,10 @@ def check(built: dict) -> None:
     """The combinations of the counterface's wear keys and the motion (one-line CaseErrors)."""
     cf, sl = built["counterface"], built["sliding"]
     if not cf.wears:
+        if built["bem"].track_model != "long_stroke":
+            raise CaseError(f"key 'bem.track_model' = \"{built['bem'].track_model}\" applies "
+                            "to a counterface that wears; set counterface.wears = true or "
+                            "remove the key")
         for name in _RATE_KEYS:
             if getattr(cf, name) is not None:
                 raise CaseError(f"key 'counterface.{name}' given but 'counterface.wears' = "

@@ -252,6 +252,13 @@ class BEMSettings:
                          "contact radius: √2·a0 for a paraboloid under depth control (the "
                          "radius where f = d, complete wear), the predicted wear-scar radius "
                          "under force control; the long semi-axis for the ellipsoid")
+    track_model: str = key("long_stroke", choices=("long_stroke", "moving"),
+                           doc="counterface.wears: the long-stroke model (a groove h(y) "
+                               "along the track, steady in the ball's frame; one contact "
+                               "solve per step) or the moving-contact model (the ball "
+                               "travels over a grid fixed to the flat, turnarounds "
+                               "included; one contact solve per pixel of sliding: short "
+                               "runs)")
     tolerance: float = key(1e-6, positive=True, maximum=1e-2,
                            doc="complementarity tolerance of each contact solve: "
                                "max |min(p/p0, gap/d)| over the pixels (1e-6: on the paper "
