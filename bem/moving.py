@@ -87,7 +87,8 @@ def run(model: MovingModel, offsets, *, record=None, keep=None, middle=None, rin
     (default: the middle row). Returns the history (``s``, ``force``,
     ``depth``, ``contact_radius``, ``wear_center``, ``wear_volume``,
     ``wear_volume_counterface``, ``track_width``, ``track_depth``,
-    ``track_area`` (of the row ``middle``), ``max_pressure``,
+    ``track_area`` (of the row ``middle``), ``scar_length``, ``scar_width`` (the
+    ball's scar along and across the sliding), ``max_pressure``,
     ``cg_iterations``), the kept states (``ball_wear`` (K, n, n), ``flat_wear``
     (K, rows, n), ``pressure``, ``gap``, ``move``), counters and the largest wear of
     one move. ``ring`` = (ring index per pixel, rings, radii) adds ``scar_radius``
@@ -110,7 +111,7 @@ def run(model: MovingModel, offsets, *, record=None, keep=None, middle=None, rin
     hist = {k: [] for k in ("s", "force", "depth", "contact_radius", "wear_center",
                             "wear_volume", "wear_volume_counterface", "track_width",
                             "track_depth", "track_area", "max_pressure", "cg_iterations",
-                            "scar_radius")}
+                            "scar_radius", "scar_length", "scar_width")}
     kept = dict(ball_wear=[], flat_wear=[], pressure=[], gap=[], move=[])
     p, iterations, largest = None, 0, 0.0
 
@@ -137,6 +138,8 @@ def run(model: MovingModel, offsets, *, record=None, keep=None, middle=None, rin
             hist["track_width"].append(track_width(y, H[middle]))
             hist["track_depth"].append(float(np.max(H[middle])))
             hist["track_area"].append(float(np.sum(H[middle])) * dx)
+            hist["scar_length"].append(track_width(y, f[:, i0] - model.f0[:, i0]))
+            hist["scar_width"].append(track_width(y, f[i0, :] - model.f0[i0, :]))
             hist["max_pressure"].append(float(np.max(c.pressure)))
             hist["cg_iterations"].append(c.iterations)
             if ring is not None:

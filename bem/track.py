@@ -230,7 +230,8 @@ def run(model: TrackModel, plan: stepping.Plan, progress=None, *, y=None, ring=N
 
     Returns the history (the ball-only BEM's columns plus
     ``wear_volume_counterface``, ``track_width``, ``track_depth``,
-    ``track_area``), the stages (s, f, p, gap, depth, groove) and counters.
+    ``track_area``, and the ball's scar along and across the sliding,
+    ``scar_length`` and ``scar_width``, read as :func:`track_width`), the stages (s, f, p, gap, depth, groove) and counters.
     """
     n = model.op.n
     area = model.op.spacing**2
@@ -242,7 +243,8 @@ def run(model: TrackModel, plan: stepping.Plan, progress=None, *, y=None, ring=N
         raise SolverError("the unworn indenter carries no load")
     names = ("s", "force", "depth", "contact_radius", "wear_center", "wear_volume",
              "wear_volume_counterface", "track_width", "track_depth", "track_area",
-             "max_pressure", "cg_iterations", "complementarity_residual", "scar_radius")
+             "max_pressure", "cg_iterations", "complementarity_residual", "scar_radius",
+             "scar_length", "scar_width")
     hist = {k: [] for k in names}
     stages = []
     column = [0.0]      # the largest Σ_i p_ij seen: one pass wears K_flat·Δ times it
@@ -261,6 +263,8 @@ def run(model: TrackModel, plan: stepping.Plan, progress=None, *, y=None, ring=N
         hist["track_area"].append(section)
         hist["track_width"].append(track_width(y, st.groove))
         hist["track_depth"].append(float(np.max(st.groove)))
+        hist["scar_length"].append(track_width(y, w[:, j0]))
+        hist["scar_width"].append(track_width(y, w[i0, :]))
         hist["max_pressure"].append(float(np.max(st.p)))
         column[0] = max(column[0], float(np.max(st.p.sum(axis=0))))
         hist["cg_iterations"].append(st.iterations)
