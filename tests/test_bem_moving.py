@@ -58,23 +58,18 @@ def test_the_turnaround_ends_are_in_the_flat_map():
         assert 0.0 < depth[end] < 0.9 * depth[mid]
 
 
-def test_moving_contact_agrees_with_long_stroke_in_the_middle_of_the_track():
-    # ball_on_flat with both K = 1e-13, a 0.25 mm stroke (about 4 contact
-    # diameters), 6 cycles, 24² pixels of 6.4 µm (the same grid for both
-    # models; the moving one slides one pixel per move). The groove in the
-    # middle row of the moving model against the long-stroke groove h(y):
-    # within 2 % of its depth (measured 0.96 %: each pass wears 1.5 % of d0
-    # there, which the long-stroke model spreads continuously). The ball's
-    # wear within 4 % of its largest (measured 2.0 %: the moving ball also
-    # slides over the track's shallower ends, a/L of its sliding).
+def differences(stroke, cycles):
+    """The moving-contact model against the long-stroke one on the same grid and the same
+    sliding: max |Δ groove| in the track's middle row over the groove's depth, and
+    max |Δ ball wear| over its largest."""
     case = cases.load(BALL, ["counterface.wears=true", "counterface.specific_rate=1e-13",
                              "wear.k=2e-3", 'sliding.motion="reciprocating"',
-                             "sliding.stroke=2.5e-4", "sliding.cycles=6",
-                             "stages.cycles=[0, 6]", "bem.grid=24", "bem.box=3.0",
+                             f"sliding.stroke={stroke}", f"sliding.cycles={cycles}",
+                             f"stages.cycles=[0, {cycles}]", "bem.grid=24", "bem.box=3.0",
                              'sliding.scheme="bdf2"', "sliding.step_hat=0.05"])
     sc = reference.scales(case)
     base, _ = track.setup(case, sc)
-    travel, dx = moving.track_rows(case.sliding.stroke, base.op.spacing)
+    travel, dx = moving.track_rows(stroke, base.op.spacing)
     model, _x = track.setup(case, sc, spacing=dx)
     plan, _ = programme.stepping_plan(case, 0.05, sc)
     long = track.run(model, plan)
@@ -83,17 +78,34 @@ def test_moving_contact_agrees_with_long_stroke_in_the_middle_of_the_track():
                             flat_wear_rate=model.flat_wear_rate, rows=travel + n,
                             periodic=False, depth=None, force=model.force,
                             p_scale=model.p_scale, g_scale=model.g_scale, tol=model.tol)
-    offsets = moving.reciprocating_offsets(travel, 6)
+    offsets = moving.reciprocating_offsets(travel, cycles)
     mid = travel // 2 + n // 2
     mov = moving.run(mm, offsets, record=[0, len(offsets)], middle=mid)
+    assert mov["history"]["s"][-1] == pytest.approx(long["history"]["s"][-1], rel=1e-12)
     groove_long = long["stages"][-1][5]
     groove_moving = mov["states"]["flat_wear"][-1][mid]
-    assert np.max(np.abs(groove_moving - groove_long)) < 0.02 * groove_long.max()
     wear_long = long["stages"][-1][1] - model.f0
     wear_moving = mov["states"]["ball_wear"][-1]
-    assert np.max(np.abs(wear_moving - wear_long)) < 0.04 * wear_long.max()
-    # same sliding, same volumes
-    assert mov["history"]["s"][-1] == pytest.approx(long["history"]["s"][-1], rel=1e-12)
+    return (np.max(np.abs(groove_moving - groove_long)) / groove_long.max(),
+            np.max(np.abs(wear_moving - wear_long)) / wear_long.max())
+
+
+def test_moving_contact_agrees_with_long_stroke_in_the_middle_of_the_track():
+    # ball_on_flat with both K = 1e-13, 24² pixels of 6.4 µm (one grid for
+    # both models), the same 3 mm of sliding over a 0.25 mm stroke (about 4
+    # contact diameters, 6 cycles) and a 0.5 mm one (3 cycles). What the
+    # long-stroke model leaves out is the track's ends: the moving ball also
+    # slides over their shallower wear, a share ~a/L of its sliding. So the
+    # two agree in the middle of the track (groove within 2 % of its depth,
+    # ball within 4 % of its wear; measured 0.96 % and 2.0 % at 0.25 mm) and
+    # agree better as the track lengthens (at 0.5 mm measured 0.40 % and
+    # 0.84 %: 0.41 of the shorter stroke's; asserted below 0.6, a/L halves).
+    # Halving the wear per pass instead (K/2, 12 cycles) left them at 1.0 %
+    # and 1.9 %: the per-pass wear (1.5 % of d0 here) is not what differs.
+    short = differences(2.5e-4, 6)
+    long = differences(5e-4, 3)
+    assert short[0] < 0.02 and short[1] < 0.04, short
+    assert long[0] < 0.6 * short[0] and long[1] < 0.6 * short[1], (short, long)
 
 
 def test_what_the_moving_model_refuses():
