@@ -74,3 +74,15 @@ def test_mdr_and_fem_say_why_they_skip_a_wearing_counterface():
         reason = registry.get(name).supports(case)
         assert reason is not None and "counterface.wears" in reason and "BEM" in reason
     assert "bem" in registry.supporting(case)
+
+
+def test_compare_names_the_skipped_solvers(tmp_path, capsys):
+    # only the BEM wears a counterface: compare refuses with one line that
+    # gives each other solver's reason (exit 2, a case the tool cannot compare)
+    from wearcheck.comparisons.cli import main
+    code = main(["compare", "ball_on_flat_steel", "--out", str(tmp_path / "c"), "--quiet"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and "\n" not in err
+    assert "only bem can" in err and "mdr: counterface.wears" in err \
+        and "fem: counterface.wears" in err
+    assert not (tmp_path / "c").exists()
