@@ -284,6 +284,9 @@ def solve(case, progress=None):
                 archard_balance=track.balance(hist, model.wear_rate, model.flat_wear_rate,
                                               case.loading.force),
                 **counters)
+    remark = track.coarse_wear_remark(counters["largest_wear_per_move"], sc["d0"], "move")
+    if remark:
+        info["warnings"] = [remark]
     if progress is not None:
         progress(1.0, "done")
     return RunResult(history=hist, stage_s=np.asarray(st["move"], float) * dx, r=r, f=f_avg,

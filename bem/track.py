@@ -50,6 +50,9 @@ from .operator import HalfSpace
 
 #: fixed-step schemes' default step in ŝ (as the ball-only BEM's)
 DEFAULT_STEP_HAT = 0.1
+#: the wear of one pass (or move), over d0, beyond which a run says that its
+#: model's continuous wear is coarse
+COARSE_PASS = 0.05
 
 
 class TrackOperator:
@@ -374,6 +377,18 @@ def step_hat_of(case, limit_hat: float) -> float:
     return float(sl.step_hat)
 
 
+def coarse_wear_remark(largest: float, d0: float, unit: str) -> str | None:
+    """The remark when one pass (move) wears the counterface by more than
+    :data:`COARSE_PASS` of d0, else None."""
+    if not largest > COARSE_PASS * d0:
+        return None
+    return (f"one {unit} wears the counterface by up to {largest / d0:.3g} d0 (more than "
+            f"{COARSE_PASS:g}): the {'long-stroke' if unit == 'pass' else 'moving-contact'} "
+            f"model takes that wear as continuous, which it no longer is; "
+            + ("a short run is better solved with bem.track_model = \"moving\""
+               if unit == "pass" else "refine bem.grid (a move is one pixel)"))
+
+
 def balance(history: dict, K_ball: float, K_flat: float, force=None) -> dict:
     """The global Archard balance of a run: each body loses K_body·F·s.
 
@@ -438,8 +453,12 @@ def solve(case, progress=None) -> RunResult:
                 not_modelled="the track's turnaround ends and curvature, the wear within "
                              "one pass (largest_wear_per_pass, K_flat ∫ p dx at its largest, "
                              "against the approach: the model wants it small)")
-    if watch.remarks:
-        info["warnings"] = watch.remarks
+    remarks = list(watch.remarks)
+    remark = coarse_wear_remark(out["counters"]["largest_wear_per_pass"], sc["d0"], "pass")
+    if remark:
+        remarks.append(remark)
+    if remarks:
+        info["warnings"] = remarks
     info.update(out["counters"], operator_applications=model.op.applications,
                 max_complementarity_residual=float(np.max(hist["complementarity_residual"])))
     if progress is not None:

@@ -193,3 +193,15 @@ def test_what_the_track_model_refuses():
     case = ball_case(scheme="explicit", step_hat=1e3)
     with pytest.raises(cases.CaseError, match="largest stable step"):
         bem.solve(case)
+
+
+def test_a_coarse_pass_is_said():
+    # one pass wearing more than 5 % of d0: the long-stroke model's continuous
+    # groove is coarse, and the run says so (a 20 µm stroke, K_flat 3e-13:
+    # K_flat·p0·1.5a ≈ 0.07 d0 per pass)
+    case = ball_case(ratio=300, cycles=2).derive({"sliding.stroke": 2e-5})
+    res = bem.solve(case)
+    d0 = reference.scales(case)["d0"]
+    assert res.info["largest_wear_per_pass"] > 0.05 * d0
+    assert any("one pass wears the counterface" in w for w in res.info["warnings"])
+    assert "warnings" not in bem.solve(ball_case()).info
