@@ -147,7 +147,9 @@ class Sliding:
     until: str = key("force_fraction", choices=("force_fraction", "distance", "cycles"),
                      doc="stop when the force has fallen below a fraction of its start, "
                          "after a total sliding distance, or after a number of reciprocating "
-                         "cycles (s = 2·stroke·cycles, gross slip)")
+                         "cycles (s = 2·stroke·cycles, gross slip; revolutions of a "
+                         "disc, s = 2π·track_radius·cycles, with sliding.motion = "
+                         "\"unidirectional\")")
     force_fraction: float = key(0.01, minimum=0.0, maximum=1.0, open_minimum=True,
                                 open_maximum=True,
                                 doc="until = force_fraction: stop once F < force_fraction * F(0)")
