@@ -303,6 +303,9 @@ def supports(case) -> str | None:
                 "the counterface by Reye–Archard's law (n = 1) only")
     if getattr(case, "fretting", None) is not None:
         return "a counterface that wears needs gross sliding ([sliding]), not [fretting]"
+    if getattr(case.bem, "coupling", False):
+        return ("key 'bem.coupling' = true: the friction coupling is not modelled with a "
+                "counterface that wears; set bem.coupling = false")
     return None
 
 

@@ -117,5 +117,5 @@ def test_what_the_moving_model_refuses():
     assert "sliding.until" in bem.supports(case.derive({"loading.control": "depth",
                                                         "loading.depth": 2e-7,
                                                         "sliding.until": "force_fraction"}))
-    with pytest.raises(CaseError, match="'bem.track_model' = \"moving\" applies"):
+    with pytest.raises(CaseError, match="bem.track_model applies to a counterface that wears"):
         cases.load(BALL, ['bem.track_model="moving"'])

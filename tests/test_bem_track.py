@@ -190,6 +190,7 @@ def test_what_the_track_model_refuses():
     assert "pressure_exponent" in bem.supports(case)
     with pytest.raises(cases.CaseError, match="pressure_exponent"):
         bem.solve(case)
+    assert "bem.coupling" in bem.supports(ball_case().derive({"bem.coupling": True}))
     case = ball_case(scheme="explicit", step_hat=1e3)
     with pytest.raises(cases.CaseError, match="largest stable step"):
         bem.solve(case)

@@ -26,17 +26,21 @@ def test_counterface_rate_from_specific_rate_or_k():
 
 
 @pytest.mark.parametrize("overrides, words", [
-    (["counterface.wears=true"], "missing key 'counterface.specific_rate'"),
-    (["counterface.k=1e-5"], "'counterface.wears' = false"),
-    (["counterface.hardness=1e9"], "'counterface.wears' = false"),
-    (["counterface.wears=true", "counterface.k=1e-5"], "needs 'counterface.hardness'"),
+    (["counterface.wears=true"], "missing key 'sliding.motion'"),
+    (["counterface.wears=true", 'sliding.motion="reciprocating"'],
+     "needs its wear rate; give counterface.specific_rate"),
+    (["counterface.k=1e-5"], "given but counterface.wears = false"),
+    (["counterface.hardness=1e9"], "given but counterface.wears = false"),
+    (["counterface.wears=true", "counterface.k=1e-5", 'sliding.motion="reciprocating"'],
+     "missing key 'counterface.hardness'"),
     (["counterface.wears=true", "counterface.k=1e-5", "counterface.specific_rate=1e-15",
-      "counterface.hardness=1e9"], "both given"),
+      "counterface.hardness=1e9", 'sliding.motion="reciprocating"'], "both given"),
     (["counterface.wears=true", "counterface.specific_rate=1e-15"],
      "missing key 'sliding.motion'"),
     (['sliding.motion="unidirectional"'], "missing key 'sliding.track_radius'"),
-    (["sliding.track_radius=0.01"], "needs sliding.motion = \"unidirectional\""),
+    (["sliding.track_radius=0.01"], "set sliding.motion = \"unidirectional\""),
     (['sliding.motion="circular"'], "must be one of"),
+    (['bem.track_model="moving"'], "bem.track_model applies to a counterface that wears"),
 ])
 def test_bad_combinations_are_one_line(overrides, words):
     with pytest.raises(CaseError) as exc:
