@@ -18,6 +18,7 @@ from .schema import (BEMSettings, CCXSettings, did_you_mean, OPTIONAL_SECTIONS, 
                      MDRSettings, Sliding, Stages, Wear, format_value, build_section,
                      key_problem,
                      section_fields, toml_string)
+from . import both_bodies
 
 
 @dataclass(frozen=True)
@@ -98,7 +99,7 @@ class Case:
         if sl.until == "distance":
             return sl.distance
         if sl.until == "cycles":
-            return 2.0 * sl.stroke * sl.cycles
+            return self.cycle_length * sl.cycles
         return None
 
     @property
@@ -115,8 +116,20 @@ class Case:
 
     @property
     def cycles_per_metre(self) -> float | None:
-        """Cycles per metre of sliding, 1/(2·stroke); None without a stroke."""
-        return None if self.sliding.stroke is None else 0.5 / self.sliding.stroke
+        """Cycles per metre of sliding, 1/(2·stroke) (1/(2π·track_radius) for a
+        unidirectional track); None without either."""
+        return None if self.cycle_length is None else 1.0 / self.cycle_length
+
+    @property
+    def cycle_length(self) -> float | None:
+        """Sliding distance of one cycle [m]: 2·stroke, or one revolution 2π·track_radius
+        (sliding.motion = "unidirectional"); None without either."""
+        return both_bodies.cycle_length(self.sliding)
+
+    @property
+    def counterface_wear_rate(self) -> float | None:
+        """K_flat [m³/(N·m) = 1/Pa] of a counterface that wears, else None."""
+        return both_bodies.counterface_wear_rate(self.counterface, self.wear)
 
     def replace(self, **sections) -> "Case":
         """A copy with whole sections replaced, validated like a case file.
@@ -352,7 +365,7 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
         # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
         from . import reference
         per_m = reference.scales(case)["s_hat_per_m"]
-        s = st.s if st.s is not None else [c * 2.0 * case.sliding.stroke for c in st.cycles]
+        s = st.s if st.s is not None else [c * case.cycle_length for c in st.cycles]
         case = replace(case, stages=replace(st, s_hat=tuple(x * per_m for x in s)))
         derived += ("stages.s_hat",)
     return replace(case, warnings=_warnings(case), derived=derived)

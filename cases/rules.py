@@ -88,12 +88,42 @@ RULES = (
     Excludes(Is("loading.control", "depth"), "loading.force"),
     Requires(Is("loading.control", "force"), "loading.force"),
     Excludes(Is("loading.control", "force"), "loading.depth"),
+    # both bodies wearing (docs/both-bodies.md): the counterface's wear rate, its track.
+    # (A wearing counterface in a fretting run is refused by [fretting]'s exclusion
+    # of a [sliding] that gives sliding.motion.)
+    Excludes(Is("counterface.wears", False),
+             ("counterface.specific_rate", "counterface.k", "counterface.hardness"),
+             hint="set counterface.wears = true to wear the counterface too, or remove it"),
+    Requires(Is("counterface.wears", True), "sliding.motion",
+             why="the counterface wears along the track the motion traces: \"reciprocating\" "
+                 "or \"unidirectional\""),
+    Requires(Is("sliding.motion", "reciprocating"), "sliding.stroke", why="one way"),
+    Requires(Is("sliding.motion", "unidirectional"), "sliding.track_radius"),
+    Excludes(Is("sliding.motion", "unidirectional"), "sliding.stroke",
+             why="a circular track of sliding.track_radius; a cycle is one revolution"),
+    Excludes(Is("sliding.motion", (None, "reciprocating")), "sliding.track_radius",
+             message="key '{key}' = {value} given but {when}: the radius of a pin-on-disc "
+                     "track; remove it, or set sliding.motion = \"unidirectional\""),
+    OneOf(("counterface.specific_rate", "counterface.k"),
+          hint="give one (K_flat = counterface.k·wear.mu/counterface.hardness)"),
+    Forbids((Is("counterface.wears", True), Absent("counterface.specific_rate"),
+             Absent("counterface.k")),
+            why="a counterface that wears needs its wear rate",
+            hint="give counterface.specific_rate (m^3/(N m)) or counterface.k with "
+                 "counterface.hardness"),
+    Requires(Given("counterface.k"), "counterface.hardness",
+             why="K_flat = k·wear.mu/counterface.hardness"),
+    Forbids((Is("counterface.wears", False), Is("bem.track_model", "moving")),
+            why="bem.track_model applies to a counterface that wears",
+            hint="set counterface.wears = true or remove bem.track_model"),
     # the end of the run
     Requires(Is("sliding.until", "distance"), "sliding.distance"),
     Excludes(Is("sliding.until", "force_fraction"), "sliding.distance"),
     Excludes(Is("sliding.until", "cycles"), "sliding.distance",
              why="the distance is 2·stroke·cycles"),
-    Requires(Is("sliding.until", "cycles"), ("sliding.stroke", "sliding.cycles")),
+    Requires(Is("sliding.until", "cycles"), "sliding.cycles"),
+    # (a disc's cycle is a revolution of its track_radius, below)
+    Requires((Is("sliding.until", "cycles"), Absent("sliding.track_radius")), "sliding.stroke"),
     Excludes.unless(Is("sliding.until", "cycles"), "sliding.cycles"),
     Forbids((Is("sliding.until", "force_fraction"), Is("loading.control", "force"),
              Absent("fretting")),
@@ -106,7 +136,8 @@ RULES = (
                "m^3/(N m) (V = K·F·s), the other is derived"),
     # the stages, and what needs a stroke
     OneOf(("stages.s_hat", "stages.s", "stages.cycles"), hint="give the stages one way only"),
-    Requires(Given("stages.cycles"), "sliding.stroke", why="one cycle slides 2·stroke"),
+    Requires((Given("stages.cycles"), Absent("sliding.track_radius")), "sliding.stroke",
+             why="one cycle slides 2·stroke"),
     Requires(Is("wear.tangential_correction", True), "sliding.stroke",
              why="the correction is the sliding each stroke end loses while the tangential "
                  "springs reverse, 2μq/G* per stroke, so it depends on the stroke",

@@ -40,12 +40,18 @@ RUN_FILES = (
                                   "render), complete, writer pid and host; only such a path is "
                                   "ever replaced, and only by the same kind"),
     Item("report.md", "", "fretting runs: loops, stick radius, energy and wear against cycles, "
-                          "checked against the closed forms"),
+                          "checked against the closed forms; both bodies wearing: the volumes "
+                          "beside the ASTM G133/G99 formulas"),
     Item("report.html", "", "the same, with its figures embedded"),
     Item("fretting_loops.png", "", "fretting runs: Q/μF against u/u* for the kept cycles, "
                                    "with the Mindlin–Deresiewicz loop"),
     Item("fretting_history.png", "", "fretting runs: stick radius, energy per cycle and worn "
                                      "volume against cycles"),
+    Item("track_profile.csv", "", "both bodies wearing: the track's cross-section per stage "
+                                  "(stage, s, cycles, y, depth, height), profilometer-style"),
+    Item("track_profiles.png", "", "both bodies wearing: the track's cross-sections"),
+    Item("counterface_wear.pvd", "", "both bodies wearing: the counterface's wear map per "
+                                     "stage, ImageData counterface_wear_KKK.vti"),
 )
 
 #: history.csv columns every solver writes, in this order
