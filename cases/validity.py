@@ -122,9 +122,12 @@ def check_planned(case, fem_sphere: bool = False) -> None:
     a0 = reference.scales(case)["a0"]
     n = case.wear.pressure_exponent
     p = 2.0 * (n + 1.0)
-    # the asymptote's b^p grows linearly in s: the sliding at which it reaches R
+    # the paraboloid law's b^p grows linearly in s: the sliding at which it reaches R
+    # (the law predicted_scar_radius sizes with; it lies above the exact cap, so the
+    # cycles proposed err on the safe side)
     unit = reference.worn_sphere_asymptote(end.radius, case.loading.force, 1.0, case.wear_rate,
-                                           exponent=n, hardness=case.wear.hardness)
+                                           exponent=n, hardness=case.wear.hardness,
+                                           profile="paraboloid")
     s_reach = (end.radius**p - a0**p) / float(unit["scar_radius"]) ** p
     # the scar runs up to 2 % beyond the asymptote: a run kept 2 % inside it stays on the sphere
     s_safe = max((end.radius / 1.02) ** p - a0**p, 0.0) / float(unit["scar_radius"]) ** p

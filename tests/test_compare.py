@@ -200,7 +200,7 @@ def test_real_solvers_made_to_disagree_fail_with_exit_code_1(tmp_path, capsys):
     assert "FAILED" in capsys.readouterr().err
     m = json.loads((out / "metrics.json").read_text())
     assert not m["passed"]
-    assert not m["pairs"]["fem"]["stages"][0]["checks"]["profile_max"]["passed"]
+    assert not m["pairs"]["fem"]["stages"][0]["checks"]["profile_contact_max"]["passed"]
     md = (out / "report.md").read_text()
     assert "**FAIL**" in md
     # the reference is the coarse one here: its resolution key is the fix named, with its
