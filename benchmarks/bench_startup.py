@@ -23,18 +23,11 @@ from pathlib import Path
 import fresh
 
 
-def wearcheck_command() -> list:
-    """The ``wearcheck`` console script of this interpreter's environment, or
-    ``python -m wearcheck`` where it is not installed."""
-    script = Path(sys.executable).with_name("wearcheck")
-    return [str(script)] if script.exists() else [sys.executable, "-m", "wearcheck"]
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=9)
     args = ap.parse_args()
-    py, wc = sys.executable, wearcheck_command()
+    py, wc = sys.executable, fresh.wearcheck_command()
     out = Path(tempfile.mkdtemp(prefix="bench-startup-"))
     commands = [
         ("floor", [py, "-c", "import numpy, scipy.sparse, scipy.linalg"], None),

@@ -6,16 +6,26 @@ run falls on all of them alike; the table gives the median and the minimum of
 each command's wall time and CPU time (user + system of the child) over the
 rounds, and each command's ratio to the baseline (the first command) per
 round, median and range. The load average is read before and after.
+
+Every process gets Python's bytecode cache in a temporary folder, as an
+installed package has its modules compiled: a ``PYTHONDONTWRITEBYTECODE`` in
+the environment would otherwise compile wearcheck's modules from source in
+every process (0.1-0.2 s of each start-up), which no user's install does.
+The warm-up round fills it.
 """
 
 from __future__ import annotations
 
 import os
 import resource
+import shutil
 import statistics
 import subprocess
+import sys
+import tempfile
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 
 @dataclass
@@ -42,22 +52,41 @@ def run_once(cmd: list, env=None, cwd=None) -> tuple[float, float, str]:
     return wall, cpu, out.stdout
 
 
+def wearcheck_command() -> list:
+    """The ``wearcheck`` console script of this interpreter's environment, or
+    ``python -m wearcheck`` where it is not installed."""
+    script = Path(sys.executable).with_name("wearcheck")
+    return [str(script)] if script.exists() else [sys.executable, "-m", "wearcheck"]
+
+
+def bytecode_env(cache: Path) -> dict:
+    """This environment with Python's bytecode cache on, kept in ``cache``."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env["PYTHONPYCACHEPREFIX"] = str(cache)
+    return env
+
+
 def alternate(commands: list, rounds: int, warmup: int = 1) -> list[Timed]:
     """Run ``commands`` — (name, argv, parse or None) — in turn, ``rounds`` times.
 
     ``parse(stdout)`` may return a dict of what the run reported (e.g. its
     ``solve_seconds``), kept per round in ``Timed.extra``. The first
-    ``warmup`` rounds (the disk cache filling) are not kept.
+    ``warmup`` rounds (the disk and bytecode caches filling) are not kept.
     """
     timed = [Timed(name) for name, _, _ in commands]
-    for k in range(warmup + rounds):
-        for t, (_, cmd, parse) in zip(timed, commands):
-            wall, cpu, stdout = run_once(cmd)
-            if k < warmup:
-                continue
-            t.wall.append(wall)
-            t.cpu.append(cpu)
-            t.extra.append(parse(stdout) if parse else {})
+    cache = Path(tempfile.mkdtemp(prefix="bench-pycache-"))
+    env = bytecode_env(cache)
+    try:
+        for k in range(warmup + rounds):
+            for t, (_, cmd, parse) in zip(timed, commands):
+                wall, cpu, stdout = run_once(cmd, env=env)
+                if k < warmup:
+                    continue
+                t.wall.append(wall)
+                t.cpu.append(cpu)
+                t.extra.append(parse(stdout) if parse else {})
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
     return timed
 
 
