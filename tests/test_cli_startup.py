@@ -61,6 +61,21 @@ def test_a_subcommand_loads_only_its_own_module():
     assert _heavy(modules) == []
 
 
+def test_an_mdr_run_loads_only_what_it_uses(tmp_path):
+    # the whole command, run directory written: none of the heavy packages,
+    # no other solver, and no psutil (the memory check reads /proc/meminfo
+    # where there is one)
+    out = tmp_path / "hertz"
+    code = ("from wearcheck.comparisons.cli import main\n"
+            f"assert main(['run', 'hertz', '--solver', 'mdr', '--quiet', '--out', {str(out)!r}]) == 0\n")
+    modules = _loaded_after(code)
+    assert (out / "meta.json").is_file()
+    assert _heavy(modules) == []
+    assert not any(m.startswith(("wearcheck.fem", "wearcheck.bem")) for m in modules)
+    if sys.platform.startswith("linux"):
+        assert "psutil" not in modules
+
+
 def test_every_subcommand_module_is_in_the_table():
     modules = {i.name for i in pkgutil.iter_modules(cli.__path__) if not i.name.startswith("_")}
     assert {name.replace("-", "_") for name in cli.SUBCOMMANDS} == modules
