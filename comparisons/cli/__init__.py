@@ -21,6 +21,7 @@ import importlib
 import os
 import pkgutil
 import re
+import select
 import signal
 import sys
 import warnings
@@ -62,6 +63,51 @@ SUBCOMMANDS = {
     "run": "run one solver on a case and write a run directory",
     "sweep": "one run per value of one or more case keys, on Dask",
 }
+
+
+#: subcommand -> examples shown at the end of its --help: (command line, what it
+#: does). Every one must parse (tests/test_cli_text.py).
+EXAMPLES = {
+    "cases": [("wearcheck cases", "the shipped cases, one line each"),
+              ("wearcheck cases paper > my_case.toml", "copy one to start your own")],
+    "compare": [("wearcheck compare paper --out runs/paper", "MDR, FEM and BEM on the paper's "
+                 "case, with verdicts"),
+                ("wearcheck compare paper --solvers mdr,fem --set wear.mu=0.5",
+                 "two solvers, one key changed")],
+    "export": [("wearcheck export runs/paper-fem --revolve 36",
+                "ParaView files, the FEM fields revolved into a 3D solid")],
+    "fretting-map": [("wearcheck fretting-map fretting --vary fretting.amplitude=0.1e-6,0.3e-6,"
+                      "1e-6 --set fretting.cycles=1000", "partial or gross slip, and the wear "
+                      "per cycle, at three amplitudes")],
+    "mesh": [("wearcheck mesh paper", "the FEM mesh of the paper's case (cached)")],
+    "refine": [("wearcheck refine paper --solver mdr --levels 200,400,800",
+                "three MDR grids: orders and converged level")],
+    "render": [("wearcheck render runs/paper-mdr", "PNG pictures of a run directory")],
+    "run": [("wearcheck run paper --solver mdr", "the MDR on the paper's case, into "
+             "runs/paper-mdr"),
+            ("wearcheck run my_case.toml --solver fem --set wear.mu=0.5 --out runs/mu-0.5",
+             "a case file of your own, one key changed"),
+            ("wearcheck run hertz --solver mdr --json", "a summary on stdout as JSON")],
+    "sweep": [("wearcheck sweep paper --vary wear.mu=0.2,0.3,0.5 --solver mdr",
+               "one run per value, summarised in sweep.csv")],
+}
+
+
+def _epilog(command: str) -> str | None:
+    """The examples of ``command`` as its help's last section."""
+    lines = [f"  {line}\n      {what}" for line, what in EXAMPLES.get(command, ())]
+    return "examples:\n" + "\n".join(lines) if lines else None
+
+
+class _HelpFormatter(argparse.HelpFormatter):
+    """argparse's, with an indented paragraph (the examples) kept as written."""
+
+    def _fill_text(self, text, width, indent):
+        paragraphs = text.split("\n\n")
+        return "\n\n".join(
+            "\n".join(indent + line for line in part.splitlines())
+            if part.startswith("examples:") else super(_HelpFormatter, self)._fill_text(
+                part, width, indent) for part in paragraphs)
 
 
 def module_name(command: str) -> str:
@@ -155,10 +201,29 @@ def build_parser(commands=None) -> argparse.ArgumentParser:
         module = _load(name)
         p = module.add_parser(sub)
         p.description = plain(p.description)
+        p.epilog, p.formatter_class = _epilog(name), _HelpFormatter
         for action in p._actions:
             action.help = plain(action.help)
         p.set_defaults(_main=module.main)
     return parser
+
+
+def _reader_gone() -> bool:
+    """Whether standard output is a pipe whose reader has closed it
+    (``wearcheck cases | head -1``); if so, what is left to write goes nowhere,
+    quietly, as for any command line tool."""
+    try:
+        fd = sys.stdout.fileno()
+        poller = select.poll()          # a pipe without a reader polls as an error
+        poller.register(fd, select.POLLOUT)
+        if not any(events & select.POLLERR for _, events in poller.poll(0)):
+            return False
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, fd)
+        os.close(devnull)
+        return True
+    except (OSError, ValueError, AttributeError):   # no fd, no poll (Windows)
+        return False
 
 
 def _command(argv: list) -> str | None:
@@ -188,7 +253,13 @@ def main(argv=None) -> int:
             # wearcheck's own remarks are printed as "note:" lines
             warnings.simplefilter("ignore")
             os.environ.setdefault("PYTHONWARNINGS", "ignore")  # Dask worker processes
-            return int(args._main(args) or 0)
+            code = int(args._main(args) or 0)
+            sys.stdout.flush()     # a reader that has gone shows here, not at exit
+            return code
+    except BrokenPipeError:
+        if not _reader_gone():
+            raise
+        return 0
     except WearcheckError as exc:
         print(f"{name}: error: {_one_line(exc)}", file=sys.stderr)
         return exc.exit_code
