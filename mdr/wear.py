@@ -159,14 +159,16 @@ def compliance_block(model: Model, n: int) -> np.ndarray:
     The matrix is sqrt(Δt)/E* times one of the grid size alone, so that one
     is built once and shared by every grid a growing domain passes through and
     every step size of an adaptive run: building it costs as much as
-    factorising. It is built twice as large as asked (at most the whole grid),
-    since contacts grow: the paper case at N = 800 built it three times
-    (350, 525, 788 nodes; 70 ms) where one build of 700 takes 20 ms.
+    factorising. It is built twice as large as asked, since contacts grow, or
+    for the whole grid where that would be more than half of it (the contact
+    reaches 80 % of the grid before the grid grows): the paper case at N = 800
+    built it three times (350, 525, 788 nodes; 70 ms) where one build of 700
+    takes 20 ms, then twice (574, 801), now once.
     """
     unit = _UNIT_COMPLIANCE.get("C")
     if unit is None or len(unit) < n:
         want = 2 * max(n, len(unit) if unit is not None else 0)
-        size = max(n, min(want, len(model.x)))
+        size = max(n, min(want if 2 * want < len(model.x) else len(model.x), len(model.x)))
         unit = _UNIT_COMPLIANCE["C"] = transforms.compliance_matrix(size, 1.0, 1.0)
     return unit[:n, :n] * (math.sqrt(model.dt) / model.E_star)
 
@@ -618,7 +620,8 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
             # sets of successive iterations differ by a node or two at the edge
             # (from the step's start pressure instead, each GMRES pass took
             # 8-10 iterations at N = 25600, now about half that)
-            x0 = np.r_[x0[:n], np.full(max(n - len(x0), 0), x0[-1] if len(x0) else 0.0)]
+            x0 = np.concatenate((x0[:n], np.full(max(n - len(x0), 0),
+                                                 x0[-1] if len(x0) else 0.0)))
         rtol = system.rtol
         if model.force is None:
             d = model.depth
