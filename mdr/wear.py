@@ -159,16 +159,14 @@ def compliance_block(model: Model, n: int) -> np.ndarray:
     The matrix is sqrt(Δt)/E* times one of the grid size alone, so that one
     is built once and shared by every grid a growing domain passes through and
     every step size of an adaptive run: building it costs as much as
-    factorising. It is built twice as large as asked, since contacts grow, or
-    for the whole grid where that would be more than half of it (the contact
-    reaches 80 % of the grid before the grid grows): the paper case at N = 800
-    built it three times (350, 525, 788 nodes; 70 ms) where one build of 700
-    takes 20 ms, then twice (574, 801), now once.
+    factorising. It is built twice as large as asked (at most the whole grid),
+    since contacts grow: the paper case at N = 800 built it three times
+    (350, 525, 788 nodes; 70 ms) where one build of 700 takes 20 ms.
     """
     unit = _UNIT_COMPLIANCE.get("C")
     if unit is None or len(unit) < n:
         want = 2 * max(n, len(unit) if unit is not None else 0)
-        size = max(n, min(want if 2 * want < len(model.x) else len(model.x), len(model.x)))
+        size = max(n, min(want, len(model.x)))
         unit = _UNIT_COMPLIANCE["C"] = transforms.compliance_matrix(size, 1.0, 1.0)
     return unit[:n, :n] * (math.sqrt(model.dt) / model.E_star)
 
