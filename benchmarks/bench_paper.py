@@ -1,6 +1,6 @@
 """The paper case as users run it, against the paper's explicit scheme (issue 26 §2).
 
-    python benchmarks/bench_paper.py [--rounds 7]
+    python benchmarks/bench_paper.py [--rounds 7] [--other PYTHON]
 
 Alternates, in fresh processes round by round, the baseline — the paper's
 explicit scheme in plain vectorised numpy at N = 800 (``bench_mdr.py``'s
@@ -13,6 +13,9 @@ baseline's stepping loop; the run's ``solve_seconds`` from its
 computations per round; and the same first solve in a fresh process timed
 in CPU seconds as well (the load of a shared machine inflates wall times
 unevenly). Target: ``solve_seconds`` <= 0.1 of the baseline.
+
+``--other PYTHON``: also time ``wearcheck run paper --solver mdr`` of another
+environment (e.g. one with the main branch installed), in the same rounds.
 
 Every process gets a bytecode cache in a temporary folder (as an installed
 package has its modules compiled), also where ``PYTHONDONTWRITEBYTECODE`` is set.
@@ -66,6 +69,8 @@ def main():
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--baseline-child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--solve-child", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--other", metavar="PYTHON",
+                    help="also time the wearcheck command of this interpreter's environment")
     args = ap.parse_args()
     if args.baseline_child:
         baseline_child()
@@ -92,12 +97,21 @@ def main():
         ("the same solve, timed in CPU seconds", [py, __file__, "--solve-child"],
          lambda stdout: json.loads(stdout.strip().splitlines()[-1])),
     ]
+    if args.other:
+        other_dir = out / "other"
+
+        def other_parse(_stdout):
+            meta = json.loads((other_dir / "meta.json").read_text(encoding="utf-8"))
+            return {"seconds": meta["solve_seconds"]}
+        commands.append((f"{args.other}: wearcheck run paper --solver mdr",
+                         [*fresh.wearcheck_command(args.other), "run", "paper", "--solver",
+                          "mdr", "--quiet", "--out", str(other_dir)], other_parse))
     print(f"# bench_paper: {fresh.load()} (before)\n")
     try:
         timed = fresh.alternate(commands, args.rounds)
     finally:
         shutil.rmtree(out, ignore_errors=True)
-    base, run, cpu = timed
+    base, run, cpu = timed[:3]
     b = [e["seconds"] for e in base.extra]
     r = [e["seconds"] for e in run.extra]
     b_cpu, r_cpu = [e["cpu"] for e in base.extra], [e["cpu"] for e in cpu.extra]
@@ -108,6 +122,11 @@ def main():
                                                        r_cpu)):
         print(f"| {t.name} | {fresh.spread(v)} | {fresh.spread(c) if c else '—'} | "
               f"{statistics.median(t.wall):.3f} | {statistics.median(t.cpu):.3f} |")
+    for t in timed[3:]:
+        v = [e["seconds"] for e in t.extra]
+        print(f"| {t.name} | {fresh.spread(v)} | — | {statistics.median(t.wall):.3f} | "
+              f"{statistics.median(t.cpu):.3f} |")
+        print(f"\n(its solve_seconds / baseline per round: {fresh.spread(fresh.ratios(v, b))})")
     last = run.extra[-1]
     print(f"\nsolve_seconds / baseline per round: {fresh.spread(fresh.ratios(r, b))} "
           f"(target <= 0.1); in CPU seconds: {fresh.spread(fresh.ratios(r_cpu, b_cpu))}; "

@@ -52,11 +52,12 @@ def run_once(cmd: list, env=None, cwd=None) -> tuple[float, float, str]:
     return wall, cpu, out.stdout
 
 
-def wearcheck_command() -> list:
-    """The ``wearcheck`` console script of this interpreter's environment, or
-    ``python -m wearcheck`` where it is not installed."""
-    script = Path(sys.executable).with_name("wearcheck")
-    return [str(script)] if script.exists() else [sys.executable, "-m", "wearcheck"]
+def wearcheck_command(python: str | None = None) -> list:
+    """The ``wearcheck`` console script of the environment of ``python`` (this
+    interpreter by default), or ``python -m wearcheck`` where it is not installed."""
+    python = python or sys.executable
+    script = Path(python).with_name("wearcheck")
+    return [str(script)] if script.exists() else [python, "-m", "wearcheck"]
 
 
 def bytecode_env(cache: Path) -> dict:
