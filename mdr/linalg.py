@@ -213,7 +213,7 @@ class NestedLU:
             raise SolverError("implicit wear step: the contact matrix factorisation failed")
         self.lu, self.n = lu, m
         # the factors' address and leading dimension for BLAS, read once per
-        # growth (ndarray.ctypes costs as much as a small triangular solve)
+        # growth (ndarray.ctypes is slow for a per-solve call; docs/performance.md)
         self._address, self._lda = lu.ctypes.data, ctypes.c_int(lu.shape[0])
         if _DTRSV is None:
             r, c = np.tril_indices(m)           # ordered by r, then c

@@ -358,7 +358,7 @@ class ImplicitSystem:
         """Whether :meth:`solve` with this sigma is a direct solve (no GMRES)."""
         if not self.nested:
             return False
-        if not isinstance(sigma, np.ndarray):      # (np.ndim costs µs a call)
+        if not isinstance(sigma, np.ndarray):      # (not np.ndim: slow in this hot path)
             return sigma == self.sigma
         return bool(np.all(sigma == self.sigma))
 

@@ -336,7 +336,8 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
                 base = y if corr is None else y + corr
                 sub = Substep("full", regular, s, hn, state)
                 full = problem.implicit(state, base, hn, 1.0, sub)
-                # (built directly: dataclasses.replace costs 30 µs a call)
+                # (built directly: dataclasses.replace, twice a step, was a
+                # visible share of a small run; docs/performance.md)
                 sub = Substep("half", regular, s, hn, state, full=full)
                 half = problem.implicit(state, base, 0.5 * hn, 1.0, sub)
                 sub = Substep("second", regular, s, hn, state, full=full, half=half)
