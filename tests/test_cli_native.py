@@ -66,3 +66,35 @@ def test_run_json_is_the_summary_with_units(tmp_path):
     assert summary["scales"]["F0"] == pytest.approx(F, rel=1e-12)
     assert summary["units"]["force"] == "N" and summary["units"]["wear_volume"] == "m^3"
     assert summary["last"]["cycles"] is None       # NaN in history.csv: JSON null
+
+
+def test_jsonable_is_strict_json():
+    # NaN and inf are not JSON: null; numpy numbers and arrays as Python's; paths as text
+    import numpy as np
+    from pathlib import Path
+    from wearcheck.comparisons.cli._common import jsonable
+
+    value = {"a": np.float64("nan"), "b": [np.int64(3), np.array([1.5, np.inf])],
+             "c": Path("runs") / "x", 4: (1, "t")}
+    text = json.dumps(jsonable(value), allow_nan=False)      # raises on a NaN left in
+    assert json.loads(text) == {"a": None, "b": [3, [1.5, None]], "c": str(Path("runs/x")),
+                                "4": [1, "t"]}
+
+
+@pytest.mark.parametrize("name", ["run", "sweep", "refine", "fretting-map", "mesh"])
+def test_commands_that_print_numbers_take_json(name):
+    _, choices = _choices()
+    assert "--json" in choices[name].format_help()
+
+
+
+def test_mesh_json_sizes(capsys):
+    # paper.toml: a0 = sqrt(R d) = sqrt(10 mm · 1 µm) = 0.1 mm (Hertz; the sphere's
+    # a0 differs by ~(a0/R)²/6 = 1.7e-5 relative, hence 1e-4); the contact nodes
+    # split the meshed contact radius into equal spacings
+    assert cli.main(["mesh", "paper", "--quiet", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["contact_radius"] == pytest.approx(out["contact_radius_over_a0"] * 1e-4, rel=1e-4)
+    assert out["spacing"] * (out["contact_nodes"] - 1) == pytest.approx(out["contact_radius"],
+                                                                      rel=1e-12)
+    assert out["dofs"] == 2 * out["nodes"] and out["vertices"] < out["nodes"]

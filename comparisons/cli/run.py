@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import json
-import math
 import sys
 from pathlib import Path
 
@@ -14,7 +12,7 @@ from wearcheck.comparisons.resources import _estimator, check_export, check_memo
 from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.comparisons.rundir import atomic_directory, write_run_files
 from wearcheck.comparisons import registry
-from ._common import add_case_arguments, load_case
+from ._common import add_case_arguments, load_case, print_json
 
 
 def add_parser(sub):
@@ -31,7 +29,7 @@ def add_parser(sub):
                         "(implies --vtk)")
     p.add_argument("--json", action="store_true",
                    help="print a summary (steps, stages, solve time, the last history row "
-                        "with units, the scales) on stdout as JSON")
+                        "with units, the scales) on stdout as JSON")  # (no table to replace)
     return p
 
 
@@ -68,7 +66,7 @@ def main(args) -> int:
               + ", ".join(f"{s:g}" for s in missing) + f" ({case.end_condition}); "
               "stages.npz does not hold them", file=sys.stderr)
     if args.json:
-        print(json.dumps(dict(case=str(args.case), **summary(case, result, args.solver, out))))
+        print_json(dict(case=args.case, **summary(case, result, args.solver, out)))
     if not args.quiet:
         print(f"{args.solver}: {len(result.history['s']) - 1} steps, "
               f"{len(result.stage_s)} stages, solve {result.solve_seconds:.3g} s -> {out}",
@@ -78,19 +76,16 @@ def main(args) -> int:
 
 def summary(case, result, solver: str, out: Path) -> dict:
     """What ``--json`` prints: the run's counts, the last history row (units
-    from the run's data dictionary; a non-finite value as null) and the scales."""
+    from the run's data dictionary) and the scales."""
     from wearcheck.cases import reference
     from wearcheck.comparisons import layout
 
-    def number(v):
-        v = float(v)
-        return v if math.isfinite(v) else None
     entry = registry.get(solver) if solver in registry.names() else None
     units = layout.run_dictionary(entry, list(result.history))["history_csv"]
-    return dict(solver=solver, out=str(out),
+    return dict(solver=solver, out=out,
                 steps=len(result.history["s"]) - 1, stages_reached=len(result.stage_s),
                 solve_seconds=result.solve_seconds,
-                last={k: number(v[-1]) for k, v in result.history.items() if len(v)},
+                last={k: float(v[-1]) for k, v in result.history.items() if len(v)},
                 units={k: units[k]["unit"] for k in result.history if k in units},
-                scales={k: number(v) for k, v in reference.scales(case).items()
+                scales={k: v for k, v in reference.scales(case).items()
                         if isinstance(v, (int, float))})
