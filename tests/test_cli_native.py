@@ -34,6 +34,18 @@ def test_a_closed_pipe_ends_the_command_quietly_and_successfully():
     assert proc.returncode == 0 and err == b"", err
 
 
+def test_a_broken_pipe_elsewhere_is_still_an_io_error(monkeypatch, capsys):
+    # a pipe other than our standard output (stdout here is fine): exit 4 with
+    # the one-line message, as for any file that cannot be written
+    from wearcheck.comparisons.cli import cases as cases_command
+
+    def broken(args):
+        raise BrokenPipeError(32, "Broken pipe")
+    monkeypatch.setattr(cases_command, "main", broken)
+    assert cli.main(["cases"]) == cli.EXIT_IO
+    assert "cannot write or read: Broken pipe" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("name", sorted(cli.SUBCOMMANDS))
 def test_every_subcommand_shows_examples_that_parse(name):
     parser, choices = _choices()

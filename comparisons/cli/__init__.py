@@ -256,10 +256,6 @@ def main(argv=None) -> int:
             code = int(args._main(args) or 0)
             sys.stdout.flush()     # a reader that has gone shows here, not at exit
             return code
-    except BrokenPipeError:
-        if not _reader_gone():
-            raise
-        return 0
     except WearcheckError as exc:
         # a study's argument is named by its flag here, by its Python name in Python
         said = exc.on_command_line() if isinstance(exc, ArgumentError) else exc
@@ -276,6 +272,8 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return EXIT_IO
     except OSError as exc:
+        if isinstance(exc, BrokenPipeError) and _reader_gone():
+            return 0        # our reader has gone (`wearcheck cases | head -1`): nothing to say
         where = f" '{exc.filename}'" if getattr(exc, "filename", None) else ""
         print(f"{name}: error: cannot write or read{where}: "
               f"{_one_line(exc.strerror or exc)}; nothing incomplete was left",
