@@ -5,8 +5,10 @@ from __future__ import annotations
 #: the key whose value the estimate mostly depends on (named in refusals)
 RESOURCE_KEY = "bem.grid"
 #: N × N double arrays alive at once while stepping (CG vectors, gap, profile,
-#: warm-start history, the padded transforms counted at their size)
-WORKING_ARRAYS = 40.0
+#: warm-start history, the padded transforms counted at their size), and
+#: the displacement G p kept with each live state (five) and the operator's
+#: single-precision kernel (one)
+WORKING_ARRAYS = 46.0
 #: N × N double arrays kept per stored stage (profile, pressure, gap in the
 #: run's stages; profile, wear, pressure, gap in the result's fields)
 PER_STAGE = 7.0
