@@ -199,8 +199,8 @@ def mdr_transform_quad(indenter, x, table=None):
 @functools.lru_cache(maxsize=4)
 def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Gauss–Legendre nodes and weights on [-1, 1], computed once per n (an n x n
-    eigenproblem: 0.2-1.4 s for n = 800, and every reference.scales of a table
-    case needs it)."""
+    eigenproblem, slow for n = 800, and every reference.scales of a table case
+    needs it; docs/performance.md, "Measurements behind the code")."""
     x, w = np.polynomial.legendre.leggauss(n)
     x.flags.writeable = w.flags.writeable = False
     return x, w
