@@ -33,6 +33,13 @@ pressure and of the wear from their ring averages, over p0 and d.
 Not modelled: wear.tangential_correction.
 """
 
-from .solver import solve, supports
-
 __all__ = ["solve", "supports"]
+
+
+def __getattr__(name):
+    # solve and supports are imported on first use: the registry imports this
+    # package for its registration.py, which must not pull in the numerics
+    if name in ("solve", "supports"):
+        from . import solver
+        return getattr(solver, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

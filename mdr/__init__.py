@@ -25,8 +25,6 @@ A case with a [fretting] section is a partial-slip run: :mod:`mdr.fretting`
 jumping).
 """
 
-from .solver import solve
-
 __all__ = ["solve", "supports"]
 
 
@@ -35,3 +33,12 @@ def supports(case) -> str | None:
     and the ellipsoid approximately (as the paraboloid of radius √(R1 R2), its
     result marked by the reason in ``info["approximate"]``)."""
     return None
+
+
+def __getattr__(name):
+    # solve is imported on first use: the registry imports this package for its
+    # registration.py, which must not pull in the numerics
+    if name == "solve":
+        from . import solver
+        return getattr(solver, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
