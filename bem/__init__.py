@@ -33,13 +33,10 @@ pressure and of the wear from their ring averages, over p0 and d.
 Not modelled: wear.tangential_correction.
 """
 
+from wearcheck.registry import lazy_attributes
+
 __all__ = ["solve", "supports"]
 
-
-def __getattr__(name):
-    # solve and supports are imported on first use: the registry imports this
-    # package for its registration.py, which must not pull in the numerics
-    if name in ("solve", "supports"):
-        from . import solver
-        return getattr(solver, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+# solve, supports and the submodules are imported on first use: the registry imports
+# this package for its registration.py, which must not pull in the numerics
+__getattr__ = lazy_attributes(__name__, {"solve": ".solver", "supports": ".solver"})

@@ -107,6 +107,27 @@ class Solver:
         return fn(case) if fn is not None else None
 
 
+def lazy_attributes(package: str, attributes: dict[str, str]) -> Callable:
+    """A solver package's module ``__getattr__`` that imports on first use.
+
+    ``attributes`` maps a name to the submodule that defines it (``{"solve":
+    ".solver"}``); any other name is the package's submodule of that name. The
+    registry imports the package for its ``registration.py``, so its
+    ``__init__`` must not import its numerics; ``package.solve`` and
+    ``package.model`` still work as if it did.
+    """
+    def __getattr__(name: str):
+        if name in attributes:
+            return getattr(importlib.import_module(attributes[name], package), name)
+        try:
+            return importlib.import_module(f".{name}", package)
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{package}.{name}":
+                raise  # the submodule exists and failed to import: say so
+            raise AttributeError(f"module {package!r} has no attribute {name!r}") from None
+    return __getattr__
+
+
 #: the registration modules of the solvers shipped with wearcheck, in the order
 #: of ``names()``; each holds ``SOLVER``, registered at the registry's first use
 BUILT_IN = ("wearcheck.mdr.registration", "wearcheck.fem.registration",

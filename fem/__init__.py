@@ -52,13 +52,10 @@ in the plane's frame (the top face has u_z = −d); ``stress`` (K, Np, 4) σ_rr,
 ``contact_pressure`` and ``wear_depth`` (K, Nc).
 """
 
+from wearcheck.registry import lazy_attributes
+
 __all__ = ["solve", "supports"]
 
-
-def __getattr__(name):
-    # solve and supports are imported on first use: the registry imports this
-    # package for its registration.py, which must not pull in the numerics
-    if name in ("solve", "supports"):
-        from . import solver
-        return getattr(solver, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+# solve, supports and the submodules are imported on first use: the registry imports
+# this package for its registration.py, which must not pull in the numerics
+__getattr__ = lazy_attributes(__name__, {"solve": ".solver", "supports": ".solver"})

@@ -25,6 +25,8 @@ A case with a [fretting] section is a partial-slip run: :mod:`mdr.fretting`
 jumping).
 """
 
+from wearcheck.registry import lazy_attributes
+
 __all__ = ["solve", "supports"]
 
 
@@ -35,10 +37,6 @@ def supports(case) -> str | None:
     return None
 
 
-def __getattr__(name):
-    # solve is imported on first use: the registry imports this package for its
-    # registration.py, which must not pull in the numerics
-    if name == "solve":
-        from . import solver
-        return getattr(solver, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+# solve and the submodules are imported on first use: the registry imports
+# this package for its registration.py, which must not pull in the numerics
+__getattr__ = lazy_attributes(__name__, {"solve": ".solver"})

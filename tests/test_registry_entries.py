@@ -118,3 +118,16 @@ def test_a_notebook_solver_registers_beside_the_built_in_ones():
     finally:
         unregister("toy-columns")
     assert "toy-columns" not in registry.names()
+
+
+def test_a_solver_package_loads_its_solve_and_submodules_on_first_use():
+    # the lazy package behaves as the eager one did: solve and supports are the
+    # solver module's, a submodule is an attribute, an unknown name is an
+    # AttributeError (hasattr, getattr with a default and autodoc rely on that)
+    import wearcheck.fem
+    solver = importlib.import_module("wearcheck.fem.solver")
+    assert wearcheck.fem.solve is solver.solve and wearcheck.fem.supports is solver.supports
+    assert wearcheck.fem.model is importlib.import_module("wearcheck.fem.model")
+    assert not hasattr(wearcheck.fem, "no_such_name")
+    with pytest.raises(AttributeError, match="no_such_name"):
+        wearcheck.fem.no_such_name

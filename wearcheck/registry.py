@@ -7,7 +7,8 @@ package's ``registration.py``. See :mod:`wearcheck.comparisons.registry` for
 what an entry declares.
 """
 
-from wearcheck.comparisons.registry import (Item, Solver, get, names, register, solve,
-                                            supporting, unregister)
+from wearcheck.comparisons.registry import (Item, Solver, get, lazy_attributes, names, register,
+                                            solve, supporting, unregister)
 
-__all__ = ["Item", "Solver", "register", "unregister", "get", "names", "supporting", "solve"]
+__all__ = ["Item", "Solver", "register", "unregister", "get", "names", "supporting", "solve",
+           "lazy_attributes"]
