@@ -222,6 +222,13 @@ class BEMSettings:
                                "max |min(p/p0, gap/d)| over the pixels (1e-6: on the paper "
                                "case at 128², 3e-5 p0 and 2e-6 F0 from 1e-7, far inside the "
                                "pixel error, at 2/3 of the iterations)")
+    coupling: bool = key(False,
+                         doc="couple the normal and tangential problems (bodies not "
+                             "elastically similar, Dundurs' β ≠ 0): the friction traction "
+                             "μp along the sliding direction moves the surface normally, "
+                             "which moves the pressure against it (docs/bem-tangential.md "
+                             "§6); one sliding direction, or reciprocating strokes when "
+                             "sliding.stroke is given; no effect when β = 0")
 
 
 @dataclass(frozen=True)
