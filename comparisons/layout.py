@@ -27,12 +27,18 @@ RUN_FILES = (
                                   "render), complete, writer pid and host; only such a path is "
                                   "ever replaced, and only by the same kind"),
     Item("report.md", "", "fretting runs: loops, stick radius, energy and wear against cycles, "
-                          "checked against the closed forms"),
+                          "checked against the closed forms; both bodies wearing: the volumes "
+                          "beside the ASTM G133/G99 formulas"),
     Item("report.html", "", "the same, with its figures embedded"),
     Item("fretting_loops.png", "", "fretting runs: Q/μF against u/u* for the kept cycles, "
                                    "with the Mindlin–Deresiewicz loop"),
     Item("fretting_history.png", "", "fretting runs: stick radius, energy per cycle and worn "
                                      "volume against cycles"),
+    Item("track_profile.csv", "", "both bodies wearing: the track's cross-section per stage "
+                                  "(stage, s, cycles, y, depth, height), profilometer-style"),
+    Item("track_profiles.png", "", "both bodies wearing: the track's cross-sections"),
+    Item("counterface_wear.pvd", "", "both bodies wearing: the counterface's wear map per "
+                                     "stage, ImageData counterface_wear_KKK.vti"),
 )
 
 #: history.csv columns every solver writes, in this order: ``HISTORY``, declared
@@ -108,7 +114,7 @@ METRICS = (
                       "passed), passed"),
     Item("passed", "", "the verdict: every check of every solver within its tolerance"),
     Item("skipped", "", "per registered solver left out of the comparison: why (the "
-                        "reason it cannot run the case, or not asked for)"),
+                        "reason it cannot run the case or here, opt-in, or not asked for)"),
     Item("diagnosis", "", "null when passed; else for the worst failed check: setting (the "
                           "case key most likely to fix it, or null), value (its current "
                           "value), suggestion, solver, reason, otherwise (the runner-up), "
@@ -178,6 +184,35 @@ STAGE_METRICS = (
 )
 
 
+#: files of a fit directory (``wearcheck fit --out``)
+FIT_FILES = (
+    Item("case.toml", "", "the resolved case as given"),
+    Item("fitted_case.toml", "", "the same with the fitted values (wear.specific_rate, "
+                                 "wear.pressure_exponent)"),
+    Item("fit.json", "", "what --json prints: parameters with their 95 % intervals, the lab "
+                         "formula's K, the goodness of fit, the measurements, the model's runs"),
+    Item("measurements.csv", "", "one row per measured value: the columns of FIT_COLUMNS"),
+    Item("fit.png", "", "measured values and the fitted model against sliding, the lab "
+                        "formula's line, and the residual of each measurement"),
+    Item("meta.json", "", "resolved and fitted case, the measurement file (path, SHA-256), "
+                          "warnings, provenance and this data dictionary"),
+)
+#: columns of a fit's measurements.csv (SI)
+FIT_COLUMNS = (
+    Item("row", "", "the row of the measurement file (its line number)"),
+    Item("cycles", "", "cycles (empty when neither the sheet nor the stroke gives them)"),
+    Item("s", "m", "sliding distance"),
+    Item("quantity", "", "scar_diameter, ball_volume or wear_center"),
+    Item("unit", "", "the unit of measured, uncertainty and model: m or m^3"),
+    Item("measured", "(unit)", "the measured value"),
+    Item("uncertainty", "(unit)", "its ± uncertainty (empty when the sheet gives none)"),
+    Item("model", "(unit)", "the fitted model's value"),
+    Item("residual", "", "(measured − model)/uncertainty, or ln(measured/model) without "
+                         "uncertainties"),
+    Item("lab_K", "m^3/(N m)", "the lab formula's K = V_lab/(F s) of this measurement"),
+)
+
+
 def _table(items) -> dict:
     return {i.name: i.as_dict() for i in items}
 
@@ -224,6 +259,11 @@ def comparison_dictionary() -> dict:
                 stage_metrics=_table(STAGE_METRICS))
 
 
+def fit_dictionary() -> dict:
+    """The data dictionary of a fit directory (written into its meta.json)."""
+    return dict(files=_table(FIT_FILES), measurements_csv=_table(FIT_COLUMNS))
+
+
 def markdown(items, first="name") -> str:
     """A Markdown table of items (the documentation's output tables)."""
     rows = [f"| {first} | unit | meaning |", "|---|---|---|"]
@@ -242,4 +282,6 @@ def doc_tables() -> dict[str, str]:
         "comparison-files": markdown(COMPARISON_FILES, "file"),
         "metrics": markdown(METRICS, "key"),
         "stage-metrics": markdown(STAGE_METRICS, "key"),
+        "fit-files": markdown(FIT_FILES, "file"),
+        "fit-columns": markdown(FIT_COLUMNS, "column"),
     }

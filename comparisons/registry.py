@@ -56,6 +56,8 @@ class Solver:
     fields : its ``fields.npz`` arrays, an :class:`Item` each.
     solve_function, supports_function : for solvers that are not packages
         (tests, notebooks): callables used instead of ``module``.
+    default : whether ``compare`` runs it when no solvers are named; False for
+        an opt-in solver (ccx: an external program), which runs when named.
     """
 
     name: str
@@ -73,6 +75,7 @@ class Solver:
     fields: tuple = ()
     solve_function: Callable | None = None
     supports_function: Callable | None = None
+    default: bool = True
 
     def _package(self):
         return importlib.import_module(self.module)
@@ -131,7 +134,7 @@ def lazy_attributes(package: str, attributes: dict[str, str]) -> Callable:
 #: the registration modules of the solvers shipped with wearcheck, in the order
 #: of ``names()``; each holds ``SOLVER``, registered at the registry's first use
 BUILT_IN = ("wearcheck.mdr.registration", "wearcheck.fem.registration",
-            "wearcheck.bem.registration")
+            "wearcheck.bem.registration", "wearcheck.ccx.registration")
 
 _REGISTRY: dict[str, Solver] = {}
 _loaded = False

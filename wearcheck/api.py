@@ -24,7 +24,7 @@ from wearcheck.cases import ArgumentError, Case, CaseError, RunResult, reference
 from wearcheck.comparisons import registry, rundir
 
 __all__ = ["load_case", "shipped_cases", "solvers", "solve", "Result", "read_run", "compare",
-           "refine", "sweep", "export_vtk"]
+           "refine", "sweep", "fit", "export_vtk"]
 
 
 # -- cases -------------------------------------------------------------------
@@ -298,6 +298,49 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
         # "wear.mu=0.2,0.3" as on the command line (--vary), typed here once
         vary = dict(cases.case.parse_vary(text) for text in vary)
     return _sweep(case, vary, solver, out, scheduler=scheduler, workers=workers, quiet=quiet)
+
+
+def fit(case: str | Path | Case, data, keys: str | Iterable[str] = ("wear.specific_rate",), *,
+        out: str | Path | None = None, exponents: Iterable[float] | None = None,
+        scheduler: str | None = None, workers: int | None = None, quiet: bool = True):
+    """Fit a ball's wear coefficients to measurements, as ``wearcheck fit`` does.
+
+    Parameters
+    ----------
+    case : the ball test (a sphere or paraboloid under a constant force): a
+        :class:`Case`, a case file or a shipped case's name.
+    data : a measurement CSV (``cycles, D [um], ± D [um]``: docs/fitting.md), or a
+        mapping of such headers to columns, ``{"cycles": [...], "D [um]": [...]}``
+        (a pandas DataFrame works).
+    keys : ``"wear.specific_rate"``, optionally with ``"wear.pressure_exponent"``
+        (then one run per exponent of ``exponents``, default 1, 1.25, ..., 4, on
+        Dask: ``scheduler``, ``workers`` as for :func:`sweep`).
+    out : also write a fit directory there (fit.json, measurements.csv, fit.png,
+        the fitted case, meta.json).
+
+    Returns
+    -------
+    FitResult
+        ``.parameters[KEY]["value"]`` and ``["ci95"]``, ``.measurements`` (each with
+        its model value and residual), ``.lab`` (the lab formula's K),
+        ``.goodness_of_fit``, ``.fitted_case``; ``.to_dict()`` is the JSON of
+        ``wearcheck fit --json``. A warning is issued when the residuals say the
+        model does not fit.
+
+    Raises
+    ------
+    CaseError
+        bad keys, case or data (one message naming the file, row and column).
+    """
+    from wearcheck.comparisons.studies import fit as _fit
+    result = _fit.fit(load_case(case), data, keys, exponents=exponents, scheduler=scheduler,
+                      workers=workers, quiet=quiet)
+    for text in result.warnings:
+        if text.startswith("the residuals"):
+            warnings.warn(text, stacklevel=2)
+    if out is not None:
+        _fit.write(result, out, data_path=data if isinstance(data, (str, Path)) else None)
+    return result
 
 
 def _listed(values, name: str) -> list:

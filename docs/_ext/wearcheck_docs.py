@@ -16,8 +16,8 @@ import os
 from pathlib import Path
 
 #: the tutorials in reading order (the rest follow by name)
-TUTORIALS = ("lab_rig_to_case.py", "friction_and_wear.py", "mu_sweep_on_dask.py",
-             "fem_fields_in_paraview.py")
+TUTORIALS = ("lab_rig_to_case.py", "g133_sheet_to_K.py", "friction_and_wear.py",
+             "mu_sweep_on_dask.py", "fem_fields_in_paraview.py")
 
 
 def tutorial_order(filename: str):
