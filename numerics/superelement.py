@@ -24,7 +24,6 @@ implicit step of wear compliance c·h is one LCP with M = C + diag(K c h/A)
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np

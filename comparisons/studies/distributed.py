@@ -159,13 +159,14 @@ def execute(base: cases.Case, changes: dict, solver: str, name: str,
     """Build the case (``base`` with ``changes``), solve it; never raises. Runs inside a
     worker.
 
-    ``solve(case, solver, progress)`` defaults to ``comparisons.solvers.solve``.
+    ``solve(case, solver, progress)`` defaults to ``comparisons.registry.solve``.
     """
     if solve is None:
         from wearcheck.comparisons import registry
         from wearcheck.comparisons.registry import solve
         try:  # a worker's first import of the solver is not part of its cost
-            importlib.import_module(registry.get(solver).module)
+            # (a solver package imports its numerics with its solve, on first use)
+            getattr(importlib.import_module(registry.get(solver).module), "solve")
         except Exception:
             pass  # solve() meets the same failure below and reports it
     out = dict(ok=False, message="", case=None, result=None, traceback="")
