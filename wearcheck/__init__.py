@@ -13,7 +13,8 @@ forms. The Python API in a few lines::
 
 Public names: :func:`load_case`, :func:`shipped_cases`, :func:`solvers`,
 :func:`solve`, :class:`Result`, :func:`read_run`, :func:`compare`,
-:func:`refine`, :func:`sweep`, :func:`export_vtk`, :class:`Case`,
+:func:`refine`, :func:`sweep`, :func:`export_vtk`, :func:`reference` (a certified
+reference solution), :func:`verify` (results produced elsewhere against it), :class:`Case`,
 :class:`CaseError`, :class:`SolverError`, and the solver registry
 :mod:`wearcheck.registry` (``register``, ``Solver``). Everything else
 (``wearcheck.mdr``, ``wearcheck.comparisons``, ...) is internal.
@@ -21,8 +22,8 @@ Public names: :func:`load_case`, :func:`shipped_cases`, :func:`solvers`,
 
 from wearcheck.cases import Case, CaseError, RunResult, SolverError, WearcheckError
 from wearcheck import registry
-from wearcheck.api import (Result, compare, export_vtk, load_case, read_run, refine,
-                           shipped_cases, solve, solvers, sweep)
+from wearcheck.api import (Result, compare, export_vtk, load_case, read_run, reference, refine,
+                           shipped_cases, solve, solvers, sweep, verify)
 
 try:
     from importlib.metadata import PackageNotFoundError, version
@@ -32,4 +33,4 @@ except PackageNotFoundError:  # running from a checkout that was not installed
 
 __all__ = ["Case", "CaseError", "SolverError", "WearcheckError", "RunResult", "Result",
            "load_case", "shipped_cases", "solvers", "solve", "read_run", "compare", "refine",
-           "sweep", "export_vtk", "registry", "__version__"]
+           "sweep", "export_vtk", "reference", "verify", "registry", "__version__"]

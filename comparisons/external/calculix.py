@@ -1,0 +1,406 @@
+"""CalculiX results: the ``.frd`` file's nodal blocks and the ``.dat`` file's prints.
+
+Each result time is a stage, its time the sliding distance (``--map s=time``,
+the default; ``s_hat=time`` or ``cycles=time``; a unit as ``'s [mm]=time'``).
+
+Stage fields, from the ``.frd`` (ASCII, ``*NODE FILE``/``*CONTACT FILE``): the
+radius from the node coordinates (block ``2C``; the symmetry axis is y as in
+CalculiX's axisymmetric elements, ``--map axis=z`` for a 3D model whose axis is
+z), the pressure from ``--map p=BLOCK.COMPONENT`` (default ``CONTACT.CPRESS``,
+written for the slave nodes), optionally the wear depth or the worn profile
+from ``--map wear=BLOCK.COMPONENT`` or ``--map f=BLOCK.COMPONENT`` (a user
+field). Or, without an ``.frd``, from the ``.dat``'s ``*CONTACT PRINT`` of
+CSTR for a node-to-surface contact (``contact stress (slave node,press,...)``),
+the coordinates then from the ``.inp`` deck of the same name (``*NODE``,
+following ``*INCLUDE``).
+
+History, from the ``.dat``: the force is the axial component of the ``total
+force`` print of the node set ``--map force=SET`` (``*NODE PRINT, NSET=SET,
+TOTALS=ONLY`` of RF; default: the only set with totals), its absolute value,
+times a factor ``--map 'force=SET*180'`` (CalculiX prints an axisymmetric
+model's reaction forces per 2° segment: ×180 for the ring). ``--map
+depth=SET``: the depth is the mean axial displacement of that set's nodes
+(``*NODE PRINT, NSET=SET`` of U), its absolute value. Model units other than
+SI: ``--map 'r [mm]=points'``, ``'p [MPa]=CONTACT.CPRESS'``, ``'force [N]=SET'``,
+``'depth [mm]=SET'``.
+
+The parsers (:func:`dat_blocks`, :func:`read_frd`) follow the CalculiX 2.20
+formats; the ``ccx`` solver package (issue 23 §3, its own branch) reads the
+same files for its runs, and the two should share one reader once both are in
+(a shared module outside the solver packages).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from wearcheck.cases import CaseError
+from wearcheck.cases.tables import parse_quantity, split_header
+
+from . import DISTANCES, External, Stage, check_unused
+
+_HEADER = re.compile(r"^\s*(?P<quantity>[a-z][a-z ]*?)\s*\((?P<components>[^)]*)\)\s+for\s+"
+                     r"(?:set\s+(?P<set>\S+)|all contact elements)\s+and time\s+(?P<time>\S+)")
+# Fortran drops the E of a three-digit exponent: 1.234567-100
+_FORTRAN_EXPONENT = re.compile(r"(\d)([-+]\d{3})$")
+AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def to_float(text: str) -> float:
+    """A number as CalculiX prints it (also ``1.234567-100``)."""
+    try:
+        return float(text)
+    except ValueError:
+        return float(_FORTRAN_EXPONENT.sub(r"\1E\2", text))
+
+
+@dataclass
+class Block:
+    """One printed block of a .dat file: quantity ("total force", "displacements",
+    "contact stress"), components, node set (None for contact prints), time, node
+    ids (None for totals) and values (n, m)."""
+
+    quantity: str
+    components: tuple
+    set: str | None
+    time: float
+    ids: np.ndarray | None
+    values: np.ndarray
+
+
+def dat_blocks(text: str, source: str) -> list[Block]:
+    """Every print block of a .dat file's text; a malformed line is one CaseError
+    naming the file and line."""
+    blocks, current, rows = [], None, []
+
+    def close():
+        if current is None:
+            return
+        quantity, comps, name, t, first = current
+        total = quantity.startswith("total")
+        ids_col = 0 if total else 1
+        width = len(comps) - (1 if first else 0) + ids_col
+        table = np.array(rows, float).reshape(len(rows), width)
+        if total:
+            blocks.append(Block(quantity, comps, name, t, None, table))
+        else:
+            blocks.append(Block(quantity, comps, name, t, table[:, 0].astype(np.int64),
+                                table[:, 1:]))
+
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        h = _HEADER.match(line)
+        if h:
+            close()
+            comps = tuple(c.strip() for c in h.group("components").split(","))
+            # a contact print's first component is the node (its id column)
+            first = comps[0] in ("slave node", "slave element+face")
+            if comps[0] == "slave element+face":
+                raise CaseError(f"{source}, line {lineno}: a contact print per element face "
+                                "(face-to-face contact); print a node-to-surface contact, "
+                                "or give the .frd's CONTACT block")
+            try:
+                t = to_float(h.group("time"))
+            except ValueError:
+                raise CaseError(f"{source}, line {lineno}: time '{h.group('time')}' is not "
+                                "a number") from None
+            current = (h.group("quantity"), comps, h.group("set"), t, first)
+            rows = []
+            continue
+        words = line.split()
+        if current is None or not words:
+            continue
+        quantity, comps, name, _, first = current
+        expected = len(comps) - (1 if first else 0) + (0 if quantity.startswith("total") else 1)
+        if len(words) != expected:
+            raise CaseError(f"{source}, line {lineno}: expected {expected} numbers in the "
+                            f"block '{quantity}'" + (f" of set {name}" if name else "")
+                            + f", got: {line.strip()}")
+        try:
+            rows.append([to_float(w) for w in words])
+        except ValueError:
+            raise CaseError(f"{source}, line {lineno}: not numbers: {line.strip()}") from None
+    close()
+    return blocks
+
+
+@dataclass
+class FrdBlock:
+    """One nodal result block of an .frd file: name ("DISP", "CONTACT"), time,
+    component names, node ids and values (n, m)."""
+
+    name: str
+    time: float
+    components: tuple
+    ids: np.ndarray
+    values: np.ndarray
+
+
+def _fields(line: str, start: int = 13, width: int = 12) -> list[float]:
+    return [to_float(line[k:k + width]) for k in range(start, len(line.rstrip()), width)]
+
+
+def read_frd(path: Path) -> tuple[dict, list[FrdBlock]]:
+    """The nodes {number: (x, y, z)} and the nodal result blocks of an ASCII .frd file."""
+    try:
+        lines = Path(path).read_text(errors="replace").splitlines()
+    except OSError as exc:
+        raise CaseError(f"{path}: cannot be read: {exc.strerror or exc}") from None
+    nodes, blocks = {}, []
+    i = 0
+    try:
+        while i < len(lines):
+            key = lines[i][:6].strip()
+            if key == "2C":
+                i += 1
+                while not lines[i].startswith(" -3"):
+                    nodes[int(lines[i][3:13])] = tuple(_fields(lines[i]))
+                    i += 1
+            elif key.startswith("100C"):
+                time = to_float(lines[i][12:24])
+                i += 1
+                name = lines[i].split()[1]
+                comps, ids, rows = [], [], []
+                i += 1
+                while not lines[i].startswith(" -3"):
+                    tag = lines[i][:3]
+                    if tag == " -5":
+                        comps.append(lines[i].split()[1])
+                    elif tag == " -1":
+                        ids.append(int(lines[i][3:13]))
+                        rows.append(_fields(lines[i]))
+                    elif tag == " -2":
+                        rows[-1].extend(_fields(lines[i]))
+                    i += 1
+                width = max((len(r) for r in rows), default=0)
+                if any(len(r) != width for r in rows):
+                    raise ValueError(f"block {name}: records of unequal length")
+                blocks.append(FrdBlock(name, time, tuple(comps[:width]),
+                                       np.array(ids, np.int64),
+                                       np.array(rows, float).reshape(len(rows), width)))
+            i += 1
+    except (IndexError, ValueError) as exc:
+        raise CaseError(f"{path}, line {i + 1}: not a readable .frd record ({exc})") from None
+    if not nodes:
+        raise CaseError(f"{path}: no node block (2C); an ASCII .frd is needed "
+                        "(CalculiX writes one by default)")
+    return nodes, blocks
+
+
+def inp_nodes(path: Path) -> dict:
+    """{number: (x, y, z)} of the ``*NODE`` blocks of a deck, following ``*INCLUDE``."""
+    nodes = {}
+    try:
+        lines = Path(path).read_text(errors="replace").splitlines()
+    except OSError as exc:
+        raise CaseError(f"{path}: cannot be read: {exc.strerror or exc}") from None
+    reading = False
+    for lineno, line in enumerate(lines, start=1):
+        s = line.strip()
+        if not s or s.startswith("**"):
+            continue
+        if s.startswith("*"):
+            word = s.split(",")[0].strip().upper()
+            reading = word == "*NODE"
+            if word == "*INCLUDE":
+                m = re.search(r"INPUT\s*=\s*([^,]+)", s, re.IGNORECASE)
+                if m:
+                    nodes.update(inp_nodes(Path(path).parent / m.group(1).strip()))
+            continue
+        if reading:
+            parts = [p for p in s.split(",") if p.strip()]
+            try:
+                values = [float(p) for p in parts[1:4]]
+                nodes[int(parts[0])] = tuple(values + [0.0] * (3 - len(values)))
+            except (ValueError, IndexError):
+                raise CaseError(f"{path}, line {lineno}: not a node record: {s}") from None
+    return nodes
+
+
+def _target(value: str, where: str) -> tuple[str, str | None, float]:
+    """'BLOCK.COMPONENT*FACTOR' or 'SET*FACTOR' -> (name, component or None, factor)."""
+    body, _, factor = value.partition("*")
+    try:
+        k = float(factor) if factor else 1.0
+    except ValueError:
+        raise CaseError(f"{where}: factor '{factor}' is not a number") from None
+    name, _, comp = body.partition(".")
+    return name.strip(), (comp.strip() or None), k
+
+
+def read(path: Path, mapping: dict) -> External:
+    """The CalculiX results at ``path`` (.frd or .dat; the other of the same name too)."""
+    path = Path(path)
+    known = {"p", "wear", "f", "force", "depth", "axis", "r"} | set(DISTANCES)
+    check_unused(mapping, known, "CalculiX")
+    frd = path if path.suffix.lower() == ".frd" else path.with_suffix(".frd")
+    dat = path if path.suffix.lower() == ".dat" else path.with_suffix(".dat")
+    frd = frd if frd.is_file() else None
+    dat = dat if dat.is_file() else None
+    spec = {"p": ("CONTACT.CPRESS", "pressure", 1.0)}
+    kind, time_factor, axis, coord = "s", 1.0, "y", 1.0
+    for key, value in mapping.items():
+        name, _ = split_header(key)
+        where = f"--map '{key}={value}'"
+        if name == "axis":
+            if value.lower() not in AXES:
+                raise CaseError(f"{where}: the axis is x, y or z")
+            axis = value.lower()
+        elif name == "r":
+            if value != "points":
+                raise CaseError(f"{where}: r comes from the node coordinates; give their "
+                                "unit as --map 'r [mm]=points'")
+            coord = parse_quantity(key, "length", where)[1]
+        elif name in DISTANCES:
+            if value != "time":
+                raise CaseError(f"{where}: the distance is CalculiX's result time: "
+                                f"--map {name}=time")
+            kind, time_factor = name, parse_quantity(key, DISTANCES[name], where)[1]
+        else:
+            quantity = {"p": "pressure", "force": "force"}.get(name, "length")
+            spec[name] = (value, quantity, parse_quantity(key, quantity, where)[1])
+    notes = []
+    source = frd or dat
+    stages = []
+    if frd is not None:
+        nodes, blocks = read_frd(frd)
+        stages = _frd_stages(frd, nodes, blocks, spec, axis, coord, time_factor, notes)
+    blocks_dat = []
+    if dat is not None:
+        try:
+            text = dat.read_text(errors="replace")
+        except OSError as exc:
+            raise CaseError(f"{dat}: cannot be read: {exc.strerror or exc}") from None
+        blocks_dat = dat_blocks(text, str(dat))
+        if not stages:
+            stages = _dat_stages(dat, blocks_dat, spec, axis, coord, time_factor, notes)
+    history = _dat_history(dat, blocks_dat, spec, axis, time_factor, notes, stages)
+    origin = [f"{dat.name if dat else frd.name} time {t:g}" for t in history["time"]]
+    return External(kind=kind, history=history, history_origin=origin, stages=stages,
+                    source=str(source), format="calculix", stage_kind=kind, notes=notes)
+
+
+def _radius(coords: np.ndarray, axis: str, factor: float) -> np.ndarray:
+    off = [i for i in range(3) if i != AXES[axis]]
+    return np.hypot(coords[:, off[0]], coords[:, off[1]]) * factor
+
+
+def _frd_stages(frd, nodes, blocks, spec, axis, coord, time_factor, notes) -> list:
+    wanted = {q: _target(spec[q][0], f"--map {q}={spec[q][0]}")
+              for q in ("p", "wear", "f") if q in spec}
+    times = sorted({b.time for b in blocks})
+    stages = []
+    for t in times:
+        at = [b for b in blocks if b.time == t]
+        vals, ids = {}, None
+        for q, (name, comp, k) in wanted.items():
+            found = [b for b in at if b.name == name]
+            if not found:
+                continue
+            b = found[0]
+            if comp is None or comp not in b.components:
+                raise CaseError(f"{frd}: block {name} at time {t:g} has no component "
+                                f"'{comp}' (it has {', '.join(b.components)}); --map "
+                                f"{q}={name}.COMPONENT")
+            v = b.values[:, b.components.index(comp)] * k * spec[q][2]
+            vals[q] = dict(zip(b.ids.tolist(), v))
+            ids = b.ids if ids is None else ids
+        if not vals:
+            continue
+        ids = sorted(set().union(*[set(v) for v in vals.values()]))
+        missing = [i for i in ids if i not in nodes]
+        if missing:
+            raise CaseError(f"{frd}: node {missing[0]} of the results at time {t:g} is not "
+                            "in the node block")
+        coords = np.array([nodes[i] for i in ids], float)
+        r = _radius(coords, axis, coord)
+        order = np.argsort(r, kind="stable")
+
+        def col(q):
+            if q not in vals:
+                return None
+            return np.array([vals[q].get(i, 0.0) for i in ids], float)[order]
+        f, wear = col("f"), col("wear")
+        stages.append(Stage(time=t * time_factor, r=r[order], f=f, p=col("p"),
+                            wear=wear if f is None else None,
+                            origin=f"{frd.name} time {t:g}"))
+    if not stages:
+        names = sorted({b.name for b in blocks})
+        raise CaseError(f"{frd}: no block {spec['p'][0].split('.')[0]} (the contact "
+                        f"pressure); blocks: {', '.join(names) or 'none'}; name the pressure "
+                        "with --map p=BLOCK.COMPONENT (*CONTACT FILE writes CONTACT.CPRESS)")
+    notes.append(f"{frd.name}: {len(stages)} stage(s) at the result times")
+    return stages
+
+
+def _dat_stages(dat, blocks, spec, axis, coord, time_factor, notes) -> list:
+    contact = [b for b in blocks if b.quantity == "contact stress"]
+    if not contact:
+        return []
+    inp = dat.with_suffix(".inp")
+    if not inp.is_file():
+        raise CaseError(f"{dat}: the contact prints need the node coordinates: no "
+                        f"{inp.name} (the deck) and no .frd beside it")
+    nodes = inp_nodes(inp)
+    k = spec["p"][2]
+    stages = []
+    for b in contact:
+        missing = [i for i in b.ids if i not in nodes]
+        if missing:
+            raise CaseError(f"{dat}: slave node {missing[0]} at time {b.time:g} is not in "
+                            f"{inp.name}")
+        r = _radius(np.array([nodes[i] for i in b.ids], float), axis, coord)
+        order = np.argsort(r, kind="stable")
+        stages.append(Stage(time=b.time * time_factor, r=r[order], f=None,
+                            p=b.values[order, 0] * k, origin=f"{dat.name} time {b.time:g}"))
+    notes.append(f"{dat.name}: the pressure from the contact prints, the radii from {inp.name}")
+    return stages
+
+
+def _dat_history(dat, blocks, spec, axis, time_factor, notes, stages) -> dict:
+    comp = AXES[axis]
+    totals = [b for b in blocks if b.quantity == "total force"]
+    history = {}
+    if totals:
+        sets = sorted({b.set for b in totals})
+        if "force" in spec:
+            name, _, k = _target(spec["force"][0], f"--map force={spec['force'][0]}")
+            k *= spec["force"][2]
+        elif len(sets) == 1:
+            name, k = sets[0], 1.0
+        else:
+            raise CaseError(f"{dat}: total forces of several node sets ({', '.join(sets)}); "
+                            "name the one that carries the load: --map force=SET")
+        mine = [b for b in totals if b.set == name]
+        if not mine:
+            raise CaseError(f"{dat}: no total force of set {name} (sets with totals: "
+                            f"{', '.join(sets)})")
+        history["time"] = np.array([b.time for b in mine]) * time_factor
+        history["force"] = np.array([abs(b.values[0, comp]) for b in mine]) * k
+        notes.append(f"{dat.name}: the force is |{('fx', 'fy', 'fz')[comp]}| of set {name}'s "
+                     f"total" + (f" × {k:g}" if k != 1.0 else ""))
+    elif dat is not None and "force" in spec:
+        raise CaseError(f"{dat}: no 'total force' print (*NODE PRINT, NSET=SET, TOTALS=ONLY "
+                        "with RF) for --map force")
+    if "depth" in spec:
+        name, _, k = _target(spec["depth"][0], f"--map depth={spec['depth'][0]}")
+        disp = [b for b in blocks if b.quantity == "displacements" and b.set == name]
+        if not disp:
+            raise CaseError(f"{dat}: no displacements printed for set {name} (--map depth)")
+        t = np.array([b.time for b in disp]) * time_factor
+        d = np.array([abs(float(np.mean(b.values[:, comp]))) for b in disp]) * k \
+            * spec["depth"][2]
+        if "time" not in history:
+            history["time"] = t
+        elif len(t) != len(history["time"]) or not np.allclose(t, history["time"]):
+            raise CaseError(f"{dat}: the displacements of set {name} are printed at other "
+                            "times than the total force")
+        history["depth"] = d
+    if "time" not in history:
+        # no printed totals: the stages alone, without history quantities
+        history["time"] = np.array([st.time for st in stages])
+        notes.append("no total force printed: the force is not judged")
+    return history
