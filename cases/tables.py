@@ -114,7 +114,7 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
 
     Returns
     -------
-    Table. An empty cell of a column that is not required is NaN.
+    Table. An empty cell (or "nan") of a column that is not required alone is NaN.
 
     Raises
     ------
@@ -175,7 +175,8 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
     for need in required:
         options = (need,) if isinstance(need, str) else tuple(need)
         if not any(o in where for o in options):
-            said = " or ".join(f"'{o}'" for o in options)
+            said = " or ".join(f"'{o}'" for o in options) if len(options) < 3 else \
+                ", ".join(f"'{o}'" for o in options[:-1]) + f" or '{options[-1]}'"
             found = ", ".join(f"'{c.strip()}'" for c in header if c.strip()) or "none"
             raise CaseError(f"{path}: no column {said} (columns found: {found})")
     values = {name: [] for name in where}
@@ -191,6 +192,8 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
                     raise CaseError(f"{path}, row {row}, column '{header[j].strip()}': missing "
                                     f"(the row has {len(cells)} cells, the header {len(header)})")
                 cell = cells[j].strip()
+                if cell.lower() == "nan" and not _is_required(name, required):
+                    cell = ""              # written for "no value" (wearcheck writes it too)
                 if not cell:
                     if _is_required(name, required):
                         raise CaseError(f"{path}, row {row}, column '{header[j].strip()}': "
@@ -222,8 +225,9 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
 
 
 def _is_required(name: str, required) -> bool:
-    """A column named in ``required`` (alone or as one of a group) has no empty cells."""
-    return any(name == need if isinstance(need, str) else name in need for need in required)
+    """A column named alone in ``required`` has no empty cells (a column of a group, one
+    of which must be present, may: the caller checks the one it uses)."""
+    return any(name == need for need in required if isinstance(need, str))
 
 
 def _numeric(cells) -> bool:

@@ -23,6 +23,7 @@ runs over decades of sliding.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from dataclasses import dataclass, field
@@ -280,6 +281,48 @@ class Reference:
             raise CaseError(f"the reference '{self.name}' has no cycles: its case has no "
                             "sliding.stroke")
         return cycles / cpm
+
+    def relative_bands(self) -> list[dict]:
+        """Per stored stage: ŝ (and cycles where defined) and each check's band relative
+        to the stage's own scale, floored, as the verdict judges a difference
+        (``[compare]`` of the reference's case)."""
+        from wearcheck.comparisons.analysis import metrics
+        sc = self.scales
+        case = self.case
+        tol = dataclasses.asdict(case.compare)
+        d = case.loading.depth if case.loading.control == "depth" else sc["d0"]
+        units = dict(profile_contact_max=d, force=sc["F0"], pressure_interior_max=sc["p0"],
+                     contact_radius=sc["a0"], wear_center=d, depth=d,
+                     wear_volume=math.pi * sc["a0"] ** 2 * d)
+        exclude = None
+        if case.indenter.profile == "truncated_paraboloid":
+            exclude = (case.indenter.flat_radius, case.compare.edge_band * sc["a0"])
+        rows = []
+        for j, s in enumerate(self.stage_s):
+            h = {k: float(v[0]) for k, v in self.history_at(s).items()}
+            r = self.rho_p * self.stage_a[j]
+            peak = metrics.peak_pressure(r, self.pressure[j], *(exclude or (None, 0.0)))
+            own = dict(profile_contact_max=max(h["depth"], h["wear_center"]), force=h["force"],
+                       pressure_interior_max=peak, contact_radius=h["contact_radius"],
+                       wear_center=h["wear_center"], wear_volume=h["wear_volume"],
+                       depth=h["depth"])
+            row = dict(s=float(s), s_hat=float(s * sc["s_hat_per_m"]))
+            if "cycles" in self.history or case.cycles_per_metre is not None:
+                row["cycles"] = float(self.s_to_cycles(s))
+            for c, parts in self.band.items():
+                check = metrics.CHECK_BY_COLUMN[c]
+                scale, _ = metrics.stage_scale(own[c] / units[c], tol[check.floor])
+                row[c] = float(parts["total"][j]) / units[c] / scale
+            rows.append(row)
+        return rows
+
+    def s_to_cycles(self, s) -> np.ndarray:
+        """Cycles at distances s: the fretting history's own, else s/(2·stroke)."""
+        s = np.asarray(s, float)
+        if "cycles" in self.history:
+            return np.interp(s, self.history["s"], self.history["cycles"])
+        cpm = self.case.cycles_per_metre
+        return s * (cpm if cpm is not None else math.nan)
 
     def band_table(self) -> list[dict]:
         """One row per stored stage: ŝ and each check's total band (unworn units)."""

@@ -106,17 +106,18 @@ def to_distance(values, kind: str, case, scales: dict, cycles_to_s=None) -> np.n
     return values / cpm
 
 
-def select_stages(history: dict, stages: list, case_stage_s) -> list[dict]:
+def select_stages(history: dict, stages: list, case_stage_s,
+                  same: float = SAME_DISTANCE) -> list[dict]:
     """The stages to judge: the user's stages, or (none given) the history rows
     nearest the case's stages. Each {s, stage (index into ``stages`` or None),
-    row (history row index or None)}."""
+    row (history row index or None)}. A history row belongs to a stage when their
+    distances agree to ``same`` relative (files that print the same time with
+    different digits, such as CalculiX's .dat and .frd, need more than round-off)."""
     hs = np.asarray(history["s"], float)
-    span = max(float(np.max(hs, initial=0.0)), max((st["s"] for st in stages), default=0.0))
-    tol = SAME_DISTANCE * max(span, 1e-300)
     out = []
     if stages:
         for i, st in enumerate(stages):
-            hit = np.flatnonzero(np.abs(hs - st["s"]) <= tol)
+            hit = np.flatnonzero(np.abs(hs - st["s"]) <= same * abs(st["s"]))
             out.append(dict(s=st["s"], stage=i, row=int(hit[0]) if hit.size else None))
         return out
     rows = []
@@ -129,7 +130,8 @@ def select_stages(history: dict, stages: list, case_stage_s) -> list[dict]:
 
 
 def judge(reference, history: dict, stages: list, *, case_stage_s, scales: dict, depth: float,
-          tolerances: dict, edge_band: float, exclude_radius=None, exclude_width=0.0) -> dict:
+          tolerances: dict, edge_band: float, exclude_radius=None, exclude_width=0.0,
+          same_distance: float = SAME_DISTANCE) -> dict:
     """Judge a user's results against ``reference``.
 
     Parameters
@@ -140,6 +142,8 @@ def judge(reference, history: dict, stages: list, *, case_stage_s, scales: dict,
     stages : [{s, r, f, p, origin}]: the user's stages (f, p None when not given).
     case_stage_s : the case's stage distances (stages chosen from the history when
         ``stages`` is empty).
+    same_distance : how closely (relative) a history row's distance must match a
+        stage's for the row to be that stage's (:func:`select_stages`).
     scales, depth, tolerances, edge_band : as ``metrics.compare_results``.
 
     Returns
@@ -150,7 +154,7 @@ def judge(reference, history: dict, stages: list, *, case_stage_s, scales: dict,
     """
     units = unit_scales(scales, depth)
     per_m = scales["s_hat_per_m"]
-    chosen = select_stages(history, stages, case_stage_s)
+    chosen = select_stages(history, stages, case_stage_s, same_distance)
     given = [q for q in HISTORY_CHECKS if q in history and np.any(np.isfinite(history[q]))]
     has_f = any(st.get("f") is not None for st in stages)
     has_p = any(st.get("p") is not None for st in stages)

@@ -59,6 +59,7 @@ class External:
         given as the wear depth w is kept in ``Stage.wear`` (the caller forms
         f = f0 + w, knowing the unworn profile).
     source, format : the path read and its format; notes : what the reader decided.
+    time_precision : how closely two distances written for the same time agree.
     """
 
     kind: str
@@ -69,6 +70,9 @@ class External:
     format: str
     stage_kind: str = "s"
     notes: list = field(default_factory=list)
+    #: relative precision of the distances as written (a stage and a history row
+    #: within it are the same time)
+    time_precision: float = 1e-9
 
     @property
     def given(self) -> list[str]:

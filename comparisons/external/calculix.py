@@ -279,8 +279,10 @@ def read(path: Path, mapping: dict) -> External:
             stages = _dat_stages(dat, blocks_dat, spec, axis, coord, time_factor, notes)
     history = _dat_history(dat, blocks_dat, spec, axis, time_factor, notes, stages)
     origin = [f"{dat.name if dat else frd.name} time {t:g}" for t in history["time"]]
+    # the .frd prints a time with six digits, the .dat with seven: the same time
     return External(kind=kind, history=history, history_origin=origin, stages=stages,
-                    source=str(source), format="calculix", stage_kind=kind, notes=notes)
+                    source=str(source), format="calculix", stage_kind=kind, notes=notes,
+                    time_precision=1e-5)
 
 
 def _radius(coords: np.ndarray, axis: str, factor: float) -> np.ndarray:

@@ -78,6 +78,9 @@ def read(directory: Path, mapping: dict) -> External:
 
 
 def _check_increasing(t, table, kind) -> None:
+    if np.any(np.isnan(t)):
+        i = int(np.flatnonzero(np.isnan(t))[0])
+        raise CaseError(f"{table.where(i, kind)}: empty")
     bad = np.flatnonzero(np.diff(t) <= 0)
     if bad.size:
         i = int(bad[0]) + 1
@@ -103,6 +106,9 @@ def read_stages(path: Path, aliases: dict) -> tuple[list, str, list]:
         raise CaseError(f"{path}: no column 'f', 'wear' or 'p' (a stage needs the worn "
                         "profile f [m], the wear depth wear [m] or the pressure p [Pa])")
     t = table[kind]
+    if np.any(np.isnan(t)):
+        i = int(np.flatnonzero(np.isnan(t))[0])
+        raise CaseError(f"{table.where(i, kind)}: empty")
     if np.any(t < 0):
         i = int(np.flatnonzero(t < 0)[0])
         raise CaseError(f"{table.where(i, kind)}: negative distance {t[i]:g}")

@@ -6,8 +6,8 @@ Verification is a comparison whose second "solver" reads files instead of
 solving: the user's results are read (:mod:`comparisons.external`), the
 reference is evaluated at the user's own distances and radii, and each stage
 is judged by the verdict's checks (:mod:`comparisons.analysis.verification`).
-The output directory (the layout ``rundir.VERIFICATION``, written atomically as
-a comparison):
+The output directory (``layout.VERIFICATION_FILES``, written atomically as a
+comparison):
 
     DIR/reference/                 the reference at the judged stages (a run directory)
     DIR/results/history.csv        the user's history as read, in SI (s, s_hat, ...)
@@ -29,7 +29,7 @@ import numpy as np
 
 from wearcheck import cases
 from wearcheck.cases import CaseError, reference as closed
-from wearcheck.comparisons import external, registry, rundir
+from wearcheck.comparisons import external, layout, registry, rundir
 from wearcheck.comparisons.analysis import verification
 from wearcheck.comparisons.studies import compare as compare_mod
 
@@ -134,7 +134,8 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
     exclude = compare_mod.pressure_exclusion(case, sc)
     pair = verification.judge(ref, hist, stages, case_stage_s=case_stage_distances(case),
                               scales=sc, depth=depth, tolerances=dataclasses.asdict(cmp),
-                              edge_band=cmp.edge_band, **exclude)
+                              edge_band=cmp.edge_band, same_distance=ext.time_precision,
+                              **exclude)
     factor = verification.distance_factor(ref, hist, sc, depth)
     judged_s = [st["s"] for st in pair["stages"]]
     if reference_solver is None:
@@ -162,7 +163,7 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
                                    time_error=err.get("estimate") if isinstance(err, dict)
                                    else None)
     _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0,
-           ref.meta.get("provenance") if reference_solver is None else None)
+           reference_solver is None)
     return m
 
 
@@ -193,14 +194,13 @@ def _diagnosis(pair, factor, cmp) -> dict | None:
         "distance slid per step or cycle"))
 
 
-def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, ref_provenance):
+def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, certified_ref):
     from wearcheck.comparisons.present import report, verify_figures, verify_report
     prov = rundir.provenance(argv)
     out = Path(out)
     with rundir.atomic_directory(out, "comparison") as tmp:
         (tmp / "reference").mkdir()
-        extra = {"reference": dict(m["reference_band"], provenance=ref_provenance)} \
-            if ref_provenance else None
+        extra = {"reference": m["reference_band"]} if certified_ref else None
         rundir.write_run_files(tmp / "reference", ref_case, run, ref_name, argv,
                                extra_meta=extra)
         (tmp / RESULTS).mkdir()
@@ -209,6 +209,7 @@ def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, ref_pr
         m["provenance"] = prov
         m["case_source"] = case.source
         m["seconds_total"] = time.perf_counter() - t0
+        m["data_dictionary"] = layout.verification_dictionary()
         rundir.write_json(tmp / "metrics.json", m)
         (tmp / "case.toml").write_text(cases.to_toml(case), encoding="utf-8")
         blocks = verify_report.build_report(case, m, names, prov)

@@ -1,0 +1,99 @@
+"""cases/tables.py: a user's CSV table with units in its header.
+
+Checked against hand-written tables whose SI values are known by construction:
+columns in any order with extras, units converted, and every bad file refused
+with one line naming the file, the row and the column.
+"""
+
+import numpy as np
+import pytest
+
+from wearcheck.cases import CaseError
+from wearcheck.cases.tables import read_table, split_header, unit_factor
+
+COLUMNS = {"s": "length", "force": "force", "p": "pressure", "wear_volume": "volume",
+           "cycles": "number"}
+
+
+def write(tmp_path, text, name="t.csv"):
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_units_and_order_and_extras(tmp_path):
+    path = write(tmp_path, "# a comment before the header\n"
+                           "note,force [kN],s [mm],p [MPa],wear_volume [mm^3],cycles\n"
+                           "a,1.5,2,3,4,5\n"
+                           "b,0.5,20,30,40,50\n")
+    t = read_table(path, COLUMNS, required=[("s", "cycles"), "force"])
+    # exact by construction: kN, mm, MPa and mm³ to SI
+    assert np.allclose(t["force"], [1500.0, 500.0], rtol=1e-15)
+    assert np.allclose(t["s"], [2e-3, 20e-3], rtol=1e-15)
+    assert np.allclose(t["p"], [3e6, 30e6], rtol=1e-15)
+    assert np.allclose(t["wear_volume"], [4e-9, 40e-9], rtol=1e-15)
+    assert np.array_equal(t["cycles"], [5.0, 50.0])
+    assert t.ignored == ["note"]
+    assert list(t.rows) == [3, 4]            # spreadsheet rows: the header is row 2
+
+
+@pytest.mark.parametrize("unit,factor", [("µm", 1e-6), ("\u03bcm", 1e-6), ("um", 1e-6),
+                                         ("nm", 1e-9), ("m", 1.0)])
+def test_micro_spellings(unit, factor):
+    assert unit_factor(unit, "length") == factor
+
+
+def test_header_forms():
+    assert split_header("force [N]") == ("force", "N")
+    assert split_header(" Force (kN) ") == ("force", "kN")
+    assert split_header("s") == ("s", None)
+
+
+def test_semicolon_and_tab_tables(tmp_path):
+    for sep in (";", "\t"):
+        path = write(tmp_path, f"s{sep}force\n1{sep}2\n3{sep}4\n")
+        t = read_table(path, COLUMNS, required=["s", "force"])
+        assert list(t["force"]) == [2.0, 4.0]
+
+
+def test_optional_empty_cell_is_nan(tmp_path):
+    path = write(tmp_path, "s,force,p\n1,2,\n3,4,5\n")
+    t = read_table(path, COLUMNS, required=["s", "force"])
+    assert np.isnan(t["p"][0]) and t["p"][1] == 5.0
+
+
+def one_line(exc):
+    text = str(exc.value)
+    assert "\n" not in text
+    return text
+
+
+@pytest.mark.parametrize("text,expect", [
+    ("s,force [lbf]\n1,2\n", ["t.csv", "row 1", "column 'force [lbf]'", "unknown unit 'lbf'",
+                              "kN"]),
+    ("s,force\n1,2\n3,x\n", ["t.csv", "row 3", "column 'force'", "'x' is not a number"]),
+    ("s,force\n1,2\n3\n", ["t.csv", "row 3", "column 'force'", "missing"]),
+    ("s,force\n1,2\n,4\n", ["t.csv", "row 3", "column 's'", "empty"]),
+    ("s,force\n1,inf\n", ["t.csv", "row 2", "column 'force'", "not a finite number"]),
+    ("s;force\n1;2,5\n", ["row 2", "column 'force'", "decimal comma"]),
+    ("s,p\n1,2\n", ["t.csv", "no column 'force'", "columns found: 's', 'p'"]),
+    ("force\n1\n", ["no column 's' or 'cycles'"]),
+    ("", ["t.csv", "empty"]),
+    ("1,2\n3,4\n", ["t.csv", "row 1", "no header row"]),
+    ("s,force\n", ["no data rows"]),
+    ("s,force,s\n1,2,3\n", ["column 's' appears twice"]),
+])
+def test_bad_tables_one_line_each(tmp_path, text, expect):
+    path = write(tmp_path, text)
+    with pytest.raises(CaseError) as exc:
+        read_table(path, COLUMNS, required=[("s", "cycles"), "force"])
+    msg = one_line(exc)
+    for part in expect:
+        assert part in msg, msg
+
+
+def test_missing_file_and_directory(tmp_path):
+    with pytest.raises(CaseError, match="does not exist"):
+        read_table(tmp_path / "no.csv", COLUMNS)
+    with pytest.raises(CaseError, match="is a directory"):
+        read_table(tmp_path, COLUMNS)
