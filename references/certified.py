@@ -40,6 +40,8 @@ BAND_CHECKS = ("profile_contact_max", "force", "pressure_interior_max", "contact
                "wear_center", "wear_volume", "depth")
 #: the band's parts, summed into "total"
 BAND_PARTS = ("space", "time", "resample")
+#: relative rounding of a value stored as float32
+FLOAT32 = 2.0**-24
 #: the folder of the shipped files
 DATA_DIR = Path(__file__).resolve().parent / "data"
 #: the format of the file (raised when its layout changes)
@@ -223,18 +225,24 @@ class Reference:
         return np.unique(np.concatenate(rs)) if rs else self.rho_f * self.stage_a[0]
 
     def band_at(self, s) -> dict:
-        """{check: total band} at distance s in unworn units: the stored stages' band
-        interpolated linearly in τ, plus the interval's interpolation cost between them."""
+        """{check: total band} at distance s [SI]: the stored stages' band interpolated
+        linearly in τ, plus the interval's interpolation cost between them, plus the
+        rounding of the values to the file's float32 (2⁻²⁴ of their size)."""
         t, nodes = float(self.tau(s)), self.tau(self.stage_s)
+        h = self.history_at(s)
+        j = int(np.argmin(np.abs(nodes - t)))
+        stored = dict(profile_contact_max=float(np.max(np.abs(self.wear[j]))),
+                      pressure_interior_max=float(np.max(self.pressure[j])),
+                      **{q: abs(float(h[q][0])) for q in HISTORY[1:]})
         out = {}
         for check, parts in self.band.items():
             total = np.asarray(parts["total"], float)
             value = float(np.interp(t, nodes, total))
             on_node = np.any(np.abs(nodes - t) <= 1e-12 * max(1.0, abs(t)))
             if not on_node and len(nodes) > 1:
-                j = int(np.clip(np.searchsorted(nodes, t) - 1, 0, len(nodes) - 2))
-                value += float(parts["interval"][j])
-            out[check] = value
+                i = int(np.clip(np.searchsorted(nodes, t) - 1, 0, len(nodes) - 2))
+                value += float(parts["interval"][i])
+            out[check] = value + FLOAT32 * stored[check]
         return out
 
     def run_result(self, stage_s=None) -> RunResult:

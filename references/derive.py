@@ -114,10 +114,10 @@ PLANS = {
     "ellipsoid": Plan(
         "ellipsoid", "bem", _DEPTH_STAGES[:-1], spread=("mdr",), rho_f_max=2.2, rho_p_max=2.2,
         points_f=221, points_p=221,
-        dimensions=(Dimension("space", "bem.grid", (128, 256, 512), 2.0,
+        dimensions=(Dimension("space", "bem.grid", (64, 128, 256), 2.0,
                               {"sliding.tolerance": 1e-5}),
                     Dimension("time", "sliding.tolerance", (1e-3, 1e-4, 1e-5), 10.0,
-                              {"bem.grid": 128}))),
+                              {"bem.grid": 64}))),
     "ball_on_flat": Plan(
         "ball_on_flat", "mdr", _DECADES, stage_unit="cycles", s_hat_ref=0.01,
         spread=("fem", "bem"),
@@ -129,12 +129,12 @@ PLANS = {
         "fretting", "mdr", (0, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000,
                             20000, 50000, 100000),
         stage_unit="cycles", s_hat_ref=1e-4, integer_stages=True,
-        dimensions=(Dimension("space", "mdr.elements", (800, 1600, 3200), 2.0,
+        dimensions=(Dimension("space", "mdr.elements", (400, 800, 1600), 2.0,
                               {"fretting.jump_tolerance": 0.005, "fretting.increments": 20}),
                     Dimension("jumps", "fretting.jump_tolerance", (0.02, 0.01, 0.005), 2.0,
-                              {"mdr.elements": 800, "fretting.increments": 20}),
+                              {"mdr.elements": 400, "fretting.increments": 20}),
                     Dimension("increments", "fretting.increments", (5, 10, 20), 2.0,
-                              {"mdr.elements": 800, "fretting.jump_tolerance": 0.005}))),
+                              {"mdr.elements": 400, "fretting.jump_tolerance": 0.005}))),
 }
 
 
@@ -303,16 +303,19 @@ def dimension_band(case, per_level: list, dim: Dimension) -> tuple[dict, dict]:
 
 # -- the whole derivation -----------------------------------------------------------
 
-def derive(plan: Plan, *, dimensions=None, spread=None, quiet=False, solve=None) -> dict:
-    """Compute a reference and its band; returns what :func:`certified.write` takes
-    (plus ``runs``: each level's time and settings).
+def derive(plan: Plan, *, dimensions=None, spread=None, changes=None, quiet=False,
+           solve=None) -> dict:
+    """Compute a reference and its band; returns what :func:`certified.write` takes.
 
-    ``dimensions`` and ``spread`` replace the plan's (the tests derive coarse
-    versions); ``solve(case, solver)`` defaults to the registry's.
+    ``dimensions`` and ``spread`` replace the plan's, ``changes`` are applied to the
+    shipped case first (a shorter run: the tests derive coarse versions);
+    ``solve(case, solver)`` defaults to the registry's.
     """
     from wearcheck import cases
     solve = solve or (lambda c, name: registry.solve(c, name))
     case = cases.load(cases.shipped(plan.name))
+    if changes:
+        case = case.derive(changes)
     dims = plan.dimensions if dimensions is None else dimensions
     say = (lambda *a: None) if quiet else (lambda *a: print(*a, flush=True))
     if plan.solver == "closed_form":
@@ -566,7 +569,8 @@ def _closed_form(plan, case) -> dict:
                 pressure=p[None, :], band=band, meta=meta, closed_pressure=pressure)
 
 
-def _as_reference(data, case) -> certified.Reference:
+def as_reference(data, case) -> certified.Reference:
+    """What :func:`derive` returned, as a :class:`certified.Reference` (not written)."""
     hist = {k: np.asarray(v, float) for k, v in data["history"].items()}
     return certified.Reference(name=data["name"], case=case, s_hat_ref=data["s_hat_ref"],
                                history=hist, stage_s=np.asarray(data["stage_s"], float),
@@ -580,7 +584,7 @@ def _spread(plan, case, data, solvers, solve, say) -> dict:
     """Each other solver at the case's own settings against the reference, per stage
     and check (relative to the stage's scale, as the verdict judges)."""
     from wearcheck.comparisons.studies import compare as cmp
-    ref = _as_reference(data, case)
+    ref = as_reference(data, case)
     out = {}
     for name in solvers:
         reason = registry.get(name).supports(case)
@@ -626,7 +630,7 @@ def _settings(case, solver) -> dict:
 def _mdr_check(plan, case, data, solve, say) -> dict:
     """The MDR at growing N against the closed form: force, contact radius and
     interior pressure errors, and their observed orders."""
-    ref = _as_reference(data, case)
+    ref = as_reference(data, case)
     sc = ref.scales
     rows = []
     for n in plan.mdr_check_levels:

@@ -367,3 +367,47 @@ def test_reference_command_and_api(tmp_path):
     assert m["passed"]
     done = cli("reference", "--list")
     assert done.returncode == 0 and "fretting" in done.stdout
+
+
+# -- the other benchmarks: cycles, a single .vtu -------------------------------------
+
+def test_ball_on_flat_in_cycles(no_figures, tmp_path):
+    # a lab test's results against the cycle count (s = 2·stroke·cycles)
+    run = wearcheck.solve(wearcheck.load_case("ball_on_flat", {"mdr.elements": 200}), "mdr")
+    m = run_verify("ball_on_flat", fmt.csv_dir(tmp_path / "r", run, time="cycles"),
+                   tmp_path / "v")
+    assert m["passed"], json.dumps(failed_stages(m))
+    assert m["results"]["distance"] == "cycles"
+    m = run_verify("ball_on_flat", fmt.csv_dir(tmp_path / "b", run, time="cycles",
+                                               scale=1.05), tmp_path / "v2")
+    assert not m["passed"]
+    # under a held force the worn volume is K F s: 5 % more distance, 5 % more volume
+    assert all("wear_volume" in bad for k, bad in failed_stages(m).items() if k > 0)
+    assert m["diagnosis"]["factor"] == pytest.approx(1 / 1.05, rel=2e-3)
+
+
+def test_fretting_in_cycles(no_figures, tmp_path):
+    # the fretting benchmark over its first thousand cycles (the run's length is free)
+    case = wearcheck.load_case("fretting", {"mdr.elements": 200, "fretting.cycles": 1000,
+                                            "fretting.stage_cycles": [0, 10, 100, 1000]})
+    run = wearcheck.solve(case, "mdr")
+    m = run_verify(case, fmt.csv_dir(tmp_path / "r", run, time="cycles"), tmp_path / "v")
+    assert m["passed"], json.dumps(failed_stages(m))
+    m = run_verify(case, fmt.csv_dir(tmp_path / "b", run, time="cycles", scale=1.05),
+                   tmp_path / "v2")
+    failed = failed_stages(m)
+    assert not m["passed"] and "wear_volume" in failed[max(failed)]
+    # against a fresh run at the results' cycle counts
+    m = run_verify(case, fmt.csv_dir(tmp_path / "r2", run, time="cycles", stages=False),
+                   tmp_path / "v3", reference_solver="mdr")
+    assert m["passed"] and m["reference"] == "mdr"
+
+
+def test_a_single_vtu_of_the_unworn_contact(no_figures, tmp_path):
+    out = tmp_path / "run"
+    run = wearcheck.solve(wearcheck.load_case("hertz", {"fem.contact_nodes": 125}), "fem")
+    run.write(out)
+    wearcheck.export_vtk(out)
+    m = run_verify("hertz", out / "vtk" / "profile_000.vtu", tmp_path / "v")
+    assert m["passed"], json.dumps(failed_stages(m))
+    assert m["checks"] == ["profile_contact_max", "pressure_interior_max"]

@@ -24,10 +24,13 @@ def csv_dir(directory, result, *, scale=1.0, time="s", stages=True) -> Path:
     head = {"s": "s [mm]", "s_hat": "s_hat", "cycles": "cycles"}[time]
     lines = [f"step,force [kN],contact_radius [mm],{head},wear_volume [mm^3],wear_center [µm],"
              "depth"]
+    fretting = result.case.fretting is not None
     for i in range(len(h["s"])):
         s = h["s"][i] * scale
-        t = {"s": s * 1e3, "s_hat": s * per_m, "cycles": s * result.case.cycles_per_metre
-             if result.case.cycles_per_metre else np.nan}[time]
+        if time == "cycles":   # a fretting run counts its own cycles; else s/(2·stroke)
+            t = h["cycles"][i] * scale if fretting else s * result.case.cycles_per_metre
+        else:
+            t = {"s": s * 1e3, "s_hat": s * per_m}[time]
         lines.append(f"{i},{h['force'][i] / 1e3:.17g},{h['contact_radius'][i] * 1e3:.17g},"
                      f"{t:.17g},{h['wear_volume'][i] * 1e9:.17g},"
                      f"{h['wear_center'][i] * 1e6:.17g},{h['depth'][i]:.17g}")

@@ -87,6 +87,16 @@ class RunReference:
     def band_at(self, s):
         return None
 
+    def cycles_to_s(self, cycles):
+        """Distances [m] of cycle counts: the run's own cycles column (fretting), else
+        the case's stroke."""
+        cycles = np.asarray(cycles, float)
+        h = self.result.history
+        if "cycles" in h and np.all(np.isfinite(h["cycles"])):
+            return np.interp(cycles, h["cycles"], h["s"], left=np.nan, right=np.nan)
+        cpm = self.case.cycles_per_metre
+        return cycles / cpm if cpm is not None else np.full(np.shape(cycles), np.nan)
+
 
 def to_distance(values, kind: str, case, scales: dict, cycles_to_s=None) -> np.ndarray:
     """Distances s [m] of values given as s, ŝ or cycles (a fretting reference maps

@@ -46,10 +46,9 @@ def _solve(case, name, quiet):
         bar.close()
 
 
-def read_results(case, path, mapping, cycles_to_s=None) -> tuple[dict, list, object]:
-    """The user's results in SI distances: (history {"s", quantities, "origin"},
-    stages [{s, r, f, p, origin}], the External read)."""
-    ext = external.read(path, mapping)
+def read_results(case, ext, cycles_to_s=None) -> tuple[dict, list]:
+    """The user's results (read by ``external.read``) in SI distances: (history
+    {"s", quantities, "origin"}, stages [{s, r, f, p, origin}])."""
     sc = closed.scales(case)
     hist = {k: np.asarray(v, float) for k, v in ext.history.items() if k != "time"}
     hist["s"] = verification.to_distance(ext.history["time"], ext.kind, case, sc, cycles_to_s)
@@ -64,23 +63,56 @@ def read_results(case, path, mapping, cycles_to_s=None) -> tuple[dict, list, obj
             f = unworn_profile(case, st.r) + st.wear
         stages.append(dict(s=s, r=st.r, f=f, p=st.p, origin=st.origin))
     if any(not np.isfinite(st["s"]) for st in stages) or not np.all(np.isfinite(hist["s"])):
-        raise CaseError(f"results '{path}': cycles outside the reference's range cannot be "
+        raise CaseError(f"results '{ext.source}': cycles beyond the reference's cannot be "
                         "turned into sliding distances")
-    return hist, stages, ext
+    return hist, stages
 
 
-def fresh_reference(case, name, hist, stages, *, quiet=True, solve=None):
-    """A run of solver ``name`` with its stages at the user's distances."""
+def case_stage_cycles(case) -> list[float]:
+    """A fretting case's stages in cycles: fretting.stage_cycles, else 0, 1, 10, ... and
+    the run's last cycle (as the MDR keeps them)."""
+    fr = case.fretting
+    if fr.stage_cycles is not None:
+        return [float(c) for c in fr.stage_cycles]
+    out, c = [0.0], 1
+    while c < fr.cycles:
+        out.append(float(c))
+        c *= 10
+    return out + [float(fr.cycles)]
+
+
+def case_stage_distances(case, cycles_to_s=None) -> list[float]:
+    """The case's stages as sliding distances [m]."""
     sc = closed.scales(case)
-    s_list = [st["s"] for st in stages] or [
-        sel["s"] for sel in verification.select_stages(hist, [], case_stage_distances(case))]
-    s_list = sorted(set(s_list))
     if case.fretting is not None:
-        raise CaseError("--reference-solver with a fretting case: give the results' stages "
-                        "in cycles and verify against the certified reference instead")
-    changes = {"stages.s_hat": [s * sc["s_hat_per_m"] for s in s_list]}
-    if case.stages.cycles is not None:
-        changes["stages.cycles"] = None
+        return [float(s) for s in cycles_to_s(np.asarray(case_stage_cycles(case)))
+                if np.isfinite(s)]
+    return [s / sc["s_hat_per_m"] for s in case.stages.s_hat]
+
+
+def fresh_reference(case, name, ext, *, quiet=True, solve=None):
+    """A run of solver ``name`` with its stages at the user's: (RunReference, the run,
+    its case). A fretting case keeps its stages at the user's cycle counts."""
+    sc = closed.scales(case)
+    if case.fretting is not None:
+        times = [st.time for st in ext.stages] if ext.stages else list(ext.history["time"])
+        kind = ext.stage_kind if ext.stages else ext.kind
+        if kind != "cycles" or any(t != round(t) for t in times):
+            raise CaseError("--reference-solver with a fretting case: give the results "
+                            "against whole cycles (a column 'cycles'); a fretting run keeps "
+                            "its stages at the end of a cycle")
+        if not ext.stages:   # the history rows nearest the case's stages
+            want = case_stage_cycles(case)
+            times = sorted({min(times, key=lambda t: abs(t - c)) for c in want})
+        changes = {"fretting.stage_cycles": sorted({int(t) for t in times})}
+    else:
+        hist, stages = read_results(case, ext)
+        s_list = [st["s"] for st in stages] or [
+            sel["s"] for sel in verification.select_stages(hist, [],
+                                                           case_stage_distances(case))]
+        changes = {"stages.s_hat": [s * sc["s_hat_per_m"] for s in sorted(set(s_list))]}
+        if case.stages.cycles is not None:
+            changes["stages.cycles"] = None
     run_case = case.derive(changes)
     registry.get(name)
     reason = registry.get(name).supports(run_case)
@@ -88,11 +120,6 @@ def fresh_reference(case, name, hist, stages, *, quiet=True, solve=None):
         raise CaseError(f"--reference-solver {name}: it cannot run this case: {reason}")
     result = (solve or (lambda c, n: _solve(c, n, quiet)))(run_case, name)
     return verification.RunReference(result, run_case, name), result, run_case
-
-
-def case_stage_distances(case) -> list[float]:
-    sc = closed.scales(case)
-    return [s / sc["s_hat_per_m"] for s in case.stages.s_hat]
 
 
 def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None,
@@ -123,16 +150,19 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
                             + ", ".join(certified.names()) + "; the physics must match: "
                             "indenter, counterface, loading, wear, fretting); verify against "
                             "a fresh run instead: --reference-solver mdr")
-        hist, stages, ext = read_results(case, results, mapping, ref.cycles_to_s)
+        ext = external.read(results, mapping)
+        hist, stages = read_results(case, ext, ref.cycles_to_s)
         ref_name, ref_title = "reference", f"certified reference '{ref.name}'"
         ref_case = case
     else:
-        hist, stages, ext = read_results(case, results, mapping)
-        ref, run, ref_case = fresh_reference(case, reference_solver, hist, stages,
-                                             quiet=quiet, solve=solve)
+        ext = external.read(results, mapping)
+        ref, run, ref_case = fresh_reference(case, reference_solver, ext, quiet=quiet,
+                                             solve=solve)
+        hist, stages = read_results(case, ext, ref.cycles_to_s)
         ref_name, ref_title = reference_solver, f"a fresh {registry.get(reference_solver).title} run"
     exclude = compare_mod.pressure_exclusion(case, sc)
-    pair = verification.judge(ref, hist, stages, case_stage_s=case_stage_distances(case),
+    pair = verification.judge(ref, hist, stages,
+                              case_stage_s=case_stage_distances(case, ref.cycles_to_s),
                               scales=sc, depth=depth, tolerances=dataclasses.asdict(cmp),
                               edge_band=cmp.edge_band, same_distance=ext.time_precision,
                               **exclude)
