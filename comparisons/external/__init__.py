@@ -70,9 +70,10 @@ class External:
     format: str
     stage_kind: str = "s"
     notes: list = field(default_factory=list)
-    #: relative precision of the distances as written (a stage and a history row
-    #: within it are the same time)
-    time_precision: float = 1e-9
+    #: relative precision of the distances as written: a stage and a history row
+    #: within it are the same time (a table's stages and history written with
+    #: different digits; CalculiX's .frd and .dat)
+    time_precision: float = 1e-6
 
     @property
     def given(self) -> list[str]:
