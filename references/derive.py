@@ -112,8 +112,11 @@ PLANS = {
                     Dimension("time", "sliding.tolerance", (1e-4, 1e-5, 1e-6), 10.0,
                               {"mdr.elements": 1600}))),
     "ellipsoid": Plan(
-        "ellipsoid", "bem", _DEPTH_STAGES[:-1], spread=("mdr",), rho_f_max=2.2, rho_p_max=2.2,
-        points_f=221, points_p=221,
+        # the BEM's box (2.5 times the final long semi-axis) holds rings to 1.64 a(s) at
+        # the end; the worn region and the pressure reach the long semi-axis, 1.44 a(s)
+        # at most (b/a = 0.48 unworn, 0.58 at complete wear)
+        "ellipsoid", "bem", _DEPTH_STAGES[:-1], spread=("mdr",), rho_f_max=1.55, rho_p_max=1.55,
+        points_f=187, points_p=187,
         dimensions=(Dimension("space", "bem.grid", (64, 128, 256), 2.0,
                               {"sliding.tolerance": 1e-5}),
                     Dimension("time", "sliding.tolerance", (1e-3, 1e-4, 1e-5), 10.0,
