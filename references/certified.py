@@ -79,12 +79,29 @@ def physics(case: Case) -> dict:
     return out
 
 
+def _default(section: str, key: str):
+    """A case key's default (None when it has none or is unknown): a key missing from one
+    side of a comparison counts as its default, so that a key added to the schema later
+    (with the default that keeps the old behaviour) does not orphan the shipped files."""
+    from wearcheck.cases.schema import SECTIONS, section_fields
+    if section not in SECTIONS:
+        return None
+    for name, f in section_fields(section):
+        if name == key and not f.metadata.get("required"):
+            return f.default
+    return None
+
+
 def physics_difference(a: dict, b: dict) -> str | None:
     """The first key in which two :func:`physics` dicts differ, as 'section.key: x != y'."""
     for section in sorted(set(a) | set(b)):
+        if (section in a) != (section in b):
+            which = "here" if section in a else "in the reference"
+            return f"[{section}] only {which}"
         sa, sb = a.get(section, {}), b.get(section, {})
         for key in sorted(set(sa) | set(sb)):
-            va, vb = sa.get(key), sb.get(key)
+            va = sa.get(key, _default(section, key))
+            vb = sb.get(key, _default(section, key))
             if isinstance(va, float) and isinstance(vb, (int, float)) and vb is not None:
                 if math.isclose(va, float(vb), rel_tol=1e-12, abs_tol=0.0):
                     continue
