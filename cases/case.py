@@ -299,6 +299,8 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     case = Case(**built, source=str(source), table=table)
     _check_sphere_depth(case)
     _check_scales(case)
+    if case.fretting is None:
+        _check_tangential_correction(case)
     if case.stages.cycles is not None:
         # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
         from . import reference
@@ -354,6 +356,33 @@ def _check_scales(case: Case) -> None:
                         "infinite); check the load against the profile's size"
                         + (f" (indenter.radius = {case.indenter.radius!r})"
                            if case.indenter.radius is not None else ""))
+
+
+def _check_tangential_correction(case: Case) -> None:
+    """The correction is the springs' reversal at each stroke end: it needs a stroke
+    longer than that reversal (docs/theory.md §4)."""
+    if not case.wear.tangential_correction:
+        return
+    sl = case.sliding
+    if sl.stroke is None:
+        # case files written for the earlier reading (an increment of paper
+        # Eq. 15, which changed F/F0 by 1e-6) have the key without a stroke
+        raise CaseError("key 'wear.tangential_correction' = true needs 'sliding.stroke' (m): "
+                        "the correction is the sliding each stroke end loses while the "
+                        "tangential springs reverse (2μq/G* per stroke), so it depends on the "
+                        "stroke; give the reciprocating stroke (one way), or remove the key "
+                        "(the earlier reading without a stroke changed nothing measurable)")
+    from . import reference
+    sc = reference.scales(case)
+    # the largest spring limit of the unworn contact, μ E* d0/G* (the line load
+    # E*(d0 - g) peaks where g = 0): u* of Cattaneo-Mindlin for the paraboloid.
+    # Wear lowers it (the line load spreads), so the start decides
+    u_star = case.wear.mu * case.E_star * sc["d0"] / case.G_star
+    if sl.stroke <= 2.0 * u_star:
+        raise CaseError(f"key 'sliding.stroke' = {sl.stroke!r}: with "
+                        "wear.tangential_correction the stroke must exceed the springs' "
+                        f"reversal 2u* = 2μE*d0/G* = {2.0 * u_star:.4g} m of the unworn contact; "
+                        "a shorter stroke is partial slip (give a [fretting] section instead)")
 
 
 def _check_indenter(built, base: Path):

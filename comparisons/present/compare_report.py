@@ -376,7 +376,7 @@ def _sphere_blocks(sw) -> list:
                      "Δa/a"], rows),
             R.para(f"Within the force tolerance {sw['force_tolerance']:g}: a0/R ≤ "
                    f"{fmt(lim)} (every swept ratio up to it). Fit over a0/R ≤ 0.02: ΔF/F ≈ "
-                   f"{fmt(sw['slope'])}·a0/R (docs/theory.md §13 estimate: 2/π ≈ 0.637), so the "
+                   f"{fmt(sw['slope'])}·a0/R (docs/theory.md §13: a0/R scaling, constant measured), so the "
                    f"finite sphere alone uses the whole force tolerance at a0/R ≈ "
                    f"{fmt(sw['ratio_at_tolerance'])}. Shipped cases: {shipped}."),
             ] + ([R.image(sw["figure"], f"{title(sw['solver'])} force relative to the half-space force against "
