@@ -185,6 +185,7 @@ def test_cli_exit_codes(tmp_path, paper_run):
     ("s,force\n0,1\n1,abc\n", None, ["history.csv", "row 3", "column 'force'"]),
     ("s,force\n0,1\n0,2\n", None, ["history.csv", "row 3", "column 's'", "increase"]),
     ("force\n1\n", None, ["history.csv", "no column 's', 's_hat' or 'cycles'"]),
+    ("s,force\n0,1\n,2\n", None, ["history.csv", "row 3", "column 's'", "empty"]),
     ("s,force\n0,1\n", "s,r,p\n0,0,1\n0,1e-5,oops\n", ["stages.csv", "row 3", "column 'p'"]),
     ("s,force\n0,1\n", "s,r,p\n0,0,1\n0,0,2\n", ["stages.csv", "row 3", "column 'r'",
                                                  "twice"]),
