@@ -168,6 +168,7 @@ class Reference:
     pressure: np.ndarray
     band: dict
     meta: dict = field(default_factory=dict)
+    _pchip: dict | None = field(default=None, repr=False)
 
     # -- scales and the time variable --------------------------------------
     @property
@@ -189,9 +190,17 @@ class Reference:
         return (s >= 0.0) & (s <= end * (1 + 1e-9) + 1e-300)
 
     # -- evaluation ------------------------------------------------------------
+    def _interpolants(self) -> dict:
+        """The history's PCHIP in τ, one per column (built once)."""
+        if self._pchip is None:
+            import scipy.interpolate
+            t_hist = self.tau(self.history["s"])
+            self._pchip = {name: scipy.interpolate.PchipInterpolator(t_hist, self.history[name])
+                           for name in HISTORY[1:]}
+        return self._pchip
+
     def history_at(self, s) -> dict:
         """Every history column at the distances s (NaN outside the history)."""
-        import scipy.interpolate
         s = np.atleast_1d(np.asarray(s, float))
         hs = self.history["s"]
         out = {"s": s.copy()}
@@ -200,10 +209,9 @@ class Reference:
             for name in HISTORY[1:]:
                 out[name] = np.where(s == hs[0], self.history[name][0], np.nan)
             return out
-        t, t_hist = self.tau(np.clip(s, hs[0], hs[-1])), self.tau(hs)
-        for name in HISTORY[1:]:
-            y = scipy.interpolate.PchipInterpolator(t_hist, self.history[name])(t)
-            out[name] = np.where(inside, y, np.nan)
+        t = self.tau(np.clip(s, hs[0], hs[-1]))
+        for name, spline in self._interpolants().items():
+            out[name] = np.where(inside, spline(t), np.nan)
         return out
 
     def stage_rho(self, s: float) -> tuple[float, np.ndarray, np.ndarray]:
