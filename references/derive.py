@@ -124,10 +124,10 @@ PLANS = {
     "ball_on_flat": Plan(
         "ball_on_flat", "mdr", _DECADES, stage_unit="cycles", s_hat_ref=0.01,
         spread=("fem", "bem"),
-        dimensions=(Dimension("space", "mdr.elements", (800, 1600, 3200), 2.0,
+        dimensions=(Dimension("space", "mdr.elements", (400, 800, 1600), 2.0,
                               {"sliding.tolerance": 1e-6}),
                     Dimension("time", "sliding.tolerance", (1e-4, 1e-5, 1e-6), 10.0,
-                              {"mdr.elements": 800}))),
+                              {"mdr.elements": 400}))),
     "fretting": Plan(
         "fretting", "mdr", (0, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000,
                             20000, 50000, 100000),
