@@ -40,7 +40,7 @@ def main(args) -> int:
     if not args.name:
         raise CaseError("name a reference (wearcheck reference --list shows them)")
     result = reference(args.name)
-    out = args.out or Path("runs") / f"reference-{result.case.source and Path(result.case.source).stem}"
+    out = args.out or Path("runs") / f"reference-{result.certified.name}"
     path = result.write(out)
     if not args.quiet:
         print(f"reference {args.name}: {len(result.stages['s'])} stages -> {path}",
