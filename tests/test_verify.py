@@ -285,6 +285,8 @@ TOP,2,2,-0.001
 RF
 *NODE PRINT,NSET=CONTACT
 U
+*EL PRINT,ELSET=UPPER
+S
 *NODE FILE
 U,RF
 *CONTACT FILE
@@ -323,6 +325,11 @@ def test_real_calculix_files_agree_with_each_other(ccx_files):
         assert set(p_frd) == set(p_dat)
         for i in p_dat:   # .frd: 6 digits, .dat: 7
             assert p_frd[i] == pytest.approx(p_dat[i], rel=1e-5)
+    # element prints (element, integration point, six stresses) are read and left aside
+    stresses = [b for b in dat if b.quantity == "stresses"]
+    # CalculiX expands a CAX4 into a C3D8 of eight integration points
+    assert len(stresses) == 2 and stresses[0].values.shape == (16, 7)
+    assert set(stresses[0].ids.tolist()) == {1, 2}
     ext = external.read(ccx_files / "block.frd", {})
     assert [st.time for st in ext.stages] == [0.5, 1.0]
     assert list(ext.history["force"]) == pytest.approx([1.795942, 3.593273], rel=1e-6)

@@ -72,49 +72,54 @@ class Block:
     values: np.ndarray
 
 
+#: components that are identifiers, not values: the row's node, element, integration point
+ID_COMPONENTS = ("slave node", "elem", "integ.pnt.")
+
+
 def dat_blocks(text: str, source: str) -> list[Block]:
-    """Every print block of a .dat file's text; a malformed line is one CaseError
-    naming the file and line."""
+    """Every print block of a .dat file's text: node prints (a node number, then the
+    components), totals (the components), element prints (element, integration point,
+    values) and node-to-surface contact prints (slave node, values); a malformed line
+    is one CaseError naming the file and line."""
     blocks, current, rows = [], None, []
 
     def close():
         if current is None:
             return
-        quantity, comps, name, t, first = current
-        total = quantity.startswith("total")
-        ids_col = 0 if total else 1
-        width = len(comps) - (1 if first else 0) + ids_col
-        table = np.array(rows, float).reshape(len(rows), width)
-        if total:
+        quantity, comps, name, t, n_ids = current
+        if quantity.startswith("total"):
+            table = np.array(rows, float).reshape(len(rows), len(comps))
             blocks.append(Block(quantity, comps, name, t, None, table))
-        else:
-            blocks.append(Block(quantity, comps, name, t, table[:, 0].astype(np.int64),
-                                table[:, 1:]))
+            return
+        width = len(comps) if n_ids else len(comps) + 1
+        table = np.array(rows, float).reshape(len(rows), width)
+        # the first identifier is the id; an integration point stays in the values
+        blocks.append(Block(quantity, comps[1:] if n_ids else comps, name, t,
+                            table[:, 0].astype(np.int64), table[:, 1:]))
 
     for lineno, line in enumerate(text.splitlines(), start=1):
         h = _HEADER.match(line)
         if h:
             close()
             comps = tuple(c.strip() for c in h.group("components").split(","))
-            # a contact print's first component is the node (its id column)
-            first = comps[0] in ("slave node", "slave element+face")
             if comps[0] == "slave element+face":
                 raise CaseError(f"{source}, line {lineno}: a contact print per element face "
                                 "(face-to-face contact); print a node-to-surface contact, "
                                 "or give the .frd's CONTACT block")
+            n_ids = sum(1 for c in comps if c in ID_COMPONENTS)
             try:
                 t = to_float(h.group("time"))
             except ValueError:
                 raise CaseError(f"{source}, line {lineno}: time '{h.group('time')}' is not "
                                 "a number") from None
-            current = (h.group("quantity"), comps, h.group("set"), t, first)
+            current = (h.group("quantity"), comps, h.group("set"), t, n_ids)
             rows = []
             continue
         words = line.split()
         if current is None or not words:
             continue
-        quantity, comps, name, _, first = current
-        expected = len(comps) - (1 if first else 0) + (0 if quantity.startswith("total") else 1)
+        quantity, comps, name, _, n_ids = current
+        expected = len(comps) if (n_ids or quantity.startswith("total")) else len(comps) + 1
         if len(words) != expected:
             raise CaseError(f"{source}, line {lineno}: expected {expected} numbers in the "
                             f"block '{quantity}'" + (f" of set {name}" if name else "")
