@@ -230,15 +230,18 @@ def history_interpolant(result, s_hat_per_m, s_hat_ref):
 
 def sample_stages(result, case, dist, stage_a, rho_f, rho_p) -> tuple[dict, dict]:
     """Wear and pressure of a run at r = ρ·a (a: the finest run's stage contact radii),
-    linearly in r; {stage value: (Mf,)}, {stage value: (Mp,)}."""
+    linearly in r; {stage value: (Mf,)}, {stage value: (Mp,)}. Beyond the run's radii
+    both are zero: the solvers' domains hold the contact and all the wear (the MDR
+    grows its domain before the contact reaches 0.9 of it), which
+    :func:`_check_support` checks on the finest run."""
     r = np.asarray(result.r, float)
     w = wear_on_radii(result, case)
     p = np.asarray(result.p, float)
     wear, pres = {}, {}
     for k, key in enumerate(dist):
         a = stage_a[key]
-        wear[key] = np.interp(rho_f * a, r, w[k], right=np.nan)
-        pres[key] = np.interp(rho_p * a, r, p[k], right=np.nan)
+        wear[key] = np.interp(rho_f * a, r, w[k], right=0.0)
+        pres[key] = np.interp(rho_p * a, r, p[k], right=0.0)
     return wear, pres
 
 
@@ -412,8 +415,7 @@ def _from_runs(plan, case, dims, solve, say) -> dict:
     pres_arr = np.array([pres_f[k] for k in stored])
     for name, arr in (("wear", wear_arr), ("pressure", pres_arr)):
         if not np.all(np.isfinite(arr)):
-            raise RuntimeError(f"{plan.name}: the finest run's radii do not reach "
-                               f"ρ = {plan.rho_f_max} at every stage ({name})")
+            raise RuntimeError(f"{plan.name}: the finest run's {name} is not finite")
     _check_support(plan, finest, finest_case, dist, stage_a, sc)
     interval = _held_out_cost(plan, case, stored, extra, dist, stage_a, wear_f, pres_f,
                               hist_f, per_m, rho_f, rho_p, edge_band)
@@ -513,13 +515,17 @@ def _held_out_cost(plan, case, stored, extra, dist, stage_a, wear_f, pres_f, his
 
 def _check_support(plan, run, run_case, dist, stage_a, sc) -> None:
     """The wear is zero beyond ρ_f_max and the pressure beyond ρ_p_max at every stage
-    (what the file leaves out); else the plan's ρ ranges are too short."""
+    (what the file leaves out), and the run's radii reach beyond the wear and the
+    contact (what sampling beyond them takes as zero); else a RuntimeError."""
     r = np.asarray(run.r, float)
     w = wear_on_radii(run, run_case)
     p = np.asarray(run.p, float)
     d = closed.scales(run_case)["d0"]
     for k, key in enumerate(dist):
         a = stage_a[key]
+        if np.abs(w[k][-1]) > 1e-9 * d or p[k][-1] > 1e-9 * sc["p0"] or a >= r[-1]:
+            raise RuntimeError(f"{plan.name}: wear or pressure at the end of the run's radii "
+                               f"at stage {key}")
         beyond_f, beyond_p = r > plan.rho_f_max * a, r > plan.rho_p_max * a
         if np.any(np.abs(w[k][beyond_f]) > 1e-9 * d):
             raise RuntimeError(f"{plan.name}: wear beyond ρ = {plan.rho_f_max} at stage {key}")
