@@ -37,6 +37,13 @@ def test_shipped_small_with_provenance(ref):
                 (check, part)
 
 
+#: the references whose every check is certified; the ellipsoid's BEM (256² pixels)
+#: leaves the ring averages of profile and pressure uncertain where the rings cross
+#: the contact ellipse's edge (up to 1.1 % of the depth and 7 % of the peak
+#: pressure), so verify leaves those checks out where they are (test_verify)
+CERTIFIED_EVERYWHERE = ("hertz", "truncated", "paper", "ball_on_flat", "fretting")
+
+
 def test_band_far_inside_the_tolerances(ref):
     # a certified reference must be much better than what it judges: each band at
     # most a tenth of its check's tolerance, relative to the stage's own scale
@@ -46,6 +53,9 @@ def test_band_far_inside_the_tolerances(ref):
              "contact_radius": tol.contact_radius_tolerance, "wear_center":
              tol.profile_tolerance, "wear_volume": tol.profile_tolerance,
              "depth": tol.profile_tolerance}
+    if ref.name not in CERTIFIED_EVERYWHERE:
+        limit = {k: v for k, v in limit.items()
+                 if k in ("force", "wear_center", "wear_volume", "depth")}
     for row in ref.relative_bands():
         for check, value in row.items():
             if check in limit:

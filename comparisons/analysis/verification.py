@@ -13,7 +13,11 @@ the stage's own scale, floored, against the case's ``[compare]`` tolerance.
 The checks are those of ``compare`` plus the wear checks
 (``metrics.WEAR_CHECKS``: central wear, worn volume, depth), each made where
 the user gave its quantity; what was not given is listed, not failed. A check
-that was given but compared nothing (radii that miss the contact) fails.
+that was given but compared nothing (radii that miss the contact) fails. A
+check where the reference's own error band uses more than
+:data:`CERTIFIED_SHARE` of the tolerance is not judged (listed with both
+numbers), unless the difference exceeds the tolerance by more than the band: that
+fails whatever the reference's error.
 """
 
 from __future__ import annotations
@@ -31,6 +35,10 @@ HISTORY_CHECKS = {"force": "force", "contact_radius": "contact_radius",
                   "wear_center": "wear_center", "wear_volume": "wear_volume", "depth": "depth"}
 #: two distances closer than this (relative to the largest) are the same stage
 SAME_DISTANCE = 1e-9
+#: a check is judged only where the reference's own error (its band, relative to the
+#: stage's scale) uses at most this share of the check's tolerance: beyond it a pass
+#: or a fail would say as much about the reference as about the results
+CERTIFIED_SHARE = 1.0 / 3.0
 
 
 def unit_scales(scales: dict, depth: float) -> dict:
@@ -232,6 +240,23 @@ def judge(reference, history: dict, stages: list, *, case_stage_s, scales: dict,
             continue
         st["checks"] = metrics.verdict(st, tolerances, checks)
         st["band"] = _band(reference, s, st, units)
+        st["uncertified"] = {}
+        for name in list(st["checks"]):
+            tol, value = st["checks"][name]["tolerance"], st["checks"][name]["value"]
+            band = st["band"].get(name, 0.0)
+            # an uncertain reference decides nothing, unless the difference is beyond
+            # the tolerance by more than the reference's error: that fails for certain
+            if band > CERTIFIED_SHARE * tol and not value > tol + band:
+                st["uncertified"][name] = dict(band=st["band"][name], tolerance=tol,
+                                               value=st["checks"].pop(name)["value"])
+        if st["uncertified"]:
+            not_judged.append(f"ŝ = {s * per_m:.4g} ({where}): " + ", ".join(
+                f"{metrics.CHECK_BY_COLUMN[n].label} (the reference's own error "
+                f"{u['band']:.2g} is more than {CERTIFIED_SHARE:.2g} of the tolerance "
+                f"{u['tolerance']:g}; the difference was {u['value']:.2g})"
+                for n, u in st["uncertified"].items()) + " not judged")
+        if not st["checks"]:
+            continue
         st["passed"] = all(c["passed"] for c in st["checks"].values())
         out_stages.append(st)
     used = [c for c in metrics.CHECKS + metrics.WEAR_CHECKS

@@ -202,6 +202,8 @@ def _largest_band_share(pair) -> dict | None:
     best = None
     for st in pair["stages"]:
         for name, value in st.get("band", {}).items():
+            if name not in st["checks"]:      # not judged: beyond a third of the tolerance
+                continue
             share = value / st["checks"][name]["tolerance"]
             if best is None or share > best["share"]:
                 best = dict(share=share, check=name, stage=st["index"],
