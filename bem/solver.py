@@ -8,7 +8,7 @@ import time
 import numpy as np
 from scipy import optimize
 
-from wearcheck.cases import CaseError, RunResult, profiles, programme, reference
+from wearcheck.cases import CaseError, RunResult, profiles, programme, reference, validity
 
 from . import wear
 from .operator import HalfSpace
@@ -132,6 +132,7 @@ def solve(case, progress=None) -> RunResult:
     sc = reference.scales(case)
     per_m = sc["s_hat_per_m"]
     sl, bem = case.sliding, case.bem
+    validity.check_planned(case)   # before the box is sized on the predicted scar
     x, dx, a_max = grid(case, sc)
     n = len(x)
     X, Y = np.meshgrid(x, x, indexing="ij")
@@ -176,7 +177,10 @@ def solve(case, progress=None) -> RunResult:
     ring = np.rint(rho / dx).astype(np.int64)
     rings = n // 2                      # whole rings inside the box
     r = np.arange(rings) * dx
-    out = wear.run(model, plan, progress, ring=(ring, rings, r))
+    watch = validity.BodyWatch(case, spacing=dx)
+    out = wear.run(model, plan, progress, ring=(ring, rings, r), watch=watch)
+    if watch.remarks:
+        info["warnings"] = watch.remarks
     hist = programme.finish_history(case, out["history"], until, plan.end, per_m)
 
     # stages: azimuthal averages on rings one pixel wide, the full fields, anisotropy

@@ -212,13 +212,16 @@ class Wear(stepping.Problem):
         self.last = (old.p, h)
 
 
-def run(model: Model, plan: stepping.Plan, progress=None, *, ring: tuple | None = None) -> dict:
+def run(model: Model, plan: stepping.Plan, progress=None, *, ring: tuple | None = None,
+        watch=None) -> dict:
     """Step the wear from the unworn state as ``plan`` says.
 
     ``ring`` = (ring index per pixel, number of rings, radii) adds the
     ``scar_radius`` column (from the ring-averaged wear). Returns the history,
     the stages reached (s, f, p, gap, depth), counters (the stepping's of
     :func:`numerics.stepping.info`, ``cg_iterations``, ``F_start``).
+    ``watch(s, contact_radius, scar_radius)`` is called at every recorded step
+    (:class:`cases.validity.BodyWatch`).
     """
     area = model.op.spacing**2
     i0, j0 = model.centre
@@ -250,6 +253,8 @@ def run(model: Model, plan: stepping.Plan, progress=None, *, ring: tuple | None 
             hist["scar_radius"].append(scar_radius(radii, total / count))
         else:
             hist["scar_radius"].append(math.nan)
+        if watch is not None:
+            watch(s, hist["contact_radius"][-1], hist["scar_radius"][-1])
         for _ in range(reached):
             stages.append((s, st.f.copy(), st.p.copy(), st.gap.copy(), st.depth))
 

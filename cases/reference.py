@@ -8,6 +8,7 @@ takes SI values and returns SI values.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -195,6 +196,16 @@ def mdr_transform_quad(indenter, x, table=None):
     return x * val
 
 
+@functools.lru_cache(maxsize=4)
+def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss–Legendre nodes and weights on [-1, 1], computed once per n (an n x n
+    eigenproblem: 0.2-1.4 s for n = 800, and every reference.scales of a table
+    case needs it)."""
+    x, w = np.polynomial.legendre.leggauss(n)
+    x.flags.writeable = w.flags.writeable = False
+    return x, w
+
+
 def general(E_star, indenter, table, depth=None, force=None):
     """Any profile with a monotonic g(x), by Gauss–Legendre quadrature and root finding.
 
@@ -202,9 +213,9 @@ def general(E_star, indenter, table, depth=None, force=None):
     with a fixed rule: a tabulated profile's slope is only piecewise smooth, so an
     adaptive rule would subdivide at every knot.
     """
-    phi, wphi = np.polynomial.legendre.leggauss(800)
+    phi, wphi = _gauss_legendre(800)
     phi, wphi = (phi + 1) * np.pi / 4, wphi * np.pi / 4
-    t, wt = np.polynomial.legendre.leggauss(400)
+    t, wt = _gauss_legendre(400)
     t, wt = (t + 1) / 2, wt / 2
 
     def g(x):

@@ -9,7 +9,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from wearcheck import meshes
-from wearcheck.cases import CaseError, SolverError, RunResult, programme, reference
+from wearcheck.cases import CaseError, SolverError, RunResult, programme, reference, validity
 from wearcheck.cases.profiles import height
 from wearcheck.numerics import stepping, superelement
 
@@ -78,6 +78,7 @@ def check_case(case) -> None:
 def mesh_parameters(case) -> meshes.SphereMeshParameters:
     """The mesh of a case, after checking that the FEM can represent it."""
     check_case(case)
+    validity.check_planned(case, fem_sphere=True)
     fem, order, R = case.fem, case.fem.element_order, case.indenter.radius
     a0 = reference.scales(case)["a0"]
     # the arc is sized for the contact's final radius: √2·a0 under depth control,
@@ -99,10 +100,13 @@ def mesh_parameters(case) -> meshes.SphereMeshParameters:
                         f"would lie inside the unworn contact (a0 = {a0:.4g} m); at least "
                         f"{MIN_NODES_IN_CONTACT} are needed, i.e. fem.contact_nodes >= {need}")
     if rc >= R:
+        # (a predicted scar past R itself was refused by validity.check_planned, as
+        # by the other solvers: here only the arc's margin beyond it does not fit)
         raise CaseError(f"key 'fem.contact_factor' = {fem.contact_factor!r}: the candidate "
-                        f"arc would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m"
-                        + (f" (predicted final scar radius {predicted:.4g} m: shorten the run "
-                           "or lower the load)" if case.loading.control == "force" else ""))
+                        f"arc would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m "
+                        f"(predicted final scar radius {predicted:.4g} m); use "
+                        f"fem.contact_factor < {math.floor(R / predicted * 1000) / 1000:g} "
+                        "(>= 1 reaches the predicted scar), or shorten the run or lower the load")
     return meshes.SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges,
                                        growth=GROWTH[order])
 
@@ -199,7 +203,9 @@ def _solve(case, progress=None) -> RunResult:
             progress(0.05 + 0.9 * frac, text)
 
     t0 = time.perf_counter()
-    out = superelement.run(problem, plan, loop_progress)
+    watch = validity.BodyWatch(case, fem_sphere=True,
+                               spacing=model.stats()["contact_spacing"])
+    out = superelement.run(problem, plan, loop_progress, watch=watch)
     t_loop = time.perf_counter() - t0
 
     # stages: full arc values (with the axis node for P2)
@@ -258,6 +264,8 @@ def _solve(case, progress=None) -> RunResult:
     )
     info.update(stepping.info(out.outcome, plan))
     info["predicted_scar_radius"] = reference.predicted_scar_radius(case, case.end_distance or 0.0)
+    if watch.remarks:
+        info["warnings"] = watch.remarks
     if progress:
         progress(1.0, "done")
     return RunResult(history=history, stage_s=np.array([st[0] for st in out.stages]),

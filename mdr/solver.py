@@ -9,11 +9,12 @@ import time
 import numpy as np
 
 from wearcheck.cases import CaseError, RunResult, SolverError, profiles, programme, reference
+from wearcheck.cases import validity
 from wearcheck.cases.result import scar_radius
 
 from wearcheck.numerics import stepping
 
-from . import contact, linalg, transforms, wear
+from . import contact, linalg, resolution, transforms, wear
 
 #: implicit Euler's default step in ŝ (sliding.step_hat = "auto"); see README/report:
 #: on the paper case its time error in F/F0 is 7.7e-3 (0.077 Δŝ, first order)
@@ -60,6 +61,18 @@ FAR_GAP_FROM = 2048
 ELLIPSOID_WARNING = ("the ellipsoid (radii R1, R2) is run as the paraboloid of "
                      "the equivalent radius √(R1 R2); MDR is exact only for bodies of "
                      "revolution (use the BEM for the ellipsoid as it is)")
+
+
+def ellipsoid_warning(case) -> str:
+    """ELLIPSOID_WARNING with what the stand-in costs at the start: its unworn force
+    (depth control) or depth (force control) over the exact elliptical Hertz one."""
+    ind, ld = case.indenter, case.loading
+    load = {ld.control: getattr(ld, ld.control)}
+    exact = reference.hertz_elliptical(case.E_star, ind.radius, ind.radius_y, **load)
+    stand_in = reference.hertz(case.E_star, profiles.equivalent_radius(ind), **load)
+    what = "force" if ld.control == "depth" else "depth"
+    return (f"{ELLIPSOID_WARNING}; at R2/R1 = {ind.radius_y / ind.radius:.4g} its unworn {what} "
+            f"is {stand_in[what] / exact[what]:.4g} of the exact (elliptical Hertz) one")
 
 
 def build_model(case) -> tuple[wear.Model, dict]:
@@ -124,10 +137,11 @@ def grow_domain(model: wear.Model, profile, arrays=()) -> tuple[wear.Model, list
 class _Recorder:
     """History rows and stored stages of a run whose grid may grow."""
 
-    def __init__(self):
+    def __init__(self, watch=None):
         self.hist = {k: [] for k in ("s", "force", "depth", "contact_radius", "wear_center",
                                      "wear_volume", "scar_radius", "max_pressure")}
         self.stages = []      # (s, x, f, p)
+        self.watch = watch    # watch(s, contact_radius, scar_radius) per recorded step
 
     def __call__(self, model, st, s, stages):
         """Record ``st`` at s on ``model``'s grid; it completes ``stages`` stages."""
@@ -141,6 +155,8 @@ class _Recorder:
         h["wear_volume"].append(transforms.volume(w, model.dt))
         h["scar_radius"].append(scar_radius(model.x, w))
         h["max_pressure"].append(float(np.max(st.p)))
+        if self.watch is not None:
+            self.watch(s, st.contact_radius, h["scar_radius"][-1])
         for _ in range(stages):
             self.stages.append((s, model.x.copy(), st.f.copy(), st.p.copy()))
 
@@ -399,21 +415,23 @@ class Wear(stepping.Problem):
 
 
 def run(model: wear.Model, plan: stepping.Plan, progress=None, *, profile=None,
-        check_oscillation: bool = True) -> dict:
+        check_oscillation: bool = True, watch=None) -> dict:
     """Step the wear from the unworn state as ``plan`` says; the numerics without case handling.
 
     Returns the history (arrays), the stages reached (s, r, f, p; on the
     union of the grids the run used), counters (the stepping's of
     :func:`numerics.stepping.info` and the solves') and ``outcome``, the
     stepper's :class:`numerics.stepping.Outcome`.
-    ``profile`` and ``check_oscillation``: see :class:`Wear`.
+    ``profile`` and ``check_oscillation``: see :class:`Wear`. ``watch(s,
+    contact_radius, scar_radius)`` is called at every recorded step
+    (:class:`cases.validity.BodyWatch`).
     """
     state = wear.contact_state(model, model.f0.copy())
     if not state.force > 0.0:
         raise SolverError("the unworn indenter carries no load (no node in contact); "
                           "raise mdr.elements or the load")
     problem = Wear(model, state, plan, profile=profile, check_oscillation=check_oscillation)
-    rec = _Recorder()
+    rec = _Recorder(watch)
     outcome = stepping.run(problem, state, plan,
                            lambda st, s, stages: rec(problem.model, st, s, stages), progress)
     model = problem.model
@@ -441,6 +459,8 @@ def solve(case, progress=None) -> RunResult:
 
 def _solve(case, progress=None) -> RunResult:
     t0 = time.perf_counter()
+    resolution.check(case)
+    validity.check_planned(case)
     model, sc = build_model(case)
     per_m = sc["s_hat_per_m"]
     sl = case.sliding
@@ -466,10 +486,12 @@ def _solve(case, progress=None) -> RunResult:
         step_hat = auto if sl.step_hat == "auto" else sl.step_hat
     info["step_hat"] = float(step_hat) if math.isfinite(step_hat) else "unlimited"
     # approximate: False, or the reason (what comparisons report per solver)
-    info["approximate"] = case.indenter.profile == "ellipsoid" and ELLIPSOID_WARNING
-    if info["approximate"]:
+    watch = validity.BodyWatch(case)
+    info["approximate"] = False
+    if case.indenter.profile == "ellipsoid":
+        info["approximate"] = info["warning"] = ellipsoid_warning(case)
         info["equivalent_radius"] = profiles.equivalent_radius(case.indenter)
-        info["warning"] = ELLIPSOID_WARNING
+        validity.remark(watch.remarks, info["warning"])
     # direct solves reuse one factorisation per step size: their steps keep to
     # the ladder 2^k ŝ; iterative solves cost the same at any step
     control = "ladder" if wear.solves_directly(model) else "continuous"
@@ -478,7 +500,9 @@ def _solve(case, progress=None) -> RunResult:
     def profile(x):
         return profiles.height(case.indenter, x, case.table)
 
-    out = run(model, plan, progress, profile=profile)
+    out = run(model, plan, progress, profile=profile, watch=watch)
+    if watch.remarks:
+        info["warnings"] = watch.remarks
     hist = programme.finish_history(case, out["history"], until, plan.end, per_m)
     info.update(out["counters"])
     if progress is not None:

@@ -400,10 +400,12 @@ class WearRun:
     outcome: stepping.Outcome | None = None
 
 
-def run(problem: Superelement, plan: stepping.Plan, progress=None) -> WearRun:
+def run(problem: Superelement, plan: stepping.Plan, progress=None, watch=None) -> WearRun:
     """Slide and wear ``problem`` as ``plan`` says; the history and the stored stages.
 
-    Raises SolverError when the unworn body carries no force.
+    ``watch(s, contact_radius, scar_radius)`` is called at every recorded step
+    (:class:`cases.validity.BodyWatch`). Raises SolverError when the unworn
+    body carries no force.
     """
     out = WearRun()
     r, area, center = problem.r, problem.area, problem.center
@@ -417,6 +419,8 @@ def run(problem: Superelement, plan: stepping.Plan, progress=None) -> WearRun:
         out.wear_center.append(float(center @ w))
         out.wear_volume.append(float(area @ w))
         out.scar_radius.append(scar_radius(r, w))
+        if watch is not None:
+            watch(s, out.contact_radius[-1], out.scar_radius[-1])
         for _ in range(stages):
             out.stages.append((s, res.f.copy(), w.copy(), res.depth, res.gap.copy()))
 
