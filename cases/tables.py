@@ -37,7 +37,9 @@ UNITS: dict[str, dict[str, float]] = {
 #: the SI unit of each quantity, as error messages name it
 SI_UNIT = {"length": "m", "force": "N", "pressure": "Pa", "volume": "m³", "number": ""}
 
-_HEADER = re.compile(r"^(?P<name>[^\[\(]*?)\s*(?:[\[\(](?P<unit>[^\]\)]*)[\]\)])?\s*$")
+# a unit is the last bracketed group at the end: "Force Reaction (Z) [N]" is the force
+# reaction (z) in N (the way ANSYS and COMSOL export tables)
+_HEADER = re.compile(r"^(?P<name>.*?)\s*[\[\(](?P<unit>[^\[\]\(\)]*)[\]\)]\s*$")
 
 
 def normal_unit(text: str) -> str:
@@ -55,12 +57,13 @@ def unit_factor(unit: str, quantity: str) -> float | None:
 
 
 def split_header(cell: str) -> tuple[str, str | None]:
-    """``"force [N]"`` -> ("force", "N"); ``"s"`` -> ("s", None)."""
-    m = _HEADER.match(cell.strip())
-    if m is None:
-        return cell.strip(), None
-    unit = m.group("unit")
-    return m.group("name").strip().lower(), (unit.strip() if unit is not None else None)
+    """``"force [N]"`` -> ("force", "N"); ``"Force Reaction (Z) [N]"`` -> ("force reaction
+    (z)", "N"); ``"s"`` -> ("s", None). Names come out in lower case."""
+    text = cell.strip()
+    m = _HEADER.match(text)
+    if m is None or not m.group("name").strip():
+        return text.lower(), None
+    return m.group("name").strip().lower(), m.group("unit").strip()
 
 
 @dataclass
@@ -99,7 +102,8 @@ def _delimiter(line: str) -> str:
 
 def read_table(path: str | Path, columns: Mapping[str, str], *,
                required: Iterable[str | tuple[str, ...]] = (),
-               aliases: Mapping[str, str] | None = None) -> Table:
+               aliases: Mapping[str, str] | None = None,
+               units: Mapping[str, str] | None = None) -> Table:
     """Read a CSV table with a header row; units in the header are converted to SI.
 
     Parameters
@@ -110,7 +114,11 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
         :data:`UNITS`. Names are matched case-insensitively; a column without
         a unit is taken in SI.
     required : names that must be present; a tuple of names means one of them.
-    aliases : {other spelling: name}, e.g. {"ŝ": "s_hat"}.
+    aliases : {other spelling: name}, e.g. {"ŝ": "s_hat"}, {"force reaction (z)":
+        "force"}: a header cell is matched by its name without the unit, or whole.
+    units : {name: unit} overriding (or supplying) a column's unit, e.g. {"s": "mm"}
+        for a column "Time [s]" that holds the sliding distance in mm, or a force
+        column of an Abaqus export (no units) in N.
 
     Returns
     -------
@@ -124,7 +132,8 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
         finite number, a row with fewer cells than the header.
     """
     path = Path(path)
-    aliases = {k.lower(): v for k, v in (aliases or {}).items()}
+    aliases = {k.strip().lower(): v for k, v in (aliases or {}).items()}
+    given_units = dict(units or {})
     if path.is_dir():
         raise CaseError(f"{path}: is a directory, not a CSV file")
     try:
@@ -153,7 +162,17 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
     ignored = []
     for j, cell in enumerate(header):
         name, unit = split_header(cell)
-        name = aliases.get(name, name)
+        whole = cell.strip().lower()
+        if name in aliases:
+            name = aliases[name]
+        elif whole in aliases:
+            # the cell named whole: its last bracket is its unit only when it is one
+            # ("Force Reaction (Z)": the (Z) belongs to the name)
+            name = aliases[whole]
+            if unit is not None and name in columns and unit_factor(unit, columns[name]) is None:
+                unit = None
+        if name in given_units:
+            unit = given_units[name]
         if name not in columns:
             if cell.strip():
                 ignored.append(cell.strip())

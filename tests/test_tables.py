@@ -49,6 +49,32 @@ def test_header_forms():
     assert split_header("s") == ("s", None)
 
 
+def test_header_forms_of_fe_exports():
+    # ANSYS and COMSOL put the unit last, after names that hold brackets of their own
+    assert split_header('Force Reaction (Z) [N]') == ("force reaction (z)", "N")
+    assert split_header("Worn Volume [mm³]") == ("worn volume", "mm³")
+    assert split_header("RF2 PI: BALL-1 N: 1") == ("rf2 pi: ball-1 n: 1", None)
+
+
+def test_an_fe_export_with_names_mapped_and_units_given(tmp_path):
+    # tab-separated, quoted names: the pseudo-time "Time [s]" holds the distance in mm
+    # (its unit given by the caller), the Abaqus-style force has no unit (given: kN),
+    # "Wear (Y)" is named whole (the (Y) is no unit)
+    path = write(tmp_path, '"Steps"\t"Time [s]"\t"RF2 PI: BALL-1 N: 1"\t"Wear (Y)"\n'
+                           '1\t0.5\t2.0\t1e-6\n2\t1.5\t1.0\t2e-6\n')
+    t = read_table(path, dict(COLUMNS, wear="length"), required=["s", "force"],
+                   aliases={"time": "s", "rf2 pi: ball-1 n: 1": "force", "wear (y)": "wear"},
+                   units={"s": "mm", "force": "kN"})
+    assert np.allclose(t["s"], [0.5e-3, 1.5e-3], rtol=1e-15)
+    assert np.allclose(t["force"], [2000.0, 1000.0], rtol=1e-15)
+    assert np.allclose(t["wear"], [1e-6, 2e-6], rtol=1e-15) and t.ignored == ["Steps"]
+    # the header's unit when none is given
+    path = write(tmp_path, '"Time [mm]","Force Reaction (Z) [kN]"\n1,2\n')
+    t = read_table(path, COLUMNS, required=["s", "force"],
+                   aliases={"time": "s", "force reaction (z)": "force"})
+    assert t["s"][0] == pytest.approx(1e-3) and t["force"][0] == pytest.approx(2000.0)
+
+
 def test_semicolon_and_tab_tables(tmp_path):
     for sep in (";", "\t"):
         path = write(tmp_path, f"s{sep}force\n1{sep}2\n3{sep}4\n")

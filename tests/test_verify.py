@@ -55,6 +55,8 @@ FORMATS = {
     "csv": (lambda d, run, scale: fmt.csv_dir(d / "res", run, scale=scale), ()),
     "csv-s_hat": (lambda d, run, scale: fmt.csv_dir(d / "res", run, scale=scale,
                                                     time="s_hat"), ()),
+    "fe-export": (lambda d, run, scale: fmt.fe_export(d / "res", run, scale=scale),
+                  fmt.FE_EXPORT_MAP),
     "vtk": (lambda d, run, scale: fmt.vtk_series(d / "res", run, scale=scale), fmt.VTK_MAP),
     "calculix": (lambda d, run, scale: fmt.calculix(d / "res", run, scale=scale),
                  fmt.CALCULIX_MAP),
@@ -82,7 +84,7 @@ def test_right_results_pass_and_k_five_percent_off_fails(no_figures, tmp_path, p
         assert "force" in failed[last]
     report = (tmp_path / "v-bad" / "report.md").read_text()
     assert f"stage {last} (ŝ = " in report and "pressure" in report.split("\n")[2]
-    if name.startswith("csv") or name == "calculix":
+    if name.startswith("csv") or name in ("calculix", "fe-export"):
         # the distance factor that explains it: 1/1.05 of the distances given
         assert m["diagnosis"]["factor"] == pytest.approx(1 / 1.05, rel=2e-3)
 
@@ -191,6 +193,8 @@ def test_cli_exit_codes(tmp_path, paper_run):
                                                  "twice"]),
     ("s,force\n0,1\n", "s,r\n0,0\n0,1\n", ["stages.csv", "no column 'f', 'wear' or 'p'"]),
     ("cycles,force\n0,1\n", None, ["cycles", "sliding.stroke"]),
+    ("s,force\n0,1\n1,-1\n", None, ["history.csv", "row 3", "column 'force'",
+                                     "changes sign"]),
 ])
 def test_bad_files_one_line(tmp_path, history, stages, expect):
     d = tmp_path / "r"

@@ -47,6 +47,39 @@ def csv_dir(directory, result, *, scale=1.0, time="s", stages=True) -> Path:
     return d
 
 
+def fe_export(directory, result, *, scale=1.0) -> Path:
+    """history.csv and stages.csv as FE post-processors export tables (ANSYS Mechanical,
+    COMSOL): tab-separated, quoted names with spaces and brackets, units in the header,
+    the sliding distance in the model's pseudo-time column "Time [s]" (in mm), a step
+    counter; and an Abaqus-style wear column without a unit (Abaqus has none)."""
+    from wearcheck.references.certified import unworn_profile
+    d = Path(directory)
+    d.mkdir(parents=True, exist_ok=True)
+    h, st = result.history, result.stages
+    rows = ['"Steps"\t"Time [s]"\t"Force Reaction (Y) [N]"\t"Contact Radius [mm]"\t'
+            '"Worn Volume [mm³]"\t"WEAR_DEPTH N: 1"']
+    for i in range(len(h["s"])):
+        rows.append(f"{i + 1}\t{h['s'][i] * scale * 1e3:.10E}\t{-h['force'][i]:.10E}\t"
+                    f"{h['contact_radius'][i] * 1e3:.10E}\t{h['wear_volume'][i] * 1e9:.10E}\t"
+                    f"{h['wear_center'][i] * 1e3:.10E}")
+    (d / "history.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    f0 = unworn_profile(result.case, st["r"])
+    rows = ['"Time [s]"\t"X [mm]"\t"Contact Pressure [MPa]"\t"Wear Depth (Y) [µm]"']
+    for k, s in enumerate(st["s"]):
+        for j, r in enumerate(st["r"]):
+            rows.append(f"{s * scale * 1e3:.10E}\t{r * 1e3:.10E}\t{st['p'][k, j] / 1e6:.10E}\t"
+                        f"{(st['f'][k, j] - f0[j]) * 1e6:.10E}")
+    (d / "stages.csv").write_text("\n".join(rows) + "\n", encoding="utf-8")
+    return d
+
+
+#: what tells wearcheck which column is which (the distance's unit given, as the
+#: pseudo-time's header says seconds; the Abaqus-style column's unit supplied)
+FE_EXPORT_MAP = ["s [mm]=Time", "force=Force Reaction (Y)", "contact_radius=Contact Radius",
+                 "wear_volume=Worn Volume", "wear_center [mm]=WEAR_DEPTH N: 1", "r=X",
+                 "p=Contact Pressure", "wear=Wear Depth (Y)"]
+
+
 def vtk_series(directory, result, *, scale=1.0) -> Path:
     """A .pvd of .vtu surfaces as another code writes them: the profile revolved about z
     (16 segments), coordinates in mm, the pressure 'CPRESS' in MPa, the worn profile

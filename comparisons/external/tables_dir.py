@@ -11,8 +11,10 @@ distance (``s``, ``s_hat`` or ``cycles``), the radius ``r`` [m] and ``f``
 (worn profile) or ``wear`` (wear depth) [m] and/or ``p`` [Pa]. The rows of a
 stage share its distance exactly as written.
 
-``--map force=Fz`` reads the user's column ``Fz`` as ``force`` (units stay in
-the header).
+``--map force=Fz`` reads the user's column ``Fz`` as ``force`` in the unit of its
+header; ``--map 'force [kN]=Fz'`` in kN whatever the header says (an export
+without units, or a pseudo-time column "Time [s]" that holds the sliding
+distance: ``--map 's [mm]=Time'``).
 """
 
 from __future__ import annotations
@@ -22,41 +24,42 @@ from pathlib import Path
 import numpy as np
 
 from wearcheck.cases import CaseError
-from wearcheck.cases.tables import read_table, split_header
+from wearcheck.cases.tables import parse_quantity, read_table, split_header
 
 from . import DISTANCES, HISTORY_QUANTITIES, External, Stage, check_unused, time_columns
 
 STAGE_COLUMNS = {"r": "length", "f": "length", "wear": "length", "p": "pressure"}
 
 
-def _aliases(mapping: dict, known) -> dict:
-    """{the user's column name: wearcheck's name} from --map name=column."""
+def _aliases(mapping: dict, known: dict) -> tuple[dict, dict, list]:
+    """From --map name=column: {the user's column name: wearcheck's name}, {wearcheck's
+    name: the unit given in --map}, and notes saying which units --map set."""
     check_unused(mapping, set(known), "CSV")
-    out = {}
+    aliases, units, notes = {}, {}, []
     for key, column in mapping.items():
         name, unit = split_header(key)
+        aliases[column.strip().lower()] = name
         if unit is not None:
-            raise CaseError(f"--map '{key}={column}': give the unit in the CSV header "
-                            f"('{column} [{unit}]'), not in --map")
-        out[column.strip().lower()] = name
-    return out
+            parse_quantity(key, known[name], f"--map '{key}={column}'")
+            units[name] = unit
+            notes.append(f"column '{column}' read as {name} in {unit} (--map)")
+    return aliases, units, notes
 
 
 def read(directory: Path, mapping: dict) -> External:
     """The tables in ``directory`` (see the module docstring)."""
     directory = Path(directory)
-    known = list(DISTANCES) + list(HISTORY_QUANTITIES) + list(STAGE_COLUMNS)
-    aliases = _aliases(mapping, known)
+    known = dict(DISTANCES, **HISTORY_QUANTITIES, **STAGE_COLUMNS)
+    aliases, units, notes = _aliases(mapping, known)
     hist_path, stages_path = directory / "history.csv", directory / "stages.csv"
     if not hist_path.is_file():
         raise CaseError(f"{hist_path}: missing (a results directory holds history.csv, "
                         "with s, s_hat or cycles and force, and optionally stages.csv)")
     columns = dict(DISTANCES, **HISTORY_QUANTITIES)
     table = read_table(hist_path, columns, required=[tuple(DISTANCES), "force"],
-                       aliases=aliases)
+                       aliases=aliases, units=units)
     times = time_columns(table.columns)
     kind = times[0]
-    notes = []
     if len(times) > 1:
         notes.append(f"{hist_path.name}: the distance is read from '{kind}'; "
                      + ", ".join(f"'{t}'" for t in times[1:]) + " not used")
@@ -68,13 +71,30 @@ def read(directory: Path, mapping: dict) -> External:
     for q in HISTORY_QUANTITIES:
         if q in table:
             history[q] = table[q]
+    history["force"] = _magnitude(table, "force", notes)
     origin = [f"{hist_path.name} row {int(r)}" for r in table.rows]
     stages, stage_kind = [], kind
     if stages_path.is_file():
-        stages, stage_kind, more = read_stages(stages_path, aliases)
+        stages, stage_kind, more = read_stages(stages_path, aliases, units)
         notes += more
     return External(kind=kind, history=history, history_origin=origin, stages=stages,
                     source=str(directory), format="csv", stage_kind=stage_kind, notes=notes)
+
+
+def _magnitude(table, name, notes) -> np.ndarray:
+    """A force column negative throughout (a reaction force, as FE codes export it) as
+    its magnitude, with a note; one that changes sign is an error naming the row."""
+    v = table[name]
+    if not np.any(v < 0):
+        return v
+    positive = np.flatnonzero(v > 0)
+    if positive.size:
+        i = int(positive[0]) if v[0] < 0 else int(np.flatnonzero(v < 0)[0])
+        raise CaseError(f"{table.where(i, name)}: the force changes sign ({v[i]:g}); give "
+                        "the normal force, of one sign throughout")
+    notes.append(f"{table.path.name}: the force is negative throughout (a reaction force): "
+                 "its magnitude is judged")
+    return -v
 
 
 def _check_increasing(t, table, kind) -> None:
@@ -91,10 +111,12 @@ def _check_increasing(t, table, kind) -> None:
         raise CaseError(f"{table.where(i, kind)}: negative distance {t[i]:g}")
 
 
-def read_stages(path: Path, aliases: dict) -> tuple[list, str, list]:
+def read_stages(path: Path, aliases: dict, units: dict | None = None
+                ) -> tuple[list, str, list]:
     """The long-form stages table: ([Stage], distance kind, notes)."""
     columns = dict(DISTANCES, **STAGE_COLUMNS)
-    table = read_table(path, columns, required=[tuple(DISTANCES), "r"], aliases=aliases)
+    table = read_table(path, columns, required=[tuple(DISTANCES), "r"], aliases=aliases,
+                       units=units)
     times = time_columns(table.columns)
     kind = times[0]
     notes = [f"{path.name}: columns not read: " + ", ".join(table.ignored)] \
