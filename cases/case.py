@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from .errors import CaseError
-from .schema import (BEMSettings, did_you_mean, OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED,
+from .schema import (BEMSettings, CCXSettings, did_you_mean, OPTIONAL_SECTIONS, PROFILE_KEYS,
+                     PROFILE_REQUIRED,
                      REQUIRED_SECTIONS,
                      SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
                      Loading,
@@ -35,6 +36,7 @@ class Case:
     mdr: MDRSettings
     fem: FEMSettings
     bem: BEMSettings
+    ccx: CCXSettings
     compare: CompareSettings
     #: partial-slip (fretting) programme; None for a gross-slip run
     fretting: Fretting | None = None

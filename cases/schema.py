@@ -236,6 +236,23 @@ class BEMSettings:
 
 
 @dataclass(frozen=True)
+class CCXSettings:
+    mode: str = key("superelement", choices=("superelement", "in_loop"),
+                    doc="superelement: CalculiX computes the contact nodes' compliance once "
+                        "(cached), wearcheck's contact and time schemes run the wear; in_loop: "
+                        "one CalculiX contact solve (gap elements) per explicit Euler step, a "
+                        "cross-check for short runs on coarse meshes (docs/ccx.md)")
+    contact_nodes: int = key(250, minimum=2,
+                             doc="number of nodes on the candidate contact arc of the CAX6 "
+                                 "sphere (the FEM's mesh at the same fem.contact_nodes)")
+    contact_factor: float = key(1.25, minimum=0.0, open_minimum=True,
+                                doc="extent of the candidate contact arc as a multiple of the "
+                                    "predicted final contact radius (as fem.contact_factor)")
+    executable: str = key("ccx", doc="the CalculiX solver: a command on PATH or a path to "
+                                     "it (version 2.20 or later)")
+
+
+@dataclass(frozen=True)
 class CompareSettings:
     """What ``wearcheck compare`` accepts as agreement.
 
@@ -321,6 +338,7 @@ SECTIONS: dict[str, type] = {
     "mdr": MDRSettings,
     "fem": FEMSettings,
     "bem": BEMSettings,
+    "ccx": CCXSettings,
     "compare": CompareSettings,
     "fretting": Fretting,
 }

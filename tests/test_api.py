@@ -62,7 +62,8 @@ def test_read_run_of_a_missing_directory(tmp_path):
 
 
 def test_compare_names_solvers_as_a_string_or_list(tmp_path):
-    with pytest.raises(cases.CaseError, match="only fem can.*mdr: not selected"):
+    with pytest.raises(cases.CaseError,
+                       match="only fem can.*mdr: not among the solvers asked for"):
         wearcheck.compare("hertz", tmp_path / "a", solvers="fem")
     with pytest.raises(cases.CaseError, match="solvers = \\[\\]"):
         wearcheck.compare("hertz", tmp_path / "b", solvers=[])
