@@ -316,7 +316,8 @@ def ccx_files(tmp_path_factory):
 
 
 def test_real_calculix_files_agree_with_each_other(ccx_files):
-    from wearcheck.comparisons.external import calculix
+    # the reader the ccx solver reads its own jobs with
+    from wearcheck import calculix_files as calculix
     nodes, blocks = calculix.read_frd(ccx_files / "block.frd")
     assert len(nodes) == 12 and nodes[2][:2] == (1.0, 0.0)
     dat = calculix.dat_blocks((ccx_files / "block.dat").read_text(), "block.dat")

@@ -24,205 +24,23 @@ depth=SET``: the depth is the mean axial displacement of that set's nodes
 SI: ``--map 'r [mm]=points'``, ``'p [MPa]=CONTACT.CPRESS'``, ``'force [N]=SET'``,
 ``'depth [mm]=SET'``.
 
-The parsers (:func:`dat_blocks`, :func:`read_frd`) follow the CalculiX 2.20
-formats; the ``ccx`` solver package (issue 23 §3, its own branch) reads the
-same files for its runs, and the two should share one reader once both are in
-(a shared module outside the solver packages).
+The files are read by :mod:`wearcheck.calculix_files` (CalculiX 2.20's
+formats), the reader the ``ccx`` solver reads its own jobs with.
 """
 
 from __future__ import annotations
 
-import re
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from wearcheck.calculix_files import dat_blocks, inp_nodes, read_frd
 from wearcheck.cases import CaseError
 from wearcheck.cases.tables import parse_quantity, split_header
 
 from . import DISTANCES, External, Stage, check_unused
 
-_HEADER = re.compile(r"^\s*(?P<quantity>[a-z][a-z ]*?)\s*\((?P<components>[^)]*)\)\s+for\s+"
-                     r"(?:set\s+(?P<set>\S+)|all contact elements)\s+and time\s+(?P<time>\S+)")
-# Fortran drops the E of a three-digit exponent: 1.234567-100
-_FORTRAN_EXPONENT = re.compile(r"(\d)([-+]\d{3})$")
 AXES = {"x": 0, "y": 1, "z": 2}
-
-
-def to_float(text: str) -> float:
-    """A number as CalculiX prints it (also ``1.234567-100``)."""
-    try:
-        return float(text)
-    except ValueError:
-        return float(_FORTRAN_EXPONENT.sub(r"\1E\2", text))
-
-
-@dataclass
-class Block:
-    """One printed block of a .dat file: quantity ("total force", "displacements",
-    "contact stress"), components, node set (None for contact prints), time, node
-    ids (None for totals) and values (n, m)."""
-
-    quantity: str
-    components: tuple
-    set: str | None
-    time: float
-    ids: np.ndarray | None
-    values: np.ndarray
-
-
-#: components that are identifiers, not values: the row's node, element, integration point
-ID_COMPONENTS = ("slave node", "elem", "integ.pnt.")
-
-
-def dat_blocks(text: str, source: str) -> list[Block]:
-    """Every print block of a .dat file's text: node prints (a node number, then the
-    components), totals (the components), element prints (element, integration point,
-    values) and node-to-surface contact prints (slave node, values); a malformed line
-    is one CaseError naming the file and line."""
-    blocks, current, rows = [], None, []
-
-    def close():
-        if current is None:
-            return
-        quantity, comps, name, t, n_ids = current
-        if quantity.startswith("total"):
-            table = np.array(rows, float).reshape(len(rows), len(comps))
-            blocks.append(Block(quantity, comps, name, t, None, table))
-            return
-        width = len(comps) if n_ids else len(comps) + 1
-        table = np.array(rows, float).reshape(len(rows), width)
-        # the first identifier is the id; an integration point stays in the values
-        blocks.append(Block(quantity, comps[1:] if n_ids else comps, name, t,
-                            table[:, 0].astype(np.int64), table[:, 1:]))
-
-    for lineno, line in enumerate(text.splitlines(), start=1):
-        h = _HEADER.match(line)
-        if h:
-            close()
-            comps = tuple(c.strip() for c in h.group("components").split(","))
-            if comps[0] == "slave element+face":
-                raise CaseError(f"{source}, line {lineno}: a contact print per element face "
-                                "(face-to-face contact); print a node-to-surface contact, "
-                                "or give the .frd's CONTACT block")
-            n_ids = sum(1 for c in comps if c in ID_COMPONENTS)
-            try:
-                t = to_float(h.group("time"))
-            except ValueError:
-                raise CaseError(f"{source}, line {lineno}: time '{h.group('time')}' is not "
-                                "a number") from None
-            current = (h.group("quantity"), comps, h.group("set"), t, n_ids)
-            rows = []
-            continue
-        words = line.split()
-        if current is None or not words:
-            continue
-        quantity, comps, name, _, n_ids = current
-        expected = len(comps) if (n_ids or quantity.startswith("total")) else len(comps) + 1
-        if len(words) != expected:
-            raise CaseError(f"{source}, line {lineno}: expected {expected} numbers in the "
-                            f"block '{quantity}'" + (f" of set {name}" if name else "")
-                            + f", got: {line.strip()}")
-        try:
-            rows.append([to_float(w) for w in words])
-        except ValueError:
-            raise CaseError(f"{source}, line {lineno}: not numbers: {line.strip()}") from None
-    close()
-    return blocks
-
-
-@dataclass
-class FrdBlock:
-    """One nodal result block of an .frd file: name ("DISP", "CONTACT"), time,
-    component names, node ids and values (n, m)."""
-
-    name: str
-    time: float
-    components: tuple
-    ids: np.ndarray
-    values: np.ndarray
-
-
-def _fields(line: str, start: int = 13, width: int = 12) -> list[float]:
-    return [to_float(line[k:k + width]) for k in range(start, len(line.rstrip()), width)]
-
-
-def read_frd(path: Path) -> tuple[dict, list[FrdBlock]]:
-    """The nodes {number: (x, y, z)} and the nodal result blocks of an ASCII .frd file."""
-    try:
-        lines = Path(path).read_text(errors="replace").splitlines()
-    except OSError as exc:
-        raise CaseError(f"{path}: cannot be read: {exc.strerror or exc}") from None
-    nodes, blocks = {}, []
-    i = 0
-    try:
-        while i < len(lines):
-            key = lines[i][:6].strip()
-            if key == "2C":
-                i += 1
-                while not lines[i].startswith(" -3"):
-                    nodes[int(lines[i][3:13])] = tuple(_fields(lines[i]))
-                    i += 1
-            elif key.startswith("100C"):
-                time = to_float(lines[i][12:24])
-                i += 1
-                name = lines[i].split()[1]
-                comps, ids, rows = [], [], []
-                i += 1
-                while not lines[i].startswith(" -3"):
-                    tag = lines[i][:3]
-                    if tag == " -5":
-                        comps.append(lines[i].split()[1])
-                    elif tag == " -1":
-                        ids.append(int(lines[i][3:13]))
-                        rows.append(_fields(lines[i]))
-                    elif tag == " -2":
-                        rows[-1].extend(_fields(lines[i]))
-                    i += 1
-                width = max((len(r) for r in rows), default=0)
-                if any(len(r) != width for r in rows):
-                    raise ValueError(f"block {name}: records of unequal length")
-                blocks.append(FrdBlock(name, time, tuple(comps[:width]),
-                                       np.array(ids, np.int64),
-                                       np.array(rows, float).reshape(len(rows), width)))
-            i += 1
-    except (IndexError, ValueError) as exc:
-        raise CaseError(f"{path}, line {i + 1}: not a readable .frd record ({exc})") from None
-    if not nodes:
-        raise CaseError(f"{path}: no node block (2C); an ASCII .frd is needed "
-                        "(CalculiX writes one by default)")
-    return nodes, blocks
-
-
-def inp_nodes(path: Path) -> dict:
-    """{number: (x, y, z)} of the ``*NODE`` blocks of a deck, following ``*INCLUDE``."""
-    nodes = {}
-    try:
-        lines = Path(path).read_text(errors="replace").splitlines()
-    except OSError as exc:
-        raise CaseError(f"{path}: cannot be read: {exc.strerror or exc}") from None
-    reading = False
-    for lineno, line in enumerate(lines, start=1):
-        s = line.strip()
-        if not s or s.startswith("**"):
-            continue
-        if s.startswith("*"):
-            word = s.split(",")[0].strip().upper()
-            reading = word == "*NODE"
-            if word == "*INCLUDE":
-                m = re.search(r"INPUT\s*=\s*([^,]+)", s, re.IGNORECASE)
-                if m:
-                    nodes.update(inp_nodes(Path(path).parent / m.group(1).strip()))
-            continue
-        if reading:
-            parts = [p for p in s.split(",") if p.strip()]
-            try:
-                values = [float(p) for p in parts[1:4]]
-                nodes[int(parts[0])] = tuple(values + [0.0] * (3 - len(values)))
-            except (ValueError, IndexError):
-                raise CaseError(f"{path}, line {lineno}: not a node record: {s}") from None
-    return nodes
 
 
 def _target(value: str, where: str) -> tuple[str, str | None, float]:
