@@ -1,10 +1,10 @@
 """``wearcheck verify``: results produced elsewhere judged against the certified reference.
 
 The right results are an independent run of the paper case (MDR at N = 400, the
-shipped time tolerance: half the reference's nothing in common but the method;
+shipped time tolerance: nothing in common with the reference but the method;
 and the FEM, a different method) handed over in every format; the wrong ones are
-the same results at 1.05 times the sliding distance (a wear coefficient 5 % too
-high). The verdict must pass the first and fail the second, naming the stage and
+the same results at 1.05 times the sliding distance (a wear coefficient 1/1.05
+of the case's: 4.8 % too low). The verdict must pass the first and fail the second, naming the stage and
 the quantity. Tolerances are the case's [compare] keys, unchanged.
 """
 

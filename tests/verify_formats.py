@@ -3,8 +3,8 @@ history and stages as a user's FE code would hand them over (CSV tables with uni
 a VTK series with foreign names and units, CalculiX's .frd and .dat).
 
 Each takes ``scale``: the sliding distance written is scale × the true one (1.05:
-the results of a model whose wear coefficient is 5 % too high, at the distances
-it claims).
+the results of a model that reaches each state only after 5 % more sliding, i.e.
+whose wear coefficient is 1/1.05 of the case's, 4.8 % too low).
 """
 
 from __future__ import annotations

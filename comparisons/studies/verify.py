@@ -221,7 +221,8 @@ def _diagnosis(pair, factor, cmp) -> dict | None:
     return dict(factor=lam, reason=(
         f"your results agree with the reference at {lam:.4g} × your sliding distances "
         f"(misfit {factor['misfit']:.2g} there, {factor['misfit_at_one']:.2g} as given, over "
-        f"{', '.join(factor['quantities'])}): your model wears {1 / lam:.4g} times as fast "
+        # (your state at s is the reference's at λs: your K s = K_case λ s)
+        f"{', '.join(factor['quantities'])}): your model wears {lam:.4g} times as fast "
         "as the case says; check the wear coefficient K = kμ/σ0 (k, μ, σ0) and the "
         "distance slid per step or cycle"))
 
