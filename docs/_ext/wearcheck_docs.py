@@ -19,7 +19,7 @@ from pathlib import Path
 
 #: the tutorials in reading order (the rest follow by name)
 TUTORIALS = ("lab_rig_to_case.py", "friction_and_wear.py", "mu_sweep_on_dask.py",
-             "fem_fields_in_paraview.py")
+             "fem_fields_in_paraview.py", "verify_an_fe_result.py")
 
 
 def tutorial_order(filename: str):
