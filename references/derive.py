@@ -408,7 +408,8 @@ def _from_runs(plan, case, dims, solve, say) -> dict:
     if case.fretting is not None:
         history["cycles"] = np.interp(s_samples, finest.history["s"],
                                       finest.history["cycles"])
-    hist_resample = _history_resample(finest, history, per_m, plan.s_hat_ref)
+    stored_s = np.array([dist[k] for k in keys if k in plan.stages])
+    hist_resample = _history_resample(finest, history, per_m, plan.s_hat_ref, stored_s)
     # the stage samples and what linear interpolation in ρ and cubic in τ cost
     rho_cost = _rho_resample(finest, finest_case, dist, stage_a, rho_f, rho_p, case, edge_band)
     wear_arr = np.array([wear_f[k] for k in stored])
@@ -425,8 +426,8 @@ def _from_runs(plan, case, dims, solve, say) -> dict:
         parts = {}
         for dim in dims:
             parts[dim.name] = np.array([bands[dim.name][check][j_of[k]] for k in stored])
-        resample = np.array([hist_resample.get(check, 0.0) + rho_cost[check][k]
-                             for k in stored])
+        resample = np.array([(hist_resample[check][j] if check in hist_resample else 0.0)
+                             + rho_cost[check][k] for j, k in enumerate(stored)])
         parts["resample"] = resample
         parts["total"] = sum(parts.values())
         parts["interval"] = interval[check]
@@ -436,7 +437,7 @@ def _from_runs(plan, case, dims, solve, say) -> dict:
                 solver=plan.solver, dimensions=level_values, orders=orders, runs=log,
                 stage_unit=plan.stage_unit, stages=list(plan.stages),
                 held_out=[k for k in extra], edge_band=edge_band,
-                history_resample=hist_resample)
+                history_resample={k: v.tolist() for k, v in hist_resample.items()})
     return dict(name=plan.name, physics=certified.physics(case), s_hat_ref=plan.s_hat_ref,
                 history=history, stage_s=np.array([dist[k] for k in stored]),
                 stage_a=np.array([stage_a[k] for k in stored]), rho_f=rho_f, wear=wear_arr,
@@ -449,17 +450,26 @@ def _s_of_tau(t, per_m, s_hat_ref):
     return s_hat / per_m
 
 
-def _history_resample(run, history, per_m, s_hat_ref) -> dict:
-    """Per history check, the largest |PCHIP of the samples − the run| over the run's steps."""
+def _history_resample(run, history, per_m, s_hat_ref, stage_s) -> dict:
+    """Per history check and stored stage (distances ``stage_s``), the largest |PCHIP of
+    the samples − the run| over the run's steps between the neighbouring stored stages:
+    the cost of reading the history near that stage. (One maximum over the whole run
+    charged the early stages of a run over decades with the error of its late ones,
+    a thousand times their worn volume.)"""
     import scipy.interpolate
     s = np.asarray(run.history["s"], float)
     inside = s <= history["s"][-1]
     t_s = certified.tau(history["s"] * per_m, s_hat_ref)
     t_run = certified.tau(s[inside] * per_m, s_hat_ref)
+    stage_s = np.asarray(stage_s, float)
+    lower = np.concatenate([[0.0], stage_s[:-1]])
+    upper = np.concatenate([stage_s[1:], [np.inf]])
     out = {}
     for name in ("force", "contact_radius", "wear_center", "wear_volume", "depth"):
         y = scipy.interpolate.PchipInterpolator(t_s, history[name])(t_run)
-        out[name] = float(np.max(np.abs(y - np.asarray(run.history[name], float)[inside])))
+        err = np.abs(y - np.asarray(run.history[name], float)[inside])
+        out[name] = np.array([float(np.max(err[(s[inside] >= lo) & (s[inside] <= hi)],
+                                           initial=0.0)) for lo, hi in zip(lower, upper)])
     return out
 
 
