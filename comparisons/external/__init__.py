@@ -138,6 +138,24 @@ def read(path: str | Path, mapping: dict | None = None) -> External:
                     "history.csv, a .pvd or .vtu file, or a CalculiX .frd or .dat file")
 
 
+#: the coordinate axes of a point's (x, y, z)
+AXES = {"x": 0, "y": 1, "z": 2}
+
+
+def geometry_mapping(name: str, key: str, value: str, where: str) -> tuple[str, object]:
+    """``--map axis=z`` -> ("axis", "z"); ``--map 'r [mm]=points'`` -> ("r", 1e-3): the
+    symmetry axis and the unit of the coordinates, for the formats with points."""
+    from wearcheck.cases.tables import parse_quantity
+    if name == "axis":
+        if value.lower() not in AXES:
+            raise CaseError(f"{where}: the axis is x, y or z")
+        return "axis", value.lower()
+    if value != "points":
+        raise CaseError(f"{where}: r comes from the points' coordinates; give their unit as "
+                        "--map 'r [mm]=points'")
+    return "r", parse_quantity(key, "length", where)[1]
+
+
 def check_unused(mapping: dict, used: set, fmt: str) -> None:
     """A --map name that the format does not know is an error, not ignored."""
     from wearcheck.cases.tables import split_header

@@ -38,10 +38,7 @@ from wearcheck.calculix_files import dat_blocks, inp_nodes, read_frd
 from wearcheck.cases import CaseError
 from wearcheck.cases.tables import parse_quantity, split_header
 
-from . import DISTANCES, External, Stage, check_unused
-
-AXES = {"x": 0, "y": 1, "z": 2}
-
+from . import AXES, DISTANCES, External, Stage, check_unused, geometry_mapping
 
 def _target(value: str, where: str) -> tuple[str, str | None, float]:
     """'BLOCK.COMPONENT*FACTOR' or 'SET*FACTOR' -> (name, component or None, factor)."""
@@ -68,15 +65,9 @@ def read(path: Path, mapping: dict) -> External:
     for key, value in mapping.items():
         name, _ = split_header(key)
         where = f"--map '{key}={value}'"
-        if name == "axis":
-            if value.lower() not in AXES:
-                raise CaseError(f"{where}: the axis is x, y or z")
-            axis = value.lower()
-        elif name == "r":
-            if value != "points":
-                raise CaseError(f"{where}: r comes from the node coordinates; give their "
-                                "unit as --map 'r [mm]=points'")
-            coord = parse_quantity(key, "length", where)[1]
+        if name in ("axis", "r"):
+            what, got = geometry_mapping(name, key, value, where)
+            axis, coord = (got, coord) if what == "axis" else (axis, got)
         elif name in DISTANCES:
             if value != "time":
                 raise CaseError(f"{where}: the distance is CalculiX's result time: "

@@ -33,9 +33,9 @@ import numpy as np
 from wearcheck.cases import CaseError
 from wearcheck.cases.tables import parse_quantity, split_header
 
-from . import DISTANCES, HISTORY_QUANTITIES, External, Stage, check_unused
+from . import (AXES, DISTANCES, HISTORY_QUANTITIES, External, Stage, check_unused,
+               geometry_mapping)
 
-AXES = {"x": 0, "y": 1, "z": 2}
 DEFAULT_ARRAYS = {"f": "f", "wear": "wear_depth", "p": "pressure"}
 KINDS = {"f": "length", "wear": "length", "p": "pressure"}
 
@@ -154,15 +154,12 @@ def read(path: Path, mapping: dict) -> External:
     for key, value in mapping.items():
         name, _ = split_header(key)
         where = f"--map '{key}={value}'"
-        if name == "axis":
-            if value.lower() not in AXES:
-                raise CaseError(f"{where}: the axis is x, y or z")
-            axis = value.lower()
-        elif name == "r":
-            if value != "points":
-                raise CaseError(f"{where}: r comes from the points; give its unit as "
-                                "--map 'r [mm]=points'")
-            factors["r"] = parse_quantity(key, "length", where)[1]
+        if name in ("axis", "r"):
+            what, got = geometry_mapping(name, key, value, where)
+            if what == "axis":
+                axis = got
+            else:
+                factors["r"] = got
         elif name in KINDS:
             names[name] = value
             factors[name] = parse_quantity(key, KINDS[name], where)[1]
