@@ -132,11 +132,12 @@ PLANS = {
         "fretting", "mdr", (0, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000, 2000, 5000, 10000,
                             20000, 50000, 100000),
         stage_unit="cycles", s_hat_ref=1e-4, integer_stages=True,
+        # (increments per cycle: a multiple of 4, each quarter cycle ramping alike)
         dimensions=(Dimension("space", "mdr.elements", (400, 800, 1600), 2.0,
-                              {"fretting.jump_tolerance": 0.005, "fretting.increments": 20}),
+                              {"fretting.jump_tolerance": 0.005, "fretting.increments": 16}),
                     Dimension("jumps", "fretting.jump_tolerance", (0.02, 0.01, 0.005), 2.0,
-                              {"mdr.elements": 400, "fretting.increments": 20}),
-                    Dimension("increments", "fretting.increments", (5, 10, 20), 2.0,
+                              {"mdr.elements": 400, "fretting.increments": 16}),
+                    Dimension("increments", "fretting.increments", (4, 8, 16), 2.0,
                               {"mdr.elements": 400, "fretting.jump_tolerance": 0.005}))),
 }
 

@@ -228,8 +228,10 @@ def test_a_coarse_rederivation_contains_the_reference(name):
     fine = certified.load(name)
     bad = [row for row in within_band(coarse, fine) if row[2] > row[3]]
     assert not bad, bad[:5]
-    # and the coarse band is the wider one: refinement shrinks it
-    for check in ("profile_contact_max", "force", "pressure_interior_max"):
+    # and the coarse band is the wider one: refinement shrinks it (not the force under
+    # force control: it is the load held, its band round-off, 1e-12 N of ball_on_flat's 2 N)
+    held = ("force",) if fine.case.loading.control == "force" else ()
+    for check in {"profile_contact_max", "force", "pressure_interior_max"} - set(held):
         assert np.max(coarse.band[check]["total"]) > np.max(fine.band[check]["total"])
 
 
