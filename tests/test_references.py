@@ -40,8 +40,12 @@ def test_shipped_small_with_provenance(ref):
 #: the references whose every check is certified; the ellipsoid's BEM (256² pixels)
 #: leaves the ring averages of profile and pressure uncertain where the rings cross
 #: the contact ellipse's edge (up to 1.1 % of the depth and 7 % of the peak
-#: pressure), so verify leaves those checks out where they are (test_verify)
-CERTIFIED_EVERYWHERE = ("hertz", "truncated", "paper", "ball_on_flat", "fretting")
+#: pressure), and fretting's MDR (N = 1600, 193 samples over 1.2 a) the pressure in
+#: the stick zone once the slip annulus has worn a groove round it (band 0.37 % of the
+#: stage's peak at 5e3 cycles, 0.9 % at 2e4, 3.2 % at 5e4, 50 % at 1e5: its edge
+#: sharpens faster than the grid and the samples resolve it, measured), so verify
+#: leaves those checks out where they are (test_verify)
+CERTIFIED_EVERYWHERE = ("hertz", "truncated", "paper", "ball_on_flat")
 
 
 def test_band_far_inside_the_tolerances(ref):
