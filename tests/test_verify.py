@@ -400,9 +400,13 @@ def test_ball_on_flat_in_cycles(no_figures, tmp_path):
 
 
 def test_fretting_in_cycles(no_figures, tmp_path):
-    # the fretting benchmark over its first thousand cycles (the run's length is free)
-    case = wearcheck.load_case("fretting", {"mdr.elements": 200, "fretting.cycles": 1000,
-                                            "fretting.stage_cycles": [0, 10, 100, 1000]})
+    # the fretting benchmark over half its cycles (the run's length is free; 2 s of MDR).
+    # Not fewer: the worn volume is judged against the larger of its own value and 1 %
+    # of π a0² d0 (compare.profile_floor), which it passes at about 2e4 cycles; at 1000
+    # cycles 5 % more sliding shifts it by 0.2 % of that floor and the verdict cannot see
+    # it (measured: 0.00215 of 0.01 allowed; at 1e4 and 5e4 cycles 0.022 and 0.056)
+    case = wearcheck.load_case("fretting", {"mdr.elements": 200, "fretting.cycles": 50000,
+                                            "fretting.stage_cycles": [0, 100, 10000, 50000]})
     run = wearcheck.solve(case, "mdr")
     m = run_verify(case, fmt.csv_dir(tmp_path / "r", run, time="cycles"), tmp_path / "v")
     assert m["passed"], json.dumps(failed_stages(m))

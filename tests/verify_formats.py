@@ -37,12 +37,20 @@ def csv_dir(directory, result, *, scale=1.0, time="s", stages=True) -> Path:
     (d / "history.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
     if stages:
         from wearcheck.references.certified import unworn_profile
-        lines = ["r [µm],wear [m],s_hat,p [MPa]"]
+        # the stages' distance as ŝ, or in cycles with a history in cycles (a fretting
+        # run's cycles are not proportional to its s: both tables count alike)
+        if time == "cycles":
+            column = "cycles"
+            when = (np.asarray(result.case.fretting.stage_cycles, float)[:len(st["s"])]
+                    if fretting else np.asarray(st["s"]) * result.case.cycles_per_metre)
+        else:
+            column, when = "s_hat", np.asarray(st["s_hat"])
+        lines = [f"r [µm],wear [m],{column},p [MPa]"]
         f0 = unworn_profile(result.case, st["r"])
-        for k, s_hat in enumerate(st["s_hat"]):
+        for k, t in enumerate(when):
             for j, r in enumerate(st["r"]):
                 lines.append(f"{r * 1e6:.17g},{st['f'][k, j] - f0[j]:.17g},"
-                             f"{s_hat * scale:.17g},{st['p'][k, j] / 1e6:.17g}")
+                             f"{t * scale:.17g},{st['p'][k, j] / 1e6:.17g}")
         (d / "stages.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
     return d
 
