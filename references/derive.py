@@ -453,24 +453,24 @@ def _s_of_tau(t, per_m, s_hat_ref):
 
 def _history_resample(run, history, per_m, s_hat_ref, stage_s) -> dict:
     """Per history check and stored stage (distances ``stage_s``), the largest |PCHIP of
-    the samples − the run| over the run's steps from the start to the next stored
-    stage: the cost of reading the history up to there. (One maximum over the whole run
-    charged the early stages of a run over decades with the error of its late ones, a
-    thousand times their worn volume; the window between the neighbouring stages alone
-    left the GCI of paper's coarse test short at ŝ = 0.02, tests/test_references.py.)"""
+    the samples − the run| over the run's steps between the neighbouring stored stages:
+    the cost of reading the history near that stage. (One maximum over the whole run
+    charged the early stages of a run over decades with the error of its late ones,
+    a thousand times their worn volume.)"""
     import scipy.interpolate
     s = np.asarray(run.history["s"], float)
     inside = s <= history["s"][-1]
     t_s = certified.tau(history["s"] * per_m, s_hat_ref)
     t_run = certified.tau(s[inside] * per_m, s_hat_ref)
     stage_s = np.asarray(stage_s, float)
+    lower = np.concatenate([[0.0], stage_s[:-1]])
     upper = np.concatenate([stage_s[1:], [np.inf]])
     out = {}
     for name in ("force", "contact_radius", "wear_center", "wear_volume", "depth"):
         y = scipy.interpolate.PchipInterpolator(t_s, history[name])(t_run)
         err = np.abs(y - np.asarray(run.history[name], float)[inside])
-        out[name] = np.array([float(np.max(err[s[inside] <= hi], initial=0.0))
-                              for hi in upper])
+        out[name] = np.array([float(np.max(err[(s[inside] >= lo) & (s[inside] <= hi)],
+                                           initial=0.0)) for lo, hi in zip(lower, upper)])
     return out
 
 
