@@ -31,6 +31,45 @@ from wearcheck.numerics import stepping
 
 from . import contact
 from .operator import HalfSpace
+from .tangential import ShearToNormal
+
+
+@dataclass
+class Coupling:
+    """The friction traction τx = μp moving the surface normally (bodies not elastically similar).
+
+    shear : the normal displacement of a traction along x (Dundurs' β in it).
+    mu : friction coefficient; the traction on the worn body points along +x,
+        the direction the counterface slides relative to it.
+    reciprocating : strokes alternate +x, -x. The wear of a step is then the
+        mean of the two strokes' (the stroke is short against the wear's time
+        scale): the pressure of the -x stroke is the mirror image x -> -x of
+        the +x stroke's on a profile symmetric in x, which the symmetric
+        wear keeps (the unworn profiles are all symmetric in x). An implicit
+        step solves the +x stroke's contact on base + σ·(stroke mean of p):
+        the wear compliance acts on the stroke mean (:func:`contact.solve`
+        ``stroke_mean``), so the step is backward Euler of the averaged law.
+    """
+
+    shear: ShearToNormal
+    mu: float
+    reciprocating: bool = False
+
+
+def stroke_mean(model: "Model", field_: np.ndarray) -> np.ndarray:
+    """The mean of a +x stroke's field and its mirror image (the -x stroke's); itself otherwise.
+
+    :func:`contact.mirror_x` (for even n pixel 0 keeps its value: it carries
+    no load, the contact may not reach the box's edge).
+    """
+    if not reciprocating(model):
+        return field_
+    return 0.5 * (field_ + contact.mirror_x(field_))
+
+
+def reciprocating(model: "Model") -> bool:
+    """Coupled with reciprocating strokes: the wear is the two strokes' mean."""
+    return model.coupling is not None and model.coupling.reciprocating
 
 
 @dataclass
@@ -49,6 +88,7 @@ class Model:
     centre: tuple[int, int] = (0, 0)
     exponent: float = 1.0      # n of the wear law dw/ds = K σ0 (p/σ0)^n
     hardness: float = 1.0      # σ0 [Pa]; enters only when exponent != 1
+    coupling: Coupling | None = None   # bem.coupling: friction traction into the normal problem
 
 
 @dataclass
@@ -61,11 +101,17 @@ class State:
     iterations: int
     residual: float
     stats: dict = field(default_factory=dict)
+    displacement: np.ndarray | None = None   # G p, within displacement_error [m]
+    displacement_error: float = 0.0
 
 
 def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
-    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard): :func:`cases.wear_law.speed`."""
-    return wear_law.speed(p, model.wear_rate, model.exponent, model.hardness)
+    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard): :func:`cases.wear_law.speed`.
+
+    Reciprocating with coupling: averaged over the two strokes (:func:`stroke_mean`).
+    """
+    return stroke_mean(model, wear_law.speed(p, model.wear_rate, model.exponent,
+                                             model.hardness))
 
 
 def wear_speed_slope(model: Model, p: np.ndarray) -> np.ndarray:
@@ -101,18 +147,30 @@ def check_edge(p: np.ndarray) -> None:
 
 
 def contact_state(model: Model, base: np.ndarray, sigma: float = 0.0,
-                  p_init=None) -> State:
+                  p_init=None, displacement=None) -> State:
     """Contact of the profile ``base`` (+ wear compliance σ) under the model's load.
 
-    The returned profile is base + σ p (the worn profile of an implicit step).
+    The returned profile is base + σ p (the worn profile of an implicit step),
+    base + σ·(stroke mean of p) when reciprocating with coupling: the +x
+    stroke's contact is solved with the wear compliance on the stroke mean,
+    so p is the +x stroke's pressure on the returned profile, which stays
+    exactly symmetric in x (σ must be symmetric in x). ``displacement`` =
+    (G p_init, its error bound) when known (:func:`contact.solve`).
     """
-    c = contact.solve(model.op, base, depth=model.depth, force=model.force, sigma=sigma,
-                      p_init=p_init, p_scale=model.p_scale, g_scale=model.g_scale,
-                      tol=model.tol, maxiter=model.maxiter)
+    u, error = displacement if displacement is not None else (None, 0.0)
+    kw = dict(depth=model.depth, force=model.force, sigma=sigma, p_init=p_init,
+              p_scale=model.p_scale, g_scale=model.g_scale, tol=model.tol,
+              maxiter=model.maxiter, stroke_mean=reciprocating(model),
+              displacement=u, displacement_error=error)
+    if model.coupling is None:
+        c = contact.solve(model.op, base, **kw)
+    else:
+        c = contact.solve_coupled(model.op, model.coupling.shear, base, model.coupling.mu, **kw)
     check_edge(c.pressure)
-    f = base + sigma * c.pressure if np.any(sigma) else base
+    f = base + stroke_mean(model, sigma * c.pressure) if np.any(sigma) else base
     return State(f=f, p=c.pressure, gap=c.gap, depth=c.depth, force=c.force,
-                 iterations=c.iterations, residual=c.residual)
+                 iterations=c.iterations, residual=c.residual, displacement=c.displacement,
+                 displacement_error=c.displacement_error)
 
 
 #: Newton iteration of a pressure exponent n != 1 (as the MDR's,
@@ -127,18 +185,22 @@ NEWTON_STALL = 1e-5
 NEWTON_STALL_AFTER = 4
 
 
-def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> State:
+def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None,
+                   displacement=None) -> State:
     """One implicit step: the contact of ``base`` + eff·(wear speed at its end).
 
     eff is the step times the scheme's factor (h for backward Euler, c h for
     BDF2). n = 1: one contact solve with wear compliance eff·K. n != 1: the
     wear speed is linearised about the last iterate (Newton: per-pixel wear
     compliance eff K n (p_k/σ0)^(n-1), base shifted by eff (r(p_k) - r'(p_k)
-    p_k)) until p settles; the profile is then base + eff r(p).
+    p_k)) until p settles; the profile is then base + eff r(p) (reciprocating
+    with coupling: r(p) and its linearisation averaged over the two strokes,
+    as :func:`contact_state`). ``displacement``: (G p_guess, its error
+    bound) when known.
     """
     K = model.wear_rate
     if model.exponent == 1.0:
-        return contact_state(model, base, eff * K, p_guess)
+        return contact_state(model, base, eff * K, p_guess, displacement)
     p_k = contact_state(model, base, 0.0, p_guess).p if p_guess is None else p_guess
     tol = max(NEWTON_TOL, 10.0 * model.tol)
     iterations, changes = 0, []
@@ -147,7 +209,11 @@ def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> 
         # enter unworn and leave worn, iterate after iterate (any slope leaves
         # the fixed point p = p_k unchanged)
         slope = wear_speed_slope(model, np.maximum(p_k, NEWTON_FLOOR * np.max(p_k)))
-        shift = eff * (wear_speed(model, p_k) - K * slope * p_k)
+        # reciprocating: the wear is the stroke mean S r(p), linearised with a
+        # slope symmetric in x (S·diag(slope) is then symmetric, as the
+        # solve needs; Newton's fixed point does not depend on the slope)
+        slope = stroke_mean(model, slope)
+        shift = eff * (wear_speed(model, p_k) - stroke_mean(model, K * slope * p_k))
         new = contact_state(model, base + shift, eff * K * slope, p_k)
         iterations += new.iterations
         change = float(np.max(np.abs(new.p - p_k))) / float(np.max(new.p))
@@ -173,31 +239,52 @@ class Wear(stepping.Problem):
     Each contact solve starts from the pressure extrapolated linearly in s
     from the last two accepted states (the second half of a doubled step:
     from the first half's); ``cg_iterations`` counts every solve's iterations.
+    The guess's displacement G p is the same combination of the states'
+    displacements (the pixels the extrapolation clips to zero added by
+    direct sums), so a solve starts without a convolution.
     """
 
     def __init__(self, model: Model, start: State):
         self.model = model
-        self.last = None          # (p, step) one accepted state back, for the extrapolation
+        self.last = None          # one accepted state back, and the step to it
         self.cg_iterations = start.iterations
 
     def _guess(self, state, h):
-        """The pressure extrapolated linearly in s over h from ``state``."""
+        """The pressure extrapolated linearly in s over h from ``state``, and (G p, error)."""
+        known = displacement_of(state)
         if self.last is None:
-            return state.p
-        guess = np.maximum(state.p + (h / self.last[1]) * (state.p - self.last[0]), 0.0)
-        return guess if np.any(guess > 0) else state.p
+            return state.p, known
+        last, step = self.last
+        ratio = h / step
+        linear = state.p + ratio * (state.p - last.p)
+        guess = np.maximum(linear, 0.0)
+        if not np.any(guess > 0):
+            return state.p, known
+        before = displacement_of(last)
+        clipped = np.nonzero(linear < 0.0)
+        if known is None or before is None or len(clipped[0]) > contact.MAX_DIRECT:
+            return guess, None
+        u = (1.0 + ratio) * known[0] - ratio * before[0]
+        self.model.op.add_point_loads(u, clipped, -linear[clipped])
+        return guess, (u, (1.0 + ratio) * known[1] + ratio * before[1])
 
     def implicit(self, origin, base, h, c, sub):
         # a doubled step's halves: the first from the whole step's guess
-        # (extrapolated over the whole step), the second from the first
-        p_guess = origin.p if sub.kind == "second" else self._guess(sub.start, sub.length)
-        new = implicit_state(self.model, base, c * h, p_guess)
+        # (extrapolated over the whole step), the second from the first; not
+        # from the whole step's solution, which would pull the two towards
+        # each other and bias the step doubling's error estimate, their
+        # difference (docs/performance.md, BEM)
+        if sub.kind == "second":
+            p_guess, known = origin.p, displacement_of(origin)
+        else:
+            p_guess, known = self._guess(sub.start, sub.length)
+        new = implicit_state(self.model, base, c * h, p_guess, known)
         self.cg_iterations += new.iterations
         return new
 
     def explicit(self, state, h, sub):
         new = contact_state(self.model, state.f + h * wear_speed(self.model, state.p), 0.0,
-                            state.p)
+                            state.p, displacement_of(state))
         self.cg_iterations += new.iterations
         return new
 
@@ -209,7 +296,14 @@ class Wear(stepping.Problem):
         return state.force, state.depth, state.f[i0, j0] - self.model.f0[i0, j0]
 
     def accepted(self, old, new, h):
-        self.last = (old.p, h)
+        self.last = (old, h)
+
+
+def displacement_of(state: State) -> tuple | None:
+    """(G p, its error bound) of a state, when its solve returned them."""
+    if state.displacement is None:
+        return None
+    return state.displacement, state.displacement_error
 
 
 def run(model: Model, plan: stepping.Plan, progress=None, *, ring: tuple | None = None,

@@ -21,11 +21,18 @@ REQUIRED = object()
 
 
 def key(default=REQUIRED, *, unit="", doc="", choices=None, positive=False,
-        minimum=None, maximum=None, open_minimum=False, open_maximum=False):
-    """Declare one case key as a dataclass field."""
+        minimum=None, maximum=None, open_minimum=False, open_maximum=False,
+        multiple_of=None, why=""):
+    """Declare one case key as a dataclass field.
+
+    The key's own constraints (type, range, choices, ``multiple_of``, for a list
+    each entry's) are declared here; ``why`` is said with a value that breaks
+    ``multiple_of``. Rules between keys: ``cases/rules.py``.
+    """
     meta = dict(unit=unit, doc=doc, choices=choices, positive=positive,
                 minimum=minimum, maximum=maximum, open_minimum=open_minimum,
-                open_maximum=open_maximum, required=default is REQUIRED)
+                open_maximum=open_maximum, multiple_of=multiple_of, why=why,
+                required=default is REQUIRED)
     if default is REQUIRED:
         return field(default=None, metadata=meta)
     return field(default=default, metadata=meta)
@@ -39,25 +46,7 @@ PROFILES = ("paraboloid", "sphere", "truncated_paraboloid", "cone", "power_law",
 #: profiles that are not bodies of revolution
 NON_AXISYMMETRIC = ("ellipsoid",)
 
-# which optional geometry keys each profile takes (besides `profile`)
-PROFILE_KEYS = {
-    "paraboloid": {"radius"},
-    "sphere": {"radius"},
-    "truncated_paraboloid": {"radius", "flat_radius"},
-    "cone": {"slope_angle", "radius"},
-    "power_law": {"coefficient", "exponent", "radius"},
-    "table": {"file", "radius"},
-    "ellipsoid": {"radius", "radius_y"},
-}
-PROFILE_REQUIRED = {
-    "paraboloid": {"radius"},
-    "sphere": {"radius"},
-    "truncated_paraboloid": {"radius", "flat_radius"},
-    "cone": {"slope_angle"},
-    "power_law": {"coefficient", "exponent"},
-    "table": {"file"},
-    "ellipsoid": {"radius", "radius_y"},
-}
+# which geometry keys each profile takes and needs: cases/rules.py (PROFILE_KEYS)
 
 
 @dataclass(frozen=True)
@@ -99,6 +88,20 @@ class Counterface:
     youngs_modulus: float | None = key(None, unit="Pa", positive=True, doc="Young's modulus E2")
     poisson_ratio: float | None = key(None, minimum=-1.0, maximum=0.5, open_minimum=True,
                                       doc="Poisson ratio ν2, in (-1, 0.5]")
+    wears: bool = key(False, doc="the counterface wears too, along the track (both bodies "
+                                 "wearing, as in ASTM G133 and G99; BEM only, needs "
+                                 "sliding.motion): give its specific_rate or k (with hardness)")
+    specific_rate: float | None = key(None, unit="m^3/(N m)", positive=True,
+                                      doc="counterface.wears: the counterface's specific wear "
+                                          "rate K_flat, V_flat = K_flat·F·s; give this or "
+                                          "counterface.k")
+    k: float | None = key(None, unit="1", positive=True,
+                          doc="counterface.wears: its dimensionless wear coefficient, "
+                              "K_flat = k·μ/counterface.hardness (μ = wear.mu); give this or "
+                              "counterface.specific_rate")
+    hardness: float | None = key(None, unit="Pa", positive=True,
+                                 doc="counterface.wears: hardness of the counterface (needed "
+                                     "with counterface.k)")
 
 
 @dataclass(frozen=True)
@@ -114,7 +117,15 @@ class Loading:
 
 @dataclass(frozen=True)
 class Wear:
-    k: float = key(unit="1", positive=True, doc="dimensionless wear coefficient k_wear (paper Eq. 1)")
+    k: float | None = key(None, unit="1", positive=True,
+                          doc="dimensionless wear coefficient k_wear (paper Eq. 1), per unit "
+                              "friction work; give this or wear.specific_rate (k = K·σ0/μ), "
+                              "the other is derived")
+    specific_rate: float | None = key(None, unit="m^3/(N m)", positive=True,
+                                      doc="the laboratory's specific wear rate K of the worn "
+                                          "body, V = K·F·s for n = 1; K = k μ/σ0, the "
+                                          "dimensional coefficient of the wear law; give this "
+                                          "or wear.k, the other is derived")
     mu: float = key(unit="1", positive=True, doc="coefficient of friction μ, τ = μ p (paper Eq. 14)")
     hardness: float = key(unit="Pa", positive=True, doc="hardness σ0 of the worn indenter")
     tangential_correction: bool = key(False,
@@ -133,7 +144,9 @@ class Sliding:
     until: str = key("force_fraction", choices=("force_fraction", "distance", "cycles"),
                      doc="stop when the force has fallen below a fraction of its start, "
                          "after a total sliding distance, or after a number of reciprocating "
-                         "cycles (s = 2·stroke·cycles, gross slip)")
+                         "cycles (s = 2·stroke·cycles, gross slip; revolutions of a "
+                         "disc, s = 2π·track_radius·cycles, with sliding.motion = "
+                         "\"unidirectional\")")
     force_fraction: float = key(0.01, minimum=0.0, maximum=1.0, open_minimum=True,
                                 open_maximum=True,
                                 doc="until = force_fraction: stop once F < force_fraction * F(0)")
@@ -144,6 +157,16 @@ class Sliding:
                                doc="reciprocating stroke (one way); one cycle slides 2·stroke. "
                                    "Required by until = cycles and stages.cycles; without it "
                                    "history.csv's column `cycles` is NaN")
+    motion: str | None = key(None, choices=("reciprocating", "unidirectional"),
+                             doc="the test's motion, for a counterface that wears along its "
+                                 "track: reciprocating (ASTM G133, the ball slides to and fro "
+                                 "over sliding.stroke) or unidirectional (ASTM G99 pin-on-disc, "
+                                 "a circular track of sliding.track_radius; a cycle is one "
+                                 "revolution)")
+    track_radius: float | None = key(None, unit="m", positive=True,
+                                     doc="motion = unidirectional: radius of the wear track on "
+                                         "the disc (G99's R); one revolution slides "
+                                         "2π·track_radius")
     cycles: float | None = key(None, minimum=0.0,
                                doc="until = cycles: number of cycles to run (0: the unworn "
                                    "contact only)")
@@ -174,10 +197,15 @@ class Stages:
                                    doc="dimensionless sliding distances ŝ at which profiles "
                                        "and pressures are kept (increasing); stages after "
                                        "the end of the run are not reached")
+    s: tuple[float, ...] | None = key(None, unit="m", minimum=0.0,
+                                      doc="the stages as sliding distances instead (not "
+                                          "together with s_hat or cycles; s_hat is then "
+                                          "derived from them)")
     cycles: tuple[float, ...] | None = key(None, minimum=0.0,
                                            doc="the stages as numbers of cycles instead "
-                                               "(needs sliding.stroke; not together with "
-                                               "s_hat, which is then derived from them)")
+                                               "(needs sliding.stroke, with any "
+                                               "sliding.until; not together with s_hat or s, "
+                                               "s_hat is then derived from them)")
 
 
 @dataclass(frozen=True)
@@ -228,11 +256,25 @@ class BEMSettings:
                          "contact radius: √2·a0 for a paraboloid under depth control (the "
                          "radius where f = d, complete wear), the predicted wear-scar radius "
                          "under force control; the long semi-axis for the ellipsoid")
+    track_model: str = key("long_stroke", choices=("long_stroke", "moving"),
+                           doc="counterface.wears: the long-stroke model (a groove h(y) "
+                               "along the track, steady in the ball's frame; one contact "
+                               "solve per step) or the moving-contact model (the ball "
+                               "travels over a grid fixed to the flat, turnarounds "
+                               "included; one contact solve per pixel of sliding: short "
+                               "runs)")
     tolerance: float = key(1e-6, positive=True, maximum=1e-2,
                            doc="complementarity tolerance of each contact solve: "
                                "max |min(p/p0, gap/d)| over the pixels (1e-6: on the paper "
                                "case at 128², 3e-5 p0 and 2e-6 F0 from 1e-7, far inside the "
                                "pixel error, at 2/3 of the iterations)")
+    coupling: bool = key(False,
+                         doc="couple the normal and tangential problems (bodies not "
+                             "elastically similar, Dundurs' β ≠ 0): the friction traction "
+                             "μp along the sliding direction moves the surface normally, "
+                             "which moves the pressure against it (docs/bem-tangential.md "
+                             "§6); one sliding direction, or reciprocating strokes when "
+                             "sliding.stroke is given; no effect when β = 0")
 
 
 @dataclass(frozen=True)
@@ -309,7 +351,8 @@ class Fretting:
                                             "amplitude (an override of one replaces the "
                                             "other)")
     cycles: int = key(unit="1", minimum=1, doc="number of fretting cycles (+U -> -U -> +U)")
-    increments: int = key(40, unit="1", minimum=4,
+    increments: int = key(40, unit="1", minimum=4, multiple_of=4,
+                          why="a quarter cycle ramps from 0 to the amplitude",
                           doc="load increments per cycle, a multiple of 4 (the first "
                               "quarter cycle from 0 to +U takes a quarter of them); a run "
                               "they do not resolve (increment wear number past 1.3, "
@@ -319,7 +362,8 @@ class Fretting:
                                 doc="cycle jumping: a jump over many cycles is accepted when "
                                     "the wear per cycle changed by at most 2·jump_tolerance "
                                     "(relative, max norm) across it; 0 simulates every cycle")
-    stage_cycles: tuple[float, ...] | None = key(None, unit="1", minimum=0.0,
+    stage_cycles: tuple[float, ...] | None = key(None, unit="1", minimum=0.0, multiple_of=1,
+                                                 why="cycle numbers",
                                                  doc="cycle numbers (increasing integers) at "
                                                      "which profile, pressure and shear "
                                                      "traction are kept (0: after the first "
@@ -426,6 +470,11 @@ def _check_number(name, value, meta):
         allowed = f"in {lb}{lo:g}, {hi:g}{rb}" if lo is not None else \
             f"{'<' if meta['open_maximum'] else '<='} {hi:g}"
         raise CaseError(f"key '{name}' = {format_value(value)}: must be {allowed}{unit}")
+    step = meta["multiple_of"]
+    if step is not None and value % step:
+        want = "a whole number" if step == 1 else f"a multiple of {step:g}"
+        raise CaseError(f"key '{name}' = {format_value(value)}: must be {want}"
+                        + (f" ({meta['why']})" if meta["why"] else ""))
     return value
 
 
@@ -483,6 +532,21 @@ def did_you_mean(name: str, allowed) -> str:
     import difflib
     close = difflib.get_close_matches(str(name), list(allowed), n=1, cutoff=0.6)
     return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def key_problem(name) -> str | None:
+    """What is wrong with ``name`` as a dotted case key (``"wear.mu"``), or None if declared."""
+    section, _, key = str(name).partition(".")
+    if not isinstance(name, str) or not key or "." in key:
+        return "a key must be section.key, e.g. wear.mu"
+    if section not in SECTIONS:
+        return (f"unknown section '{section}'{did_you_mean(section, SECTIONS)}; allowed: "
+                + ", ".join(SECTIONS))
+    names = [f.name for f in dataclasses.fields(SECTIONS[section])]
+    if key not in names:
+        return (f"unknown key '{name}'{did_you_mean(key, names)}; allowed in [{section}]: "
+                + ", ".join(names))
+    return None
 
 
 def build_section(section: str, raw: dict) -> Any:

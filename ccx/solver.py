@@ -46,6 +46,9 @@ def supports(case) -> str | None:
     if ind.radius is None:
         return (f"CalculiX needs 'indenter.radius' (the radius of its sphere) for profile "
                 f"\"{ind.profile}\"; it is not given")
+    if cf.wears:
+        return ("counterface.wears = true: the CalculiX model wears the sphere only (a wear "
+                "track on the flat needs the BEM's both-bodies models, docs/both-bodies.md)")
     if not cf.rigid:
         return ("counterface.rigid = false: the CalculiX model is an elastic sphere against "
                 "a rigid plane; set counterface.rigid = true or use the MDR solver")

@@ -40,12 +40,18 @@ RUN_FILES = (
                                   "render), complete, writer pid and host; only such a path is "
                                   "ever replaced, and only by the same kind"),
     Item("report.md", "", "fretting runs: loops, stick radius, energy and wear against cycles, "
-                          "checked against the closed forms"),
+                          "checked against the closed forms; both bodies wearing: the volumes "
+                          "beside the ASTM G133/G99 formulas"),
     Item("report.html", "", "the same, with its figures embedded"),
     Item("fretting_loops.png", "", "fretting runs: Q/μF against u/u* for the kept cycles, "
                                    "with the Mindlin–Deresiewicz loop"),
     Item("fretting_history.png", "", "fretting runs: stick radius, energy per cycle and worn "
                                      "volume against cycles"),
+    Item("track_profile.csv", "", "both bodies wearing: the track's cross-section per stage "
+                                  "(stage, s, cycles, y, depth, height), profilometer-style"),
+    Item("track_profiles.png", "", "both bodies wearing: the track's cross-sections"),
+    Item("counterface_wear.pvd", "", "both bodies wearing: the counterface's wear map per "
+                                     "stage, ImageData counterface_wear_KKK.vti"),
 )
 
 #: history.csv columns every solver writes, in this order
@@ -250,6 +256,34 @@ VERIFICATION_METRICS = (
     Item("data_dictionary", "", "units and meanings of every file and key"),
 )
 
+#: files of a fit directory (``wearcheck fit --out``)
+FIT_FILES = (
+    Item("case.toml", "", "the resolved case as given"),
+    Item("fitted_case.toml", "", "the same with the fitted values (wear.specific_rate, "
+                                 "wear.pressure_exponent)"),
+    Item("fit.json", "", "what --json prints: parameters with their 95 % intervals, the lab "
+                         "formula's K, the goodness of fit, the measurements, the model's runs"),
+    Item("measurements.csv", "", "one row per measured value: the columns of FIT_COLUMNS"),
+    Item("fit.png", "", "measured values and the fitted model against sliding, the lab "
+                        "formula's line, and the residual of each measurement"),
+    Item("meta.json", "", "resolved and fitted case, the measurement file (path, SHA-256), "
+                          "warnings, provenance and this data dictionary"),
+)
+#: columns of a fit's measurements.csv (SI)
+FIT_COLUMNS = (
+    Item("row", "", "the row of the measurement file (its line number)"),
+    Item("cycles", "", "cycles (empty when neither the sheet nor the stroke gives them)"),
+    Item("s", "m", "sliding distance"),
+    Item("quantity", "", "scar_diameter, ball_volume or wear_center"),
+    Item("unit", "", "the unit of measured, uncertainty and model: m or m^3"),
+    Item("measured", "(unit)", "the measured value"),
+    Item("uncertainty", "(unit)", "its ± uncertainty (empty when the sheet gives none)"),
+    Item("model", "(unit)", "the fitted model's value"),
+    Item("residual", "", "(measured − model)/uncertainty, or ln(measured/model) without "
+                         "uncertainties"),
+    Item("lab_K", "m^3/(N m)", "the lab formula's K = V_lab/(F s) of this measurement"),
+)
+
 
 def _table(items) -> dict:
     return {i.name: i.as_dict() for i in items}
@@ -303,6 +337,11 @@ def verification_dictionary() -> dict:
                 stage_metrics=_table(STAGE_METRICS))
 
 
+def fit_dictionary() -> dict:
+    """The data dictionary of a fit directory (written into its meta.json)."""
+    return dict(files=_table(FIT_FILES), measurements_csv=_table(FIT_COLUMNS))
+
+
 def markdown(items, first="name") -> str:
     """A Markdown table of items (the documentation's output tables)."""
     rows = [f"| {first} | unit | meaning |", "|---|---|---|"]
@@ -323,4 +362,6 @@ def doc_tables() -> dict[str, str]:
         "stage-metrics": markdown(STAGE_METRICS, "key"),
         "verification-files": markdown(VERIFICATION_FILES, "file"),
         "verification-metrics": markdown(VERIFICATION_METRICS, "key"),
+        "fit-files": markdown(FIT_FILES, "file"),
+        "fit-columns": markdown(FIT_COLUMNS, "column"),
     }

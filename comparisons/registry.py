@@ -229,6 +229,7 @@ register(Solver(
                 "constrained conjugate gradients; also non-axisymmetric indenters",
     style=dict(ls="none", marker="s", ms=3.0, mfc="none", mew=0.8),
     export_vtk="wearcheck.comparisons.present.vtk_image:write_bem_fields",
+    run_report="wearcheck.comparisons.present.track_report:write",
     history_columns=(Item("max_pressure", "Pa", "largest pixel pressure"),
                      Item("cg_iterations", "", "conjugate-gradient iterations of the step's "
                                                "contact solve"),
@@ -238,13 +239,29 @@ register(Solver(
                                               "with ring-averaged wear >= 1e-3 of its largest"),
                      Item("s_hat", "", "dimensionless sliding ŝ"),
                      Item("cycles", "", "reciprocating cycles s/(2·sliding.stroke); NaN "
-                                        "without a stroke")),
+                                        "without a stroke"),
+                     # both bodies wearing (counterface.wears)
+                     Item("wear_volume_counterface", "m^3", "worn volume of the counterface"),
+                     Item("track_width", "m", "width of the track where its depth is at "
+                                              "least 1e-3 of its largest"),
+                     Item("track_depth", "m", "largest depth of the track's cross-section"),
+                     Item("track_area", "m^2", "area of the track's cross-section (middle)"),
+                     Item("scar_length", "m", "both bodies: the ball's scar along the "
+                                              "sliding (wear >= 1e-3 of its largest)"),
+                     Item("scar_width", "m", "both bodies: the ball's scar across the "
+                                             "sliding")),
     fields=(Item("x", "m", "pixel-centre x coordinates (N,), first array axis"),
             Item("y", "m", "pixel-centre y coordinates (N,), second array axis"),
             Item("profile", "m", "worn profile f(x, y) per stage (K, N, N)"),
             Item("wear_depth", "m", "wear depth per stage (K, N, N)"),
             Item("pressure", "Pa", "pixel pressure per stage (K, N, N)"),
-            Item("gap", "m", "gap f - d + u per stage (K, N, N)"))))
+            Item("gap", "m", "gap f - d + u per stage (K, N, N)"),
+            Item("track_depth", "m", "counterface.wears: the track's cross-section (depth "
+                                     "along y) per stage (K, N)"),
+            Item("flat_wear", "m", "bem.track_model = moving: the counterface's wear on its "
+                                   "own grid per stage (K, rows, N)"),
+            Item("flat_x", "m", "bem.track_model = moving: the flat grid's x along the track "
+                                "(rows,)"))))
 
 register(Solver(
     name="ccx", title="CalculiX", module="wearcheck.ccx", section="ccx",

@@ -46,6 +46,9 @@ def supports(case) -> str | None:
         return ("fretting (partial slip) needs a one-directional tangential load, which the "
                 "axisymmetric FEM cannot carry; use the MDR solver")
     ind, cf = case.indenter, case.counterface
+    if cf.wears:
+        return ("counterface.wears = true: the FEM wears the sphere only (a wear track on "
+                "the counterface is not axisymmetric); use the BEM")
     if ind.profile == "ellipsoid":
         return ("indenter.profile = \"ellipsoid\": the FEM is axisymmetric and cannot "
                 "represent an ellipsoid; use the BEM (or the MDR, approximately)")

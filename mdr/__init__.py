@@ -33,5 +33,8 @@ __all__ = ["solve", "supports"]
 def supports(case) -> str | None:
     """None: the MDR runs every axisymmetric case the schema accepts (fretting too),
     and the ellipsoid approximately (as the paraboloid of radius √(R1 R2), its
-    result marked by the reason in ``info["approximate"]``)."""
+    result marked by the reason in ``info["approximate"]``); not a counterface that wears."""
+    if case.counterface.wears:
+        return ("counterface.wears = true: the MDR wears the indenter only (a wear track "
+                "on the counterface is not axisymmetric); use the BEM")
     return None

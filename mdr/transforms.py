@@ -406,10 +406,12 @@ def to_1d(f: np.ndarray) -> np.ndarray:
     """
     f = np.asarray(f, dtype=float)
     n = len(f)
-    g = np.full(n, f[0])
+    g = np.empty(n)
+    g[0] = f[0]
     if n > 1:
         s = lower(_kernel(abel_kernel, n - 1), np.diff(f), key="c")
-        g[1:] += _two_sqrt(n) * s
+        np.multiply(_two_sqrt(n), s, out=g[1:])
+        g[1:] += f[0]
     return g
 
 

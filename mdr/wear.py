@@ -358,7 +358,7 @@ class ImplicitSystem:
         """Whether :meth:`solve` with this sigma is a direct solve (no GMRES)."""
         if not self.nested:
             return False
-        if np.ndim(sigma) == 0:
+        if not isinstance(sigma, np.ndarray):      # (not np.ndim: slow in this hot path)
             return sigma == self.sigma
         return bool(np.all(sigma == self.sigma))
 
@@ -612,13 +612,14 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
             raise contact.DomainOutgrown("the contact has reached the edge of the MDR domain "
                                          "during wear")
         n = m + 1
-        sigma = hc * K * (S[:n] if np.ndim(S) else S)
+        sigma = hc * K * (S[:n] if isinstance(S, np.ndarray) else S)
         if len(x0) != n:
             # the last iterate's pressure, cut or extended by its edge value: the
             # sets of successive iterations differ by a node or two at the edge
             # (from the step's start pressure instead, each GMRES pass took
             # 8-10 iterations at N = 25600, now about half that)
-            x0 = np.r_[x0[:n], np.full(max(n - len(x0), 0), x0[-1] if len(x0) else 0.0)]
+            x0 = np.concatenate((x0[:n], np.full(max(n - len(x0), 0),
+                                                 x0[-1] if len(x0) else 0.0)))
         rtol = system.rtol
         if model.force is None:
             d = model.depth

@@ -13,8 +13,9 @@ forms. The Python API in a few lines::
 
 Public names: :func:`load_case`, :func:`shipped_cases`, :func:`solvers`,
 :func:`solve`, :class:`Result`, :func:`read_run`, :func:`compare`,
-:func:`refine`, :func:`sweep`, :func:`export_vtk`, :func:`reference` (a certified
-reference solution), :func:`verify` (results produced elsewhere against it), :class:`Case`,
+:func:`refine`, :func:`sweep`, :func:`fit`, :func:`export_vtk`, :func:`reference` (a
+certified reference solution), :func:`verify` (results produced elsewhere against it),
+:class:`Case`,
 :class:`CaseError`, :class:`SolverError`, and the solver registry
 :mod:`wearcheck.registry` (``register``, ``Solver``). Everything else
 (``wearcheck.mdr``, ``wearcheck.comparisons``, ...) is internal.
@@ -22,8 +23,8 @@ reference solution), :func:`verify` (results produced elsewhere against it), :cl
 
 from wearcheck.cases import Case, CaseError, RunResult, SolverError, WearcheckError
 from wearcheck import registry
-from wearcheck.api import (Result, compare, export_vtk, load_case, read_run, reference, refine,
-                           shipped_cases, solve, solvers, sweep, verify)
+from wearcheck.api import (Result, compare, export_vtk, fit, load_case, read_run, reference,
+                           refine, shipped_cases, solve, solvers, sweep, verify)
 
 try:
     from importlib.metadata import PackageNotFoundError, version
@@ -33,4 +34,4 @@ except PackageNotFoundError:  # running from a checkout that was not installed
 
 __all__ = ["Case", "CaseError", "SolverError", "WearcheckError", "RunResult", "Result",
            "load_case", "shipped_cases", "solvers", "solve", "read_run", "compare", "refine",
-           "sweep", "export_vtk", "reference", "verify", "registry", "__version__"]
+           "sweep", "fit", "export_vtk", "reference", "verify", "registry", "__version__"]

@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import json
+import math
 import sys
 from pathlib import Path
 
 from wearcheck import cases
+from wearcheck.cases.case import parse_vary
 
 
 def add_case_arguments(parser) -> None:
@@ -32,9 +35,58 @@ def load_case(args) -> cases.Case:
     return case
 
 
+def varied(args) -> dict[str, list]:
+    """The ``--vary`` flags, typed once: ``{"section.key": [values]}`` as ``--set`` reads
+    them (a relative ``indenter.file`` relative to the case file, as there).
+
+    A key varied twice, or both set and varied, is refused.
+    """
+    out = {}
+    for text in args.vary:
+        name, values = parse_vary(text)
+        if name in out:
+            raise cases.CaseError(f"--vary names the key {name} twice")
+        if name == "indenter.file":
+            values = [str(Path(args.case).absolute().parent / v)
+                      if isinstance(v, str) and not Path(v).is_absolute() else v
+                      for v in values]
+        out[name] = values
+    both = set(out) & {o.partition("=")[0].strip() for o in args.overrides}
+    if both:
+        raise cases.CaseError(f"key {sorted(both)[0]} is both in --set and --vary")
+    return out
+
+
 def study_exit(rows) -> int:
     """1 if a run of the study failed (said on stderr, with --quiet too: it is an error), else 0."""
     failed = [r for r in rows if r["status"] != "ok"]
     if failed:
         print(f"{len(failed)} of {len(rows)} runs failed", file=sys.stderr)
     return 1 if failed else 0
+
+
+def add_json_argument(parser, what: str) -> None:
+    """``--json``: ``what`` on stdout as JSON, for scripts, instead of the table."""
+    parser.add_argument("--json", action="store_true",
+                        help=f"print {what} on stdout as JSON instead of the table")
+
+
+def jsonable(value):
+    """``value`` with numpy numbers as Python ones, a non-finite number as null
+    (strict JSON has no NaN) and paths as text."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if hasattr(value, "tolist"):           # a numpy array or number
+        return jsonable(value.tolist())
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def print_json(value) -> None:
+    """``value`` (:func:`jsonable`) as one line of JSON on stdout."""
+    print(json.dumps(jsonable(value)))
