@@ -227,12 +227,13 @@ def within_band(coarse, fine):
 #: they may be. Paper (coarse levels N 200 to 800, time tolerance to 1e-5): the central
 #: wear at ŝ = 0.02 lies 3.18e-12 m from the coarse version, its bands give 1.33e-12 m
 #: (2.4 times short; 3e-6 of the depth, a 3000th of the tolerance), the worn volume there
-#: 1.2 times, the force at ŝ = 0.1 3.03e-4 N against 2.07e-4 N (1.5 times; 1e-5 F0).
+#: 1.2 times, the force at ŝ = 0.1 3.03e-4 N against 2.07e-4 N (1.5 times; 1e-5 F0),
+#: 1.91e-4 N since main's speed merge changed the MDR's stage landings (1.6 times).
 #: The grid convergence index of those coarse levels is that short at the first stages;
 #: found when the history's resampling cost became per stage (one maximum over the run
 #: had covered it). The shipped bands, from levels 8 times finer, are not known to be.
 BAND_SHORT_BY = {("paper", "wear_center"): 2.5, ("paper", "wear_volume"): 1.3,
-                 ("paper", "force"): 1.5}
+                 ("paper", "force"): 1.7}
 
 
 @pytest.mark.slow
