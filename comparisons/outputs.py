@@ -6,9 +6,12 @@ Every output directory wearcheck writes carries a marker file,
 ``wearcheck mesh --out``), whether it is complete, and the writing process
 (pid, host). Only that marker makes an existing path replaceable, and only by
 an output of the same kind; anything else is refused with one line and never
-deleted. Directories are built in a hidden ``.NAME.partial-*`` sibling and
-renamed into place when complete; a partial directory whose writer has died
-(same host, pid gone) is removed on the next write to the same path.
+deleted. Directories are built in a hidden ``.NAME.partial-*`` sibling, marked
+complete only when they are, and then exchanged with what is at the path in
+one atomic step (:func:`_install`), so that a kill at any instant leaves the
+path holding the earlier output or the new one. What a killed writer left
+beside the path (same host, pid gone) is put right by the next write to, or
+read of, that path (:func:`recover`).
 
 The CLI checks an output path with :func:`check_output` before any solve, so a
 path that cannot be written fails in a second, not after the work.
@@ -29,6 +32,7 @@ import time
 from pathlib import Path
 
 from wearcheck import cases
+from wearcheck.comparisons import renames
 
 #: written into every directory wearcheck creates: what may be replaced, and by what
 OUTPUT_MARKER = ".wearcheck-output"
@@ -46,12 +50,17 @@ def marker_data(kind: str, complete: bool) -> dict:
                 host=platform.node(), created=time.strftime("%Y-%m-%dT%H:%M:%S%z"))
 
 
-def write_marker(directory: Path, kind: str, complete: bool = True, files=None) -> None:
-    """Write the marker; ``files`` (from :func:`inventory`) lists what the output holds."""
+def write_marker(directory: Path, kind: str, complete: bool = True, files=None,
+                 built_in: str | None = None) -> None:
+    """Write the marker, by rename (never half written); ``files`` (from
+    :func:`inventory`) lists what the output holds, ``built_in`` names the hidden
+    ``.partial-*`` directory it was built in (see :func:`left_behind`)."""
     data = marker_data(kind, complete)
     if files is not None:
         data["files"] = files
-    (Path(directory) / OUTPUT_MARKER).write_text(json.dumps(data) + "\n", encoding="utf-8")
+    if built_in is not None:
+        data["built_in"] = built_in
+    _rewrite_marker(Path(directory), data)
 
 
 def _parse_marker(text: str) -> dict | None:
@@ -138,14 +147,13 @@ def _walk(fd: int, prefix: str, files: dict, nested: list, root_kind=None,
         entries = sorted(it, key=lambda e: e.name)
     depth = prefix.count("/") + 1
     for e in entries:
-        if not prefix and e.name == OUTPUT_MARKER:
-            continue
+        if not prefix and (e.name == OUTPUT_MARKER or e.name.startswith(OUTPUT_MARKER + ".")):
+            continue          # the marker, and a new one being written (_rewrite_marker)
         rel = prefix + e.name
         if e.is_dir(follow_symlinks=False):
             sub = os.open(e.name, os.O_RDONLY | os.O_DIRECTORY, dir_fd=fd)
             marker = _marker_at(sub)
-            if marker is not None and marker.get("complete", True) is False \
-                    and partials is not None and e.name.startswith(".") \
+            if marker is not None and partials is not None and e.name.startswith(".") \
                     and (".partial-" in e.name or ".old-" in e.name):
                 partials.append((rel, marker))
                 os.close(sub)
@@ -228,10 +236,9 @@ def _foreign(fd: int, name: str) -> str | None:
     try:
         _walk(fd, "", now, nested, marker.get("kind"), partials)
         for rel, pm in partials:
-            pid = pm.get("pid")
-            if pm.get("host") == platform.node() and isinstance(pid, int) \
-                    and not _pid_alive(pid):
+            if left_behind(rel.rpartition("/")[2], pm):
                 continue              # left by a wearcheck process that died: debris
+            pid = pm.get("pid")
             return (f"output '{name}' is being written into by wearcheck process {pid} on "
                     f"{pm.get('host')} ({_shown([rel])}); try again when it has finished")
         added = [k for k in now if k not in recorded]
@@ -405,32 +412,182 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
-def clean_stale(parent: Path, name: str) -> list[Path]:
-    """Remove ``.NAME.partial-*`` and ``.NAME.old-*`` siblings left by dead writers.
+def left_behind(name: str, marker: dict) -> bool:
+    """Whether the hidden directory ``name`` (a ``.NAME.partial-*`` or ``.NAME.old-*``)
+    with ``marker`` is what a writer that is gone left behind.
 
-    Only directories whose marker names this host and a process that no longer
-    exists; anything else is left alone. Returns what was removed.
+    Its writer (the marker's pid) no longer runs on this host. A complete output
+    in another's place (its marker names the ``.partial-*`` it was itself built
+    in) is an earlier output that a replacement exchanged out of the path:
+    the replacing process (``aside_by``) must be gone.
     """
-    removed = []
+    writer = marker
+    if marker.get("complete", True) and marker.get("built_in") not in (None, name):
+        writer = marker.get("aside_by")
+        if not isinstance(writer, dict):
+            return True   # killed right after the exchange, before it said whose it is
+    pid = writer.get("pid")
+    return writer.get("host") == platform.node() and isinstance(pid, int) \
+        and not _pid_alive(pid)
+
+
+def _siblings(path: Path) -> list[Path]:
+    """The ``.NAME.partial-*`` and ``.NAME.old-*`` directories beside ``path``."""
     try:
-        entries = list(Path(parent).iterdir())
+        entries = list(path.parent.iterdir())
     except OSError:
-        return removed
-    for entry in entries:
-        if not (entry.name.startswith(f".{name}.partial-")
-                or entry.name.startswith(f".{name}.old-")):
-            continue
-        if entry.is_symlink() or not entry.is_dir():
-            continue
+        return []
+    return sorted(e for e in entries
+                  if (e.name.startswith(f".{path.name}.partial-")
+                      or e.name.startswith(f".{path.name}.old-"))
+                  and not e.is_symlink() and e.is_dir())
+
+
+def recover(path) -> list[Path]:
+    """Put right what writers of ``path`` that were killed left beside it.
+
+    Only wearcheck's own hidden siblings are touched (a marker), and only those
+    :func:`left_behind`:
+
+    - ``.NAME.old-*`` holds the earlier output moved aside (a file system without
+      an atomic exchange, see :func:`_install`): if ``path`` is missing it goes
+      back there, otherwise it is removed;
+    - ``.NAME.partial-*``, complete or not, is removed: a new output that was
+      being written, or whose installation the kill stopped (``path`` still
+      holds the earlier one), or the earlier one exchanged out of ``path``
+      (which holds the new one).
+
+    A complete output holding a file wearcheck did not write (its inventory) is
+    left where it is. Returns the directories removed.
+    """
+    path = Path(path)
+    removed = []
+    for entry in _siblings(path):
         marker = read_marker(entry)
-        if marker is None or marker.get("complete", True) is not False:
+        if marker is None or not left_behind(entry.name, marker):
             continue
-        pid = marker.get("pid")
-        if marker.get("host") != platform.node() or not isinstance(pid, int) or _pid_alive(pid):
-            continue
-        shutil.rmtree(entry, ignore_errors=True)
-        removed.append(entry)
+        if entry.name.startswith(f".{path.name}.old-"):
+            _settle_graveyard(entry, path)
+            if not entry.exists():
+                removed.append(entry)
+        else:
+            done = _remove_unless_foreign(entry)
+            if done == "removed":
+                removed.append(entry)
+            elif done == "foreign":
+                _keep_in_sight(entry, path)
     return removed
+
+
+def _keep_in_sight(entry: Path, path: Path) -> Path | None:
+    """A hidden earlier output holding files that reached it while it was replaced
+    (the writer was killed before it could put it back): renamed to a visible
+    ``NAME.kept-N`` beside ``path``, for the user to take the files from."""
+    for n in range(1, 1000):
+        keep = path.with_name(f"{path.name}.kept-{n}")
+        try:
+            renames.rename_noreplace(entry, keep)
+        except FileExistsError:
+            continue
+        except OSError:
+            if os.path.lexists(keep):
+                continue
+            try:
+                os.rename(entry, keep)
+            except OSError:
+                return None
+        return keep
+    return None
+
+
+def clean_stale(parent: Path, name: str) -> list[Path]:
+    """:func:`recover` of ``parent / name`` (the name of earlier versions)."""
+    return recover(Path(parent) / name)
+
+
+def _remove_unless_foreign(directory: Path, checked: bool = False) -> str:
+    """Remove a wearcheck directory, unless it is a complete output holding files
+    wearcheck did not write (``checked``: already known not to).
+
+    Returns "removed", "foreign", or "busy" (no marker, gone meanwhile, or being
+    removed by another process, which marks it incomplete first).
+    """
+    marker = read_marker(directory)
+    if marker is None:
+        return "busy"
+    if not checked and marker.get("complete", True):
+        try:
+            why = foreign_content(directory)
+        except FileNotFoundError:
+            return "busy"
+        if why:
+            now = read_marker(directory) or {}
+            return "foreign" if now.get("complete", False) else "busy"
+    remove_tree(directory)
+    return "busy" if directory.exists() else "removed"
+
+
+def remove_tree(directory: Path) -> None:
+    """Remove ``directory``: first its marker says incomplete (this process's
+    debris), and it goes last. A removal cut short by a kill leaves a directory
+    that says whose it is and that it is no output, which :func:`recover` removes."""
+    directory = Path(directory)
+    marker = read_marker(directory)
+    if marker is not None and marker.get("complete", True):
+        with contextlib.suppress(OSError):
+            _rewrite_marker(directory, dict(marker_data(marker.get("kind", "run"), False),
+                                            removing=True))
+    try:
+        entries = sorted(os.scandir(directory), key=lambda e: e.name)
+    except FileNotFoundError:
+        return
+    except OSError:
+        shutil.rmtree(directory, ignore_errors=True)
+        return
+    first = True
+    for e in entries:
+        if e.name == OUTPUT_MARKER:
+            continue
+        if e.is_dir(follow_symlinks=False):
+            shutil.rmtree(e.path, ignore_errors=True)
+        else:
+            with contextlib.suppress(FileNotFoundError, PermissionError):
+                os.unlink(e.path)
+        if first:
+            first = False
+            _step("retiring")
+    with contextlib.suppress(OSError):
+        os.unlink(directory / OUTPUT_MARKER)
+    with contextlib.suppress(OSError):
+        os.rmdir(directory)
+
+
+def _settle_graveyard(graveyard: Path, path: Path, restore: bool = True) -> None:
+    """Empty a ``.NAME.old-*`` directory of :func:`_install`'s fallback.
+
+    It holds the earlier occupants of ``path``, moved aside as ``0``, ``1``, ...
+    (one per attempt; concurrent writers may have installed several). With
+    ``restore`` (the new output was not installed), when ``path`` is missing
+    the last of them goes back there. The others are removed unless they hold
+    files wearcheck did not write, which are kept in sight. The directory goes
+    when it is empty.
+    """
+    held = []
+    with contextlib.suppress(OSError):
+        held = sorted((p for p in graveyard.iterdir() if p.name != OUTPUT_MARKER),
+                      key=lambda p: (len(p.name), p.name))
+    if restore and held and not os.path.lexists(path):
+        marker = read_marker(held[-1])
+        if marker is not None and marker.get("complete", True):
+            with contextlib.suppress(OSError):
+                os.rename(held[-1], path)
+    for aside in held:
+        if aside.is_dir() and not aside.is_symlink() \
+                and _remove_unless_foreign(aside) == "foreign":
+            _keep_in_sight(aside, path)
+    with contextlib.suppress(OSError):
+        if [p.name for p in graveyard.iterdir()] in ([], [OUTPUT_MARKER]):
+            remove_tree(graveyard)
 
 
 def is_partial(path: Path) -> bool:
@@ -452,56 +609,153 @@ def _umask() -> int:
     return mask
 
 
-def _install(tmp: Path, path: Path, kind: str) -> None:
-    """Rename the complete ``tmp`` onto ``path``, moving an earlier output aside.
+#: the steps of replacing an output, in the order they happen; :func:`_step` marks
+#: each, and the tests kill the writer at every one of them in turn
+REPLACE_STEPS = ("built", "checked", "complete", "installed", "exchanged", "graveyard",
+                 "aside", "retiring", "retired")
+#: called with the name of each step when set (a test's kill); None in use
+STEP_HOOK = None
+#: devices (st_dev) whose file system refused an atomic exchange: plain renames there
+_NO_EXCHANGE: set = set()
 
-    Race-free under concurrent writers to one path: each rename either lands
-    or finds ``path`` taken, in which case the occupant (checked to be a
-    replaceable output) is moved into a private ``.old-`` directory and the
-    rename retried; the last writer to rename wins. The occupant is checked
-    again once moved aside, where nobody can add to it any more: a file that
-    reached it between the first check and the move is not lost, the
-    occupant goes back (or, if another writer took the path meanwhile, stays
-    beside it under a name the error gives).
+
+def _step(name: str) -> None:
+    if STEP_HOOK is not None:
+        STEP_HOOK(name)
+
+
+def _occupant_refusal(path: Path, kind: str) -> str | None:
+    """:func:`refusal` without reading the occupant's files: the kind of what is
+    at ``path`` only (its content is checked once it is out of the way)."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return None
+    if not stat.S_ISDIR(st.st_mode):
+        return _refusal(path, kind)
+    marker = read_marker(path)
+    if marker is None or not marker.get("complete", True):
+        return _refusal(path, kind)
+    if marker.get("kind") == kind or (marker.get("kind") == "legacy"
+                                      and kind in ("run", "comparison")):
+        return None
+    return _refusal(path, kind)
+
+
+def _install(tmp: Path, path: Path, kind: str) -> None:
+    """Put the complete output ``tmp`` in the place of ``path``, crash-safely.
+
+    ``path`` holds the earlier output or the new one at every instant: the two
+    are swapped in one step (``renameat2(RENAME_EXCHANGE)``); the earlier one,
+    now at ``tmp``'s name, is checked for files that reached it since the
+    check before (those go back with it, in a second swap) and removed, its
+    marker last. A kill at any point leaves ``path`` whole, and the hidden
+    sibling to :func:`recover`. Concurrent writers each swap atomically: the
+    last one wins, nothing is lost, nothing fails.
+
+    Where the file system cannot exchange (NFS, CIFS, FUSE), the earlier output
+    is renamed into a private ``.NAME.old-*`` directory and the new one renamed
+    into place: between the two renames ``path`` is missing, and a kill there
+    leaves the earlier output in ``.NAME.old-*``, where :func:`recover` (the
+    next write to, or read of, ``path``) puts it back.
+
+    ``tmp`` is this function's from the call on: installed, or removed.
     """
     graveyard = None
-    kept = False
+    swapped = False       # tmp holds what was at path (after an exchange)
+    checked = False       # ... and it holds nothing wearcheck did not write
+    installed = False
     try:
         for attempt in range(100000):
             try:
-                os.rename(tmp, path)
+                os.rename(tmp, path)  # path missing, or an empty directory
+                installed = True
+                _step("installed")
                 return
             except OSError as exc:
                 if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST, errno.ENOTDIR,
                                      errno.EISDIR):
                     raise
-            why = refusal(path, kind)
+            why = _occupant_refusal(path, kind)
             if why:
                 raise OutputError(why)
+            if graveyard is None and os.stat(path.parent).st_dev not in _NO_EXCHANGE:
+                try:
+                    renames.exchange(tmp, path)
+                except FileNotFoundError:
+                    continue      # another writer moved it meanwhile
+                except renames.Unsupported:
+                    _NO_EXCHANGE.add(os.stat(path.parent).st_dev)
+                else:
+                    swapped = True
+                    _step("exchanged")
+                    _claim_aside(tmp)
+                    checked = _check_swapped(tmp, path)
+                    return
             if graveyard is None:
                 graveyard = Path(tempfile.mkdtemp(prefix=f".{path.name}.old-",
                                                   dir=path.parent))
                 write_marker(graveyard, kind, complete=False)
+                _step("graveyard")
             aside = graveyard / f"{attempt}"
             try:
                 os.rename(path, aside)
             except FileNotFoundError:
-                continue  # another writer moved it first
+                continue          # another writer moved it first
+            _step("aside")
             why = foreign_content(aside)
             if why:
+                # files reached it while it was being replaced: it goes back
                 try:
                     os.rename(aside, path)
                 except OSError:
                     keep = path.with_name(f"{path.name}.kept-{os.getpid()}-{attempt}")
                     os.rename(aside, keep)
-                    kept = True
                     raise OutputError(f"output '{path}': files reached it while it was being "
                                       f"replaced; it was kept as '{keep}'") from None
                 raise OutputError(why.replace(str(aside), str(path)))
         raise OSError(errno.EBUSY, f"could not install '{path}': too many concurrent writers")
     finally:
-        if graveyard is not None and not kept:
-            shutil.rmtree(graveyard, ignore_errors=True)
+        if swapped:
+            _remove_unless_foreign(tmp, checked=checked)
+            _step("retired")
+        elif tmp.exists():
+            remove_tree(tmp)  # not installed: this process's own directory
+        if graveyard is not None:
+            _settle_graveyard(graveyard, path, restore=not installed)
+            _step("retired")
+
+
+def _claim_aside(aside: Path) -> None:
+    """Say in the marker of the earlier output, just exchanged out of its path, which
+    process moved it: :func:`recover` of another leaves it to that one while it runs."""
+    marker = read_marker(aside)
+    if marker is not None and marker.get("complete", True):
+        with contextlib.suppress(OSError):
+            _rewrite_marker(aside, dict(marker, aside_by=dict(pid=os.getpid(),
+                                                              host=platform.node())))
+
+
+def _check_swapped(aside: Path, path: Path) -> bool:
+    """After the exchange: True if the earlier output, now at ``aside``, holds only what
+    wearcheck wrote; otherwise swap it back into ``path`` and refuse (OutputError)."""
+    try:
+        why = foreign_content(aside)
+    except FileNotFoundError:
+        why, gone = None, True
+    else:
+        gone = not (read_marker(aside) or {}).get("complete", False)
+    if gone:
+        # another writer's recover() is removing it (remove_tree marks it
+        # incomplete first, and it removes only an output holding nothing foreign)
+        return False
+    if not why:
+        return True
+    try:
+        renames.exchange(aside, path)
+    except FileNotFoundError:
+        os.rename(aside, path)   # path went meanwhile
+    raise OutputError(why.replace(str(aside), str(path)))
 
 
 def _directory_stat(path: Path):
@@ -558,24 +812,36 @@ def atomic_directory(path, kind: str = "run"):
     if kind not in KINDS:
         raise ValueError(f"unknown output kind {kind!r}")
     path = check_output(path, kind)
-    occupant = _directory_stat(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    clean_stale(path.parent, path.name)
+    recover(path)
+    occupant = _directory_stat(path)
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
+    handed_over = False
     try:
         os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; outputs are shared like any dir
         if occupant is not None:
             # now, so that a default ACL of the directory replaced reaches the
             # files written into the new one, as it would have there
             _copy_attributes(path, tmp)
-        write_marker(tmp, kind, complete=False)
+        write_marker(tmp, kind, complete=False, built_in=tmp.name)
         yield tmp
-        write_marker(tmp, kind, complete=True, files=inventory(tmp, kind))
+        _step("built")
+        # the occupant's files are read (hashed) while this output still says it is
+        # incomplete: a kill during the check leaves nothing that looks complete
+        why = refusal(path, kind)
+        if why:
+            raise OutputError(why)
+        _step("checked")
+        occupant = _directory_stat(path)
         if occupant is not None:
             _take_permissions(tmp, occupant, path)
+        write_marker(tmp, kind, complete=True, files=inventory(tmp, kind), built_in=tmp.name)
+        _step("complete")
+        handed_over = True
         _install(tmp, path, kind)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if not handed_over:
+            remove_tree(tmp)
         raise
 
 

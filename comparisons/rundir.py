@@ -209,12 +209,15 @@ class Run:
     """A run directory read back: case, history, stages, meta."""
 
     def __init__(self, path: str | Path):
-        from wearcheck.comparisons.outputs import is_partial
+        from wearcheck.comparisons.outputs import is_partial, recover
         self.path = Path(path)
         if is_partial(self.path):
             raise cases.CaseError(f"'{self.path}' is an incomplete run directory (a .partial "
                                   "directory of a wearcheck process that was stopped or is "
                                   "still writing); use the complete run")
+        if not self.path.exists():
+            # a writer killed while it replaced the run may have left it aside
+            recover(self.path)
         if not self.path.exists():
             raise cases.CaseError(f"run directory '{self.path}' does not exist")
         if not self.path.is_dir():

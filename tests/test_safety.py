@@ -619,10 +619,15 @@ def _writer(path, worker, count, queue):
         queue.put(f"{type(exc).__name__}: {exc}")
 
 
-def test_concurrent_writers_to_one_path_never_fail_nor_leave_debris(tmp_path):
+@pytest.mark.parametrize("exchange", [True, False], ids=["exchange", "rename-fallback"])
+def test_concurrent_writers_to_one_path_never_fail_nor_leave_debris(tmp_path, monkeypatch,
+                                                                     exchange):
     """4 processes x 150 atomic writes to one path: no OSError, no leftover
-    directory, and the path holds one complete write (the last to land)."""
+    directory, and the path holds one complete write (the last to land); with
+    the atomic exchange and with the renames of file systems without it."""
     from wearcheck.comparisons.rundir import OUTPUT_MARKER
+    if not exchange:
+        monkeypatch.setattr("wearcheck.comparisons.renames._RENAMEAT2", None)
     path = tmp_path / "out"
     ctx = multiprocessing.get_context("fork")
     queue = ctx.Queue()

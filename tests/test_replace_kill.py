@@ -1,0 +1,197 @@
+"""A SIGKILL at every step of replacing an output loses nothing (issue 20, item 1).
+
+The writer runs in a child process that kills itself (SIGKILL, no clean-up
+runs) when it reaches a given step of ``outputs.REPLACE_STEPS``: every step in
+turn, with the atomic exchange of Linux and with the plain-rename fallback of
+file systems without it. After each kill the invariant is checked as the kill
+left it: the path holds the earlier output or the new one, whole (the
+fallback: or it is missing while the earlier one waits, complete, in its
+``.NAME.old-*``), and nothing hidden says complete unless it is. Then a later
+write (and a read) must put everything right: the path whole again, no
+``.partial-*`` or ``.old-*`` left.
+"""
+
+from __future__ import annotations
+
+import json
+import multiprocessing
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from wearcheck.comparisons import outputs
+
+def _payload(out: Path, payload: str) -> None:
+    with outputs.atomic_directory(out, "run") as tmp:
+        (tmp / "payload.txt").write_text(payload)
+        for i in range(20):
+            (tmp / f"stage{i:02d}.bin").write_bytes(bytes([i]) * 50000)
+
+
+def _writer(step, exchange, work, before=None):
+    """The child: ``work()``, killing itself (SIGKILL) when it reaches ``step``;
+    ``before(name)`` runs at every step first."""
+    from wearcheck.comparisons import renames
+    if not exchange:
+        renames._RENAMEAT2 = None          # as on NFS: no atomic exchange
+
+    def hook(name):
+        if before is not None:
+            before(name)
+        if name == step:
+            os.kill(os.getpid(), signal.SIGKILL)
+    outputs.STEP_HOOK = hook
+    work()
+
+
+#: the steps each way of replacing passes through
+STEPS = {
+    True: ("built", "checked", "complete", "exchanged", "retiring", "retired"),
+    False: ("built", "checked", "complete", "graveyard", "aside", "installed", "retiring",
+            "retired"),
+}
+
+
+def _fork(step, exchange, work, before=None) -> int:
+    """Exit code of a forked child (quicker than a new interpreter): 0, or
+    -SIGKILL where it killed itself."""
+    proc = multiprocessing.get_context("fork").Process(
+        target=_writer, args=(step, exchange, work, before))
+    proc.start()
+    proc.join(60)
+    return proc.exitcode
+
+
+def _write(out: Path, payload: str, step: str = "", exchange: bool = True) -> int:
+    return _fork(step, exchange, lambda: _payload(out, payload))
+
+
+def _content(directory: Path) -> str | None:
+    """'old' or 'new' if ``directory`` holds that output whole and marked complete, else None."""
+    marker = outputs.read_marker(directory)
+    if not marker or marker.get("complete") is not True:
+        return None
+    try:
+        payload = (directory / "payload.txt").read_text()
+    except FileNotFoundError:
+        return None
+    names = sorted(p.name for p in directory.iterdir())
+    whole = names == sorted([outputs.OUTPUT_MARKER, "payload.txt"]
+                            + [f"stage{i:02d}.bin" for i in range(20)])
+    if not whole or set(marker.get("files", {})) != set(names) - {outputs.OUTPUT_MARKER}:
+        return None
+    return payload
+
+
+def _hidden(parent: Path) -> list[Path]:
+    return sorted(p for p in parent.iterdir() if p.name.startswith(".out."))
+
+
+@pytest.mark.parametrize("exchange", [True, False], ids=["exchange", "rename-fallback"])
+def test_a_kill_at_each_step_leaves_the_old_or_the_new_output(tmp_path, exchange):
+    out = tmp_path / "out"
+    for step in outputs.REPLACE_STEPS:
+        if out.exists():
+            outputs.remove_tree(out)
+        assert _write(out, "old", exchange=exchange) == 0
+        code = _write(out, "new", step, exchange)
+        if step not in STEPS[exchange]:
+            assert code == 0, step     # a step of the other way
+            continue
+        assert code == -signal.SIGKILL, (step, code)
+        # as the kill left it
+        now = _content(out) if out.exists() else None
+        if exchange or step not in ("aside",):
+            assert now in ("old", "new"), (step, now)
+        else:
+            # between the two renames of the fallback: missing, the old one aside
+            assert not out.exists()
+            held = [p for g in _hidden(tmp_path) if ".old-" in g.name
+                    for p in g.iterdir() if p.name != outputs.OUTPUT_MARKER]
+            assert [_content(p) for p in held] == ["old"], step
+        before = step in ("built", "checked", "complete", "graveyard")
+        assert now == ("old" if before else "new" if step != "aside" else None), step
+        for hidden in _hidden(tmp_path):
+            marker = outputs.read_marker(hidden) or {}
+            if marker.get("complete") is True:
+                # nothing says complete unless it is a whole output
+                assert _content(hidden) in ("old", "new"), (step, hidden.name)
+        # a later read or write puts everything right
+        outputs.recover(out)
+        assert _content(out) == (now or "old"), step
+        assert _hidden(tmp_path) == [], (step, _hidden(tmp_path))
+        assert _write(out, "third", exchange=exchange) == 0
+        assert _content(out) == "third"
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["out"], step
+
+
+def test_a_kill_before_the_first_install_leaves_nothing_that_looks_complete(tmp_path):
+    """No earlier output: a kill at each step leaves no output, or the whole new one."""
+    out = tmp_path / "out"
+    for step in ("built", "checked", "complete", "installed"):
+        assert _write(out, "new", step) == -signal.SIGKILL, step
+        assert (_content(out) if out.exists() else None) == (
+            "new" if step == "installed" else None), step
+        outputs.recover(out)
+        assert _hidden(tmp_path) == [], step
+        assert [p.name for p in tmp_path.iterdir()] in ([], ["out"])
+        if out.exists():
+            outputs.remove_tree(out)
+
+
+def test_a_file_that_reached_the_old_output_survives_a_kill_after_the_swap(tmp_path):
+    """The user adds a file to the earlier output after the check, the writer dies
+    right after the exchange: the next write keeps the file (in sight), never deletes it."""
+    out = tmp_path / "out"
+    assert _write(out, "old") == 0
+    def notes(name):
+        if name == "checked":
+            (out / "notes.txt").write_text("mine")
+    assert _fork("exchanged", True, lambda: _payload(out, "new"), notes) == -signal.SIGKILL
+    assert _content(out) == "new"
+    assert _write(out, "third") == 0
+    kept = [p for p in tmp_path.iterdir() if (p / "notes.txt").exists()]
+    assert [p.name for p in kept] == ["out.kept-1"]
+    assert (kept[0] / "notes.txt").read_text() == "mine"
+    assert _hidden(tmp_path) == []
+
+
+def test_a_complete_partial_of_an_older_wearcheck_is_removed(tmp_path):
+    """What the reviewer found: a killed writer of an earlier version left a
+    complete-marked ``.partial`` (no ``built_in``); the next write removes it."""
+    out = tmp_path / "out"
+    assert _write(out, "old") == 0
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                          capture_output=True, text=True).stdout.strip()
+    stale = tmp_path / ".out.partial-legacy"
+    stale.mkdir()
+    (stale / "payload.txt").write_text("new")
+    files = outputs.inventory(stale, "run")
+    (stale / outputs.OUTPUT_MARKER).write_text(json.dumps(dict(
+        wearcheck="output", kind="run", complete=True, pid=int(dead),
+        host=__import__("platform").node(), files=files)))
+    assert _write(out, "third") == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_a_read_restores_an_output_a_kill_left_aside(tmp_path):
+    """The fallback's window: the run is missing, the earlier one in ``.NAME.old-*``;
+    reading the run (``export``, ``compare``'s reading) puts it back first."""
+    from wearcheck import cases
+    from wearcheck.comparisons.cli import main as cli_main
+    from wearcheck.comparisons.rundir import Run
+    out = tmp_path / "out"
+    hertz = str(cases.shipped("hertz"))
+    assert cli_main(["run", hertz, "--out", str(out), "--set", "mdr.elements=40",
+                     "--quiet"]) == 0
+    work = lambda: cli_main(["run", hertz, "--out", str(out), "--set", "mdr.elements=41",
+                             "--quiet"])
+    assert _fork("aside", False, work) == -signal.SIGKILL
+    assert not out.exists()
+    run = Run(out)
+    assert run.case.mdr.elements == 40
+    assert _hidden(tmp_path) == []
