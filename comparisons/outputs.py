@@ -27,12 +27,19 @@ import os
 import platform
 import shutil
 import stat
+import struct
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 from wearcheck import cases
 from wearcheck.comparisons import renames
+
+try:
+    import fcntl
+except ImportError:       # not on Windows
+    fcntl = None
 
 #: written into every directory wearcheck creates: what may be replaced, and by what
 OUTPUT_MARKER = ".wearcheck-output"
@@ -338,6 +345,7 @@ def check_output(path, kind: str) -> Path:
         raise OutputError(f"output '{raw}': name a directory or file of its own, not "
                           "'.' or '..'")
     given = Path(raw).absolute()
+    _check_name_length(raw, given)
     for part in [*reversed(given.parents), given]:
         if part.is_symlink() and not part.exists():
             raise OutputError(f"output '{raw}': '{part}' is a broken symbolic link; "
@@ -355,8 +363,106 @@ def check_output(path, kind: str) -> Path:
         raise OutputError(f"output '{path}' is a mount point, which wearcheck cannot replace "
                           f"by its finished output; give a directory inside it, e.g. "
                           f"'{path / 'run'}'")
-    _check_writable_ancestor(path)
+    if not path.is_symlink() and path.exists():
+        why = _pinned(path, whole=kind != "study")
+        if why:
+            raise OutputError(why)
+    _check_writable_ancestor(path, inside=kind == "study")
     return path
+
+
+#: the longest name wearcheck writes beside an output NAME: '.NAME.partial-' and
+#: mkdtemp's 8 characters (a file's side marker '.NAME.wearcheck-output' is as long)
+_HIDDEN_EXTRA = len("..partial-") + 8
+#: room kept below PATH_MAX for the deepest file inside an output
+#: ('<solver>/vtk/.vtk.partial-XXXXXXXX/solid_stage000.vtu' and the like)
+_INNER_PATH = 120
+
+
+def _limits(path: Path) -> tuple[int, int]:
+    """(NAME_MAX, PATH_MAX) of the file system that holds (or will hold) ``path``."""
+    ancestor = path.parent
+    while True:
+        try:
+            os.stat(ancestor)
+            break
+        except OSError:
+            if ancestor == ancestor.parent:
+                break
+            ancestor = ancestor.parent
+    try:
+        return os.pathconf(ancestor, "PC_NAME_MAX"), os.pathconf(ancestor, "PC_PATH_MAX")
+    except (OSError, ValueError):
+        return 255, 4096
+
+
+def _check_name_length(raw: str, path: Path) -> None:
+    """Refuse, before any work, a name the file system would refuse only when the output
+    is written: a component, or the output's hidden sibling, or the whole path too long."""
+    name_max, path_max = _limits(path)
+    for part in path.parts[1:-1]:
+        if len(os.fsencode(part)) > name_max:
+            raise OutputError(f"output '{raw}': the directory name '{part[:40]}...' is "
+                              f"{len(os.fsencode(part))} bytes; this file system takes names "
+                              f"of at most {name_max}")
+    n = len(os.fsencode(path.name))
+    if n + _HIDDEN_EXTRA > name_max:
+        raise OutputError(f"output '{raw[:60]}...': its name is {n} bytes, and wearcheck "
+                          f"writes it through a hidden '.NAME.partial-XXXXXXXX' beside it, "
+                          f"{_HIDDEN_EXTRA} bytes longer; this file system takes names of at "
+                          f"most {name_max} bytes: give a name of at most "
+                          f"{name_max - _HIDDEN_EXTRA} bytes")
+    total = len(os.fsencode(str(path))) + _HIDDEN_EXTRA + _INNER_PATH
+    if total > path_max:
+        raise OutputError(f"output '{raw[:60]}...': the path is {len(os.fsencode(str(path)))} "
+                          f"bytes, and the files inside the output would pass the system's "
+                          f"limit of {path_max} bytes for a path: give a path of at most "
+                          f"{path_max - _HIDDEN_EXTRA - _INNER_PATH} bytes")
+
+
+#: Linux inode flags (``chattr``): the file or directory cannot be changed, or
+#: only appended to; either way it cannot be renamed or removed
+_FS_IOC_GETFLAGS = 0x80006601 | (struct.calcsize("l") << 16)
+_PINNING_FLAGS = {0x10: "immutable (chattr +i)", 0x20: "append-only (chattr +a)"}
+
+
+def _inode_flags(path) -> int:
+    """The ``chattr`` flags of a directory or regular file; 0 where unknown."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0))
+    except OSError:
+        return 0
+    try:
+        return int.from_bytes(fcntl.ioctl(fd, _FS_IOC_GETFLAGS, bytes(8))[:4], sys.byteorder)
+    except (OSError, ValueError):
+        return 0          # a file system without the flags (tmpfs, NFS), or not Linux
+    finally:
+        os.close(fd)
+
+
+def _pinned(path: Path, whole: bool = True) -> str | None:
+    """Why wearcheck could not replace (``whole``: or remove the contents of) the existing
+    ``path``: it, or something in it, is immutable or append-only."""
+    if fcntl is None:
+        return None
+    todo = [path]
+    if whole and path.is_dir():
+        for root, dirs, files in os.walk(path):
+            todo += [Path(root) / n for n in dirs + files]
+    for item in todo:
+        try:
+            if item.is_symlink() or not (item.is_dir() or item.is_file()):
+                continue
+        except OSError:
+            continue
+        flags = _inode_flags(item)
+        for bit, what in _PINNING_FLAGS.items():
+            if flags & bit:
+                where = "it is" if item == path else f"'{item}' in it is"
+                return (f"output '{path}': {where} {what}, so wearcheck could not replace "
+                        f"it; clear the flag (chattr -{what[-2]} ...) or choose another "
+                        "output path")
+    return None
 
 
 def _refuse_working_directory(path: Path) -> None:
@@ -871,7 +977,9 @@ def study_directory(path, runs=(), files=()) -> Path:
         if (path / name).exists() or (path / name).is_symlink():
             _check_study_file(path, name, recorded)
     for run in runs:
-        why = refusal(path / run, "run")
+        _check_name_length(str(path / run), path / run)
+        why = refusal(path / run, "run") or (
+            _pinned(path / run) if (path / run).is_dir() else None)
         if why:
             raise OutputError(why)
     return path
@@ -1035,6 +1143,11 @@ def check_output_path_common(path) -> Path:
     if not raw or Path(raw).name in ("", ".", "..") or raw.endswith(os.sep):
         raise OutputError(f"output '{raw}': name a file of its own")
     path = Path(raw).absolute()
+    _check_name_length(raw, path)
+    if path.is_file() and not path.is_symlink():
+        why = _pinned(path, whole=False)
+        if why:
+            raise OutputError(why)
     _check_writable_ancestor(path)
     return path
 
@@ -1064,9 +1177,10 @@ def write_file(path, source: Path, kind: str = "mesh") -> Path:
     return path
 
 
-def _check_writable_ancestor(path: Path) -> None:
-    """The nearest existing ancestor of ``path`` must be a directory we can write into."""
-    ancestor = path.parent
+def _check_writable_ancestor(path: Path, inside: bool = False) -> None:
+    """The nearest existing ancestor of ``path`` must be a directory we can write into
+    (``inside``: ``path`` itself when it exists, as a study is written into)."""
+    ancestor = path if inside and path.is_dir() else path.parent
     while not ancestor.exists() and not ancestor.is_symlink():
         ancestor = ancestor.parent
     if not ancestor.is_dir():
@@ -1078,8 +1192,15 @@ def _check_writable_ancestor(path: Path) -> None:
     # access() answers for the permission bits only: root passes them everywhere, and
     # /proc, /sys or a file system that refuses new entries fail only when written,
     # after the solve. A directory made and removed at once asks the file system.
+    # The probe has the name of the hidden directory the output is written through
+    # (file systems with a shorter limit on names refuse it here).
+    prefix = ".wearcheck-probe-" if ancestor == path else f".{path.name}.partial-"
     try:
-        os.rmdir(tempfile.mkdtemp(prefix=".wearcheck-probe-", dir=ancestor))
+        os.rmdir(tempfile.mkdtemp(prefix=prefix, dir=ancestor))
     except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            raise OutputError(f"output '{path}': the file system refuses the name of the "
+                              f"hidden '.{path.name[:20]}....partial-XXXXXXXX' it is written "
+                              "through; give a shorter name") from None
         raise OutputError(f"output '{path}': nothing can be created in '{ancestor}' "
                           f"({exc.strerror or exc})") from None

@@ -1,0 +1,133 @@
+"""Output paths and run directories a user can get wrong (issue 20, item 8: the
+output and command-line parts).
+
+Each test failed on the code before its fix: an output path refused only after
+the solve (exit 4), a damaged run exported with a traceback's exit 70 or
+rendered blank with exit 0, a second sweep that replaced the first's table,
+misleading messages. The solves are small (MDR, 40 springs, ~0.1 s); where a
+refusal must come before the work, the solve is replaced by one that fails.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from wearcheck import cases
+from wearcheck.comparisons.cli import main as cli_main
+
+HERTZ = str(cases.shipped("hertz"))
+SMALL = ["--set", "mdr.elements=40", "--quiet"]
+
+
+def _one_error_line(err: str) -> str:
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+@pytest.fixture
+def no_solve(monkeypatch):
+    """Fail the test if the CLI starts a solve: refusals must come before the work."""
+    def boom(*args, **kwargs):
+        raise AssertionError("the solve started before the refusal")
+    monkeypatch.setattr("wearcheck.comparisons.registry.solve", boom)
+
+
+# -- output paths refused before the solve -----------------------------------
+
+@pytest.mark.parametrize("length", [240, 250, 300])
+def test_an_over_long_out_name_is_refused_before_solving(tmp_path, capsys, no_solve, length):
+    """NAME_MAX (255 on ext4, xfs, tmpfs) less the 18 bytes of '.NAME.partial-XXXXXXXX':
+    a name of 238 bytes or more cannot be written; before the fix 250 failed after
+    the solve (exit 4) and 300 with an OSError."""
+    out = tmp_path / ("x" * length)
+    assert cli_main(["run", HERTZ, "--out", str(out), *SMALL]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert f"its name is {length} bytes" in line and "at most 237 bytes" in line
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_longest_name_that_fits_is_written(tmp_path):
+    out = tmp_path / ("x" * 237)
+    assert cli_main(["run", HERTZ, "--out", str(out), *SMALL]) == 0
+    assert (out / "meta.json").is_file()
+
+
+def test_an_over_long_out_path_is_refused_before_solving(tmp_path, capsys, no_solve):
+    deep = tmp_path.joinpath(*["d" * 200] * 21)          # > PATH_MAX = 4096
+    assert cli_main(["run", HERTZ, "--out", str(deep), *SMALL]) == 2
+    assert "limit of 4096 bytes for a path" in _one_error_line(capsys.readouterr().err)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_sweep_runs_with_over_long_names_are_refused_before_the_cluster(tmp_path, capsys):
+    value = "0." + "1" * 240
+    code = cli_main(["sweep", HERTZ, "--vary", f"wear.mu={value}", "--out",
+                     str(tmp_path / "s"), "--quiet"])
+    assert code == 2
+    assert "at most 237 bytes" in _one_error_line(capsys.readouterr().err)
+
+
+def _chattr(flag: str, path: Path) -> None:
+    done = subprocess.run(["chattr", flag, str(path)], capture_output=True)
+    if done.returncode != 0:
+        pytest.skip(f"chattr {flag} is not allowed here: {done.stderr.decode().strip()}")
+
+
+@pytest.fixture
+def pinned():
+    """chattr a path for the test; the flags are cleared afterwards (else tmp_path
+    could not be removed)."""
+    made = []
+
+    def pin(flag, path):
+        _chattr(flag, path)
+        made.append((flag, path))
+    yield pin
+    for flag, path in reversed(made):
+        subprocess.run(["chattr", "-" + flag[1:], str(path)], capture_output=True)
+
+
+@pytest.mark.parametrize("what, flag", [("empty", "+i"), ("run", "+i"), ("run", "+a"),
+                                        ("file-in-run", "+i")])
+def test_an_immutable_out_is_refused_before_solving(tmp_path, capsys, monkeypatch, pinned,
+                                                     what, flag):
+    """An immutable or append-only directory cannot be renamed, nor a file in it
+    removed: before the fix the run failed after the solve (exit 4)."""
+    out = tmp_path / "out"
+    if what == "empty":
+        out.mkdir()
+    else:
+        assert cli_main(["run", HERTZ, "--out", str(out), *SMALL]) == 0
+    before = sorted(p.name for p in out.iterdir())
+    pinned(flag, out / "history.csv" if what == "file-in-run" else out)
+
+    def boom(*args, **kwargs):
+        raise AssertionError("the solve started before the refusal")
+    monkeypatch.setattr("wearcheck.comparisons.registry.solve", boom)
+    assert cli_main(["run", HERTZ, "--out", str(out), *SMALL]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert ("immutable" if flag == "+i" else "append-only") in line
+    assert sorted(p.name for p in out.iterdir()) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_an_immutable_mesh_file_is_refused_before_meshing(tmp_path, capsys, monkeypatch,
+                                                          pinned):
+    monkeypatch.setenv("WEARCHECK_CACHE", str(tmp_path / "cache"))
+    msh = tmp_path / "s.msh"
+    argv = ["mesh", HERTZ, "--out", str(msh), "--set", "fem.contact_nodes=20", "--quiet"]
+    assert cli_main(argv) == 0
+    pinned("+i", msh)
+    monkeypatch.setattr("wearcheck.meshes.sphere_mesh",
+                        lambda *a, **k: pytest.fail("meshed before the refusal"))
+    assert cli_main(argv) == 2
+    assert "immutable" in _one_error_line(capsys.readouterr().err)
