@@ -464,20 +464,58 @@ def discard_run(path: Path) -> None:
 # --------------------------------------------------------------------------
 # The study directory
 
-def record_study(out: Path, study: str, case, overrides, prov) -> None:
-    """Add this study's provenance to DIR/meta.json (kept for the other studies)."""
+def study_meta(out) -> dict:
+    """DIR/meta.json of a study directory ({} when there is none, or it is unreadable)."""
     path = Path(out) / "meta.json"
-    meta = {}
-    if path.is_file():
-        try:
-            meta = json.loads(path.read_text(encoding="utf-8"))
-        except json.JSONDecodeError:
-            meta = {}
-    meta.setdefault("studies", {})[study] = dict(
-        prov, case_file=str(getattr(case, "source", "")), overrides=list(overrides),
-        resolved_case=cases.to_toml(case))
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return meta if isinstance(meta, dict) else {}
+
+
+def record_study(out: Path, study: str, case, overrides, prov) -> None:
+    """Add this study's provenance to DIR/meta.json (kept for the other studies).
+
+    A study of the same name recorded before (a re-run, or a sweep that adds
+    values) stays, under ``earlier`` in the new entry, latest first.
+    """
+    meta = study_meta(out)
+    studies = meta.setdefault("studies", {})
+    entry = dict(prov, case_file=str(getattr(case, "source", "")), overrides=list(overrides),
+                 resolved_case=cases.to_toml(case))
+    previous = studies.get(study)
+    if isinstance(previous, dict):
+        earlier = previous.pop("earlier", [])
+        entry["earlier"] = [previous] + (earlier if isinstance(earlier, list) else [])
+    studies[study] = entry
     from wearcheck.comparisons.outputs import write_study_text
     write_study_text(out, "meta.json", json.dumps(jsonable(meta), indent=2) + "\n")
+
+
+def _flat(table: dict, prefix: str = "") -> dict:
+    out = {}
+    for key, value in table.items():
+        if isinstance(value, dict):
+            out.update(_flat(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
+def base_difference(recorded_toml: str, case) -> str | None:
+    """The first key (``section.key: here vs there``) in which ``case`` differs from a
+    resolved case recorded as TOML; None when they are the same case."""
+    import tomllib
+    try:
+        there = _flat(tomllib.loads(recorded_toml))
+    except (tomllib.TOMLDecodeError, TypeError):
+        return "the case recorded there cannot be read"
+    here = _flat(tomllib.loads(cases.to_toml(case)))
+    for key in sorted(set(here) | set(there)):
+        if here.get(key) != there.get(key):
+            return f"{key} = {here.get(key, '(unset)')!r} here, {there.get(key, '(unset)')!r} there"
+    return None
 
 
 def fmt(v, spec=".4g"):
