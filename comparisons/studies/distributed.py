@@ -281,10 +281,15 @@ class _Watchdog:
                 workerless = None
                 continue
             if workers is None:
-                if now - answered < limit:
+                if getattr(self.client, "status", "") == "closed":
+                    # the connection broke and reconnecting failed: nothing to wait for
+                    self.reason = ("the Dask scheduler was lost (it died, or the connection "
+                                   "broke); the task was cancelled")
+                elif now - answered < limit:
                     continue
-                self.reason = (f"the Dask scheduler stopped answering for {limit:g} s "
-                               "(stopped, or gone); the task was cancelled")
+                else:
+                    self.reason = (f"the Dask scheduler stopped answering for {limit:g} s "
+                                   "(stopped, or gone); the task was cancelled")
             else:
                 workerless = workerless or now
                 if now - workerless < limit:
