@@ -237,6 +237,10 @@ class Run:
         if missing:
             raise cases.CaseError(f"run directory file '{self.path / 'stages.npz'}' is damaged: "
                                   f"no {', '.join(sorted(missing))}")
+        why = stages_damage(self.stages)
+        if why:
+            raise cases.CaseError(f"run directory file '{self.path / 'stages.npz'}' is "
+                                  f"damaged: {why}")
         fields = self.path / "fields.npz"
         self.fields = _read(fields, _read_npz) if fields.is_file() else None
 
@@ -247,6 +251,35 @@ class Run:
     @property
     def solver(self) -> str:
         return self.meta["solver"]
+
+
+def stages_damage(stages: dict) -> str | None:
+    """What is wrong with the arrays of a stages.npz (layout.STAGES), or None.
+
+    s and s_hat are (K,), r is (M,), f, p and the optional per-stage arrays are
+    (K, M) (an empty table when no stage was stored), every value finite:
+    wearcheck never writes a run with a non-finite value (a numerical failure
+    is reported instead), so one is damage, which exporting or drawing would
+    turn into empty pictures.
+    """
+    arrays = {k: np.asarray(v) for k, v in stages.items()}
+    for name, arr in arrays.items():
+        if not np.issubdtype(arr.dtype, np.number):
+            return f"'{name}' holds {arr.dtype} values, not numbers"
+    K, M = np.shape(arrays["s"]), np.shape(arrays["r"])
+    if len(K) != 1 or len(M) != 1:
+        return f"'s' has shape {K} and 'r' {M}; both must be lists (one dimension)"
+    K, M = K[0], M[0]
+    expected = {"s": (K,), "s_hat": (K,), "r": (M,)}
+    for name, arr in arrays.items():
+        want = expected.get(name, (K, M))
+        if arr.shape != want and not (K == 0 and arr.size == 0 and name not in expected):
+            return (f"'{name}' has shape {arr.shape}, not {want} ({K} stages x {M} radii, "
+                    "as 's' and 'r' say)")
+        bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
+        if bad:
+            return f"'{name}' holds {bad} values that are not finite (NaN or infinite)"
+    return None
 
 
 def _refuse_other_output(path: Path) -> None:

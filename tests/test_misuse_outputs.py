@@ -131,3 +131,49 @@ def test_an_immutable_mesh_file_is_refused_before_meshing(tmp_path, capsys, monk
                         lambda *a, **k: pytest.fail("meshed before the refusal"))
     assert cli_main(argv) == 2
     assert "immutable" in _one_error_line(capsys.readouterr().err)
+
+
+# -- damaged run directories ---------------------------------------------------
+
+def _damage_npz(path: Path, change) -> None:
+    arrays = dict(np.load(path))
+    change(arrays)
+    np.savez(path, **arrays)
+
+
+@pytest.mark.parametrize("damage, words", [
+    (lambda z: z.update(p=z["p"][:, :5]), "'p' has shape (1, 5), not (1, 41)"),
+    (lambda z: z.update(s_hat=np.zeros(2)), "'s_hat' has shape (2,), not (1,)"),
+    (lambda z: z.update(r=z["r"][None, :]), "'r' (1, 41)"),
+    (lambda z: z.update(f=np.full_like(z["f"], np.nan)), "'f' holds 41 values that are not "
+                                                          "finite"),
+    (lambda z: z.update(p=np.where(z["p"] > 0, np.inf, z["p"])), "'p' holds 13 values"),
+    (lambda z: z.update(s=np.array(["a"])), "'s' holds <U1 values"),
+], ids=["p-cut", "s_hat-long", "r-2d", "f-nan", "p-inf", "s-text"])
+@pytest.mark.parametrize("command", ["export", "render"])
+def test_damaged_stage_arrays_are_one_line_naming_the_array(tmp_path, capsys, damage, words,
+                                                            command):
+    """Before the fix ``p`` cut to 5 columns made ``export`` exit 70 (a traceback's
+    internal error) and NaN profiles rendered blank pictures with exit 0. (The Hertz
+    run stores 1 stage on 41 radii, 13 of them in contact.)"""
+    run = tmp_path / "run"
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    _damage_npz(run / "stages.npz", damage)
+    before = sorted(p.name for p in run.iterdir())
+    assert cli_main([command, str(run), "--quiet"]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert "stages.npz' is damaged" in line and words in line
+    assert sorted(p.name for p in run.iterdir()) == before     # nothing written
+
+
+@pytest.mark.parametrize("command", ["export", "render"])
+def test_non_finite_fem_fields_are_damage_not_empty_pictures(tmp_path, capsys, command):
+    run = tmp_path / "run"
+    assert cli_main(["run", HERTZ, "--out", str(run), "--solver", "fem", "--set",
+                     "fem.contact_nodes=11", *SMALL]) == 0
+    _damage_npz(run / "fields.npz", lambda z: z["stress"].__setitem__((0, 3), np.nan))
+    before = sorted(p.name for p in run.iterdir())
+    assert cli_main([command, str(run), "--quiet"]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert "fields.npz is damaged: 'stress' holds 4 values that are not finite" in line
+    assert sorted(p.name for p in run.iterdir()) == before
