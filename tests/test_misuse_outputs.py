@@ -177,3 +177,45 @@ def test_non_finite_fem_fields_are_damage_not_empty_pictures(tmp_path, capsys, c
     line = _one_error_line(capsys.readouterr().err)
     assert "fields.npz is damaged: 'stress' holds 4 values that are not finite" in line
     assert sorted(p.name for p in run.iterdir()) == before
+
+
+# -- the memory guard ------------------------------------------------------------
+
+def _mdr_peak(stages: int) -> tuple[int, float, list]:
+    """(stages stored, peak RSS growth [bytes] of solve and write, overrides) of an MDR
+    run of the paper case at N = 800 in a fresh process. The stages are consecutive
+    floats at ŝ = 1: stored in one step (a run's cost), each as large as any."""
+    values = [1.0]
+    for _ in range(stages - 1):
+        values.append(float(np.nextafter(values[-1], 2.0)))
+    overrides = ["mdr.elements=800", "stages.s_hat=[" + ",".join(map(repr, values)) + "]"]
+    code = ("import sys, tempfile; from pathlib import Path; from wearcheck import cases; "
+            "from wearcheck.comparisons import registry; "
+            "from wearcheck.comparisons.rundir import write_run; import wearcheck.mdr; "
+            "hwm = lambda: int([l for l in Path('/proc/self/status').read_text().splitlines() "
+            "if l.startswith('VmHWM:')][0].split()[1]); "
+            "c = cases.load(cases.shipped('paper'), sys.argv[1:]); b = hwm(); "
+            "r = registry.solve(c, 'mdr'); d = tempfile.TemporaryDirectory(); "
+            "write_run(Path(d.name) / 'r', c, r, 'mdr'); print(len(r.stage_s), (hwm() - b) * 1024)")
+    out = subprocess.run([sys.executable, "-c", code, *overrides], capture_output=True,
+                         text=True, check=True, timeout=600).stdout.split()
+    return int(out[-2]), float(out[-1]), overrides
+
+
+def test_the_mdr_memory_estimate_bounds_what_stored_stages_take():
+    """Peak RSS growth of MDR runs storing 10 and 3000 stages (N = 800, solve and write,
+    fresh processes) against mdr.resources: the estimate's growth with the stages at
+    least the measured one (before the fix 16 bytes per node and stage were assumed,
+    57 are taken: the reviewer's 20 000 stages, estimated at 323 MiB, took 1006 MB),
+    at most 4x it; and the whole estimate at least the whole peak."""
+    if not Path("/proc/self/status").exists():
+        pytest.skip("needs Linux's /proc/self/status (VmHWM)")
+    from wearcheck.mdr.resources import memory_bytes
+    few, used_few, over_few = _mdr_peak(10)
+    many, used_many, over_many = _mdr_peak(3000)
+    assert (few, many) == (10, 3000)
+    est_few = memory_bytes(cases.load(cases.shipped("paper"), over_few))
+    est_many = memory_bytes(cases.load(cases.shipped("paper"), over_many))
+    grown, est_grown = used_many - used_few, est_many - est_few
+    assert grown <= est_grown <= 4 * grown, (grown, est_grown)
+    assert used_many <= est_many, (used_many, est_many)
