@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import tomllib
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -192,11 +193,34 @@ def parse_override(text: str) -> tuple[str, str, Any]:
     return section, k, parsed
 
 
+def special_file(path: Path) -> str | None:
+    """What ``path`` is when it exists but is no regular file nor directory: "a pipe"
+    (``/dev/stdin`` fed by ``|``, ``<(...)``), "a character device" (``/dev/null``),
+    "a socket", "a block device"; None otherwise. Such a path exists, but a case or
+    a table cannot be read from it as from a file (more than once, beside its
+    other files), which "does not exist" would hide."""
+    import stat
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+    for test, what in ((stat.S_ISFIFO, "a pipe"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISSOCK, "a socket"), (stat.S_ISBLK, "a block device")):
+        if test(mode):
+            return what
+    return None
+
+
 def read_raw(path: str | Path) -> dict:
     """The TOML tables of a case file, unvalidated; every failure a one-line CaseError."""
     path = Path(path)
     if path.is_dir():
         raise CaseError(f"case file '{path}' is a directory, not a TOML file")
+    what = special_file(path)
+    if what:
+        raise CaseError(f"case file '{path}' is {what}, not a file: wearcheck reads a case "
+                        "from a file (more than once, and finds a profile table beside it); "
+                        "save it first, e.g. 'cat > case.toml', and give that")
     if not path.is_file():
         raise CaseError(f"case file '{path}' does not exist")
     try:
@@ -385,6 +409,9 @@ def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
     name = "indenter.file"
     if file.is_dir():
         raise CaseError(f"key '{name}' = \"{file}\": is a directory, not a CSV file")
+    if special_file(file):
+        raise CaseError(f"key '{name}' = \"{file}\": is {special_file(file)}, not a file; "
+                        "save the table to a CSV file and name that")
     if not file.is_file():
         raise CaseError(f"key '{name}' = \"{file}\": file does not exist")
     rows = []

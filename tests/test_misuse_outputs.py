@@ -219,3 +219,33 @@ def test_the_mdr_memory_estimate_bounds_what_stored_stages_take():
     grown, est_grown = used_many - used_few, est_many - est_few
     assert grown <= est_grown <= 4 * grown, (grown, est_grown)
     assert used_many <= est_many, (used_many, est_many)
+
+
+# -- inputs that exist but are no files ---------------------------------------------
+
+def test_a_case_piped_to_dev_stdin_is_named_a_pipe(tmp_path):
+    """Before the fix: "case file '/dev/stdin' does not exist" (it exists: a pipe)."""
+    done = subprocess.run([sys.executable, "-m", "wearcheck", "run", "/dev/stdin", "--out",
+                           str(tmp_path / "x"), "--quiet"], input=Path(HERTZ).read_text(),
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    line = _one_error_line(done.stderr)
+    assert "'/dev/stdin' is a pipe, not a file" in line and "does not exist" not in line
+    assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.parametrize("case, words", [("/dev/null", "is a character device, not a file"),
+                                         ("-", "does not read a case from standard input")])
+def test_other_special_case_paths_say_what_they_are(tmp_path, capsys, case, words):
+    assert cli_main(["run", case, "--out", str(tmp_path / "x"), "--quiet"]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert words in line and "does not exist" not in line
+
+
+def test_a_profile_table_that_is_a_fifo_is_named_so(tmp_path, capsys):
+    from conftest import write_table_case
+    case = write_table_case(tmp_path, None)
+    os.mkfifo(tmp_path / "profile.csv")
+    assert cli_main(["run", str(case), "--out", str(tmp_path / "x"), "--quiet"]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert "indenter.file" in line and "is a pipe, not a file" in line
