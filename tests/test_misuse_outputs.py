@@ -249,3 +249,40 @@ def test_a_profile_table_that_is_a_fifo_is_named_so(tmp_path, capsys):
     assert cli_main(["run", str(case), "--out", str(tmp_path / "x"), "--quiet"]) == 2
     line = _one_error_line(capsys.readouterr().err)
     assert "indenter.file" in line and "is a pipe, not a file" in line
+
+
+# -- the mesh cache -----------------------------------------------------------------
+
+@pytest.mark.parametrize("damage", ["points-zeroed", "triangles-shuffled", "msh-changed",
+                                    "no-checksum"])
+def test_a_mesh_cache_entry_changed_since_it_was_written_is_rebuilt(tmp_path, capsys,
+                                                                    monkeypatch, damage):
+    """An entry whose arrays were rewritten (a valid .npz: the zip's CRC cannot tell)
+    gave "the stiffness matrix could not be factorised ...; is the sphere
+    constrained?" (exit 3). Its checksum now says it changed: it is generated again,
+    and the run gives the force of a run on a fresh cache."""
+    from wearcheck import meshes
+    monkeypatch.setenv("WEARCHECK_CACHE", str(tmp_path / "cache"))
+    argv = ["run", HERTZ, "--solver", "fem", "--set", "fem.contact_nodes=11", "--quiet"]
+    assert cli_main([*argv, "--out", str(tmp_path / "a")]) == 0
+    npz = next((tmp_path / "cache").glob("*.npz"))
+    arrays = dict(np.load(npz))
+    if damage == "points-zeroed":
+        arrays["points"] = arrays["points"] * 0.0
+    elif damage == "triangles-shuffled":
+        arrays["triangles"] = np.roll(arrays["triangles"], 1, axis=1)[::-1]
+    elif damage == "no-checksum":          # as an earlier wearcheck wrote it
+        del arrays["checksum"]
+    if damage == "msh-changed":
+        with open(npz.with_suffix(".msh"), "a") as fh:
+            fh.write("$Comment\nedited\n$EndComment\n")
+    else:
+        np.savez(npz, **arrays)
+    generated = []
+    real = meshes._generate
+    monkeypatch.setattr(meshes, "_generate", lambda *a: generated.append(1) or real(*a))
+    assert cli_main([*argv, "--out", str(tmp_path / "b")]) == 0, capsys.readouterr().err
+    assert generated == [1]
+    from wearcheck.comparisons.rundir import Run
+    a, b = Run(tmp_path / "a"), Run(tmp_path / "b")
+    np.testing.assert_array_equal(a.history["force"], b.history["force"])
