@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import json
+import math
 import os
 import platform
 import shlex
@@ -230,6 +231,9 @@ class Run:
         self.meta = _read(meta, lambda p: json.loads(p.read_text(encoding="utf-8")))
         if not isinstance(self.meta, dict) or not isinstance(self.meta.get("scales"), dict):
             raise cases.CaseError(f"run directory file '{meta}' is damaged (no scales)")
+        why = meta_damage(self.meta)
+        if why:
+            raise cases.CaseError(f"run directory file '{meta}' is damaged: {why}")
         self.case = cases.load(self.path / "case.toml")
         self.history = _read(self.path / "history.csv", _read_history)
         self.stages = _read(self.path / "stages.npz", _read_npz)
@@ -251,6 +255,26 @@ class Run:
     @property
     def solver(self) -> str:
         return self.meta["solver"]
+
+
+#: the scales every reader of a run divides by: finite and positive
+POSITIVE_SCALES = ("E_star", "a0", "d0", "F0", "p0")
+
+
+def meta_damage(meta: dict) -> str | None:
+    """What is wrong with a run's meta.json for reading it back, or None: the solver's
+    name, and the scales (layout.META) as finite numbers, positive where divided by."""
+    if not isinstance(meta.get("solver"), str) or not meta["solver"]:
+        return "no solver name"
+    scales = meta["scales"]
+    for name in ("E_star", "G_star", "a0", "d0", "F0", "p0", "s_hat_per_m"):
+        value = scales.get(name)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value):
+            return f"scale '{name}' is {value!r}, not a finite number"
+        if name in POSITIVE_SCALES and value <= 0:
+            return f"scale '{name}' is {value!r}, not positive"
+    return None
 
 
 def stages_damage(stages: dict) -> str | None:

@@ -286,3 +286,24 @@ def test_a_mesh_cache_entry_changed_since_it_was_written_is_rebuilt(tmp_path, ca
     from wearcheck.comparisons.rundir import Run
     a, b = Run(tmp_path / "a"), Run(tmp_path / "b")
     np.testing.assert_array_equal(a.history["force"], b.history["force"])
+
+
+@pytest.mark.parametrize("damage, words", [
+    (lambda m: m["scales"].update(a0="x"), "scale 'a0' is 'x', not a finite number"),
+    (lambda m: m["scales"].pop("p0"), "scale 'p0' is None"),
+    (lambda m: m["scales"].update(d0=0.0), "scale 'd0' is 0.0, not positive"),
+    (lambda m: m.pop("solver"), "no solver name"),
+], ids=["a0-text", "p0-missing", "d0-zero", "no-solver"])
+def test_a_damaged_meta_json_is_one_line_not_an_internal_error(tmp_path, capsys, damage,
+                                                               words):
+    """A neighbour of the damaged stages (found trying them): scales missing or not
+    numbers made ``export`` exit 70 (KeyError) and ``render`` blame VTK's process."""
+    run = tmp_path / "run"
+    assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
+    meta = json.loads((run / "meta.json").read_text())
+    damage(meta)
+    (run / "meta.json").write_text(json.dumps(meta))
+    for command in ("export", "render"):
+        assert cli_main([command, str(run), "--quiet"]) == 2
+        line = _one_error_line(capsys.readouterr().err)
+        assert "meta.json' is damaged" in line and words in line
