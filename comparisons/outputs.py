@@ -719,6 +719,8 @@ def _umask() -> int:
 #: each, and the tests kill the writer at every one of them in turn
 REPLACE_STEPS = ("built", "checked", "complete", "installed", "exchanged", "graveyard",
                  "aside", "retiring", "retired")
+#: the steps of replacing a file of a study directory (:func:`write_study_file`)
+STUDY_FILE_STEPS = ("study-file-listed", "study-file-replaced")
 #: called with the name of each step when set (a test's kill); None in use
 STEP_HOOK = None
 #: devices (st_dev) whose file system refused an atomic exchange: plain renames there
@@ -975,7 +977,7 @@ def study_directory(path, runs=(), files=()) -> Path:
                           "yourself or choose another output path")
     for name in sorted({*recorded, *files}):
         if (path / name).exists() or (path / name).is_symlink():
-            _check_study_file(path, name, recorded)
+            _check_study_file(path, name, recorded, marker)
     for run in runs:
         _check_name_length(str(path / run), path / run)
         why = refusal(path / run, "run") or (
@@ -993,11 +995,18 @@ def _path_fingerprint(path: Path) -> list:
         os.close(fd)
 
 
-def _check_study_file(study: Path, name: str, recorded: dict) -> None:
-    """``study/name`` exists: it must be a file the studies wrote there, unchanged since."""
+def _check_study_file(study: Path, name: str, recorded: dict, marker=None) -> None:
+    """``study/name`` exists: it must be a file the studies wrote there, unchanged since
+    (or the one a write killed half-way was replacing: the marker's ``replacing``)."""
     path = study / name
-    if path.is_symlink() or not path.is_file() or name not in recorded \
-            or not _same(_path_fingerprint(path), recorded[name]):
+    before = ((marker or {}).get("replacing") or {}).get(name) \
+        if isinstance((marker or {}).get("replacing"), dict) else None
+    if path.is_symlink() or not path.is_file() or name not in recorded:
+        ok = False
+    else:
+        now = _path_fingerprint(path)
+        ok = _same(now, recorded[name]) or (before is not None and _same(now, before))
+    if not ok:
         raise OutputError(f"'{path}' is not a file wearcheck wrote into this study, or it "
                           "changed since; move it out (or rename it) and run again")
 
@@ -1010,22 +1019,40 @@ def write_study_file(study, name: str, write) -> Path:
     """
     study = Path(study)
     path = study / name
-    marker = read_marker(study) or {}
+    marker = read_marker(study) or marker_data("study", True)
     recorded = marker.get("files") if isinstance(marker.get("files"), dict) else {}
+    current = None        # the fingerprint of the file this write replaces
     if path.exists() or path.is_symlink():
-        _check_study_file(study, name, recorded)
+        _check_study_file(study, name, recorded, marker)
+        current = _path_fingerprint(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=Path(name).suffix, dir=study)
     os.close(fd)
     try:
         write(Path(tmp))
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; study files are shared
+        # the marker lists the new file before it takes the old one's place, and keeps
+        # the old one's as it is replaced: a kill in between leaves a file the
+        # marker accepts (either), never one a later study refuses as not its own
+        new = _path_fingerprint(Path(tmp))
+        replacing = marker.get("replacing") if isinstance(marker.get("replacing"), dict) \
+            else {}
+        replacing.pop(name, None)
+        if current is not None:
+            # what is on disk, not what the marker listed: an earlier write that
+            # failed after listing its file left the old one in place
+            replacing[name] = current
+        _rewrite_marker(study, dict(marker, files=dict(recorded, **{name: new}),
+                                    replacing=replacing))
+        _step("study-file-listed")
         os.replace(tmp, path)
+        _step("study-file-replaced")
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
-    recorded[name] = _path_fingerprint(path)
-    _rewrite_marker(study, dict(marker or marker_data("study", True), files=recorded))
+    recorded[name] = new
+    replacing.pop(name, None)
+    _rewrite_marker(study, dict(marker, files=recorded, replacing=replacing))
     return path
 
 
@@ -1043,12 +1070,14 @@ def remove_study_file(study, name: str) -> bool:
     if not (path.exists() or path.is_symlink()):
         return False
     try:
-        _check_study_file(study, name, recorded)
+        _check_study_file(study, name, recorded, marker)
     except OutputError:
         return False
     path.unlink()
     recorded.pop(name, None)
-    _rewrite_marker(study, dict(marker, files=recorded))
+    replacing = marker.get("replacing") if isinstance(marker.get("replacing"), dict) else {}
+    replacing.pop(name, None)
+    _rewrite_marker(study, dict(marker, files=recorded, replacing=replacing))
     return True
 
 

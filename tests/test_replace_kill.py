@@ -195,3 +195,25 @@ def test_a_read_restores_an_output_a_kill_left_aside(tmp_path):
     run = Run(out)
     assert run.case.mdr.elements == 40
     assert _hidden(tmp_path) == []
+
+
+@pytest.mark.parametrize("step", outputs.STUDY_FILE_STEPS)
+def test_a_kill_while_a_study_file_is_replaced_leaves_one_the_next_study_takes(tmp_path,
+                                                                              step):
+    """A study's sweep.csv replaced by a second sweep, the writer killed between the
+    file and its marker: the file is the old or the new, and the next study into
+    the directory takes it as its own (before, the marker listed the old file's
+    fingerprint only, and every later study refused the new one as foreign)."""
+    study = outputs.study_directory(tmp_path / "study")
+    outputs.write_study_text(study, "sweep.csv", "old\n")
+    code = _fork(step, True, lambda: outputs.write_study_text(study, "sweep.csv", "new\n"))
+    assert code == -signal.SIGKILL
+    assert (study / "sweep.csv").read_text() in ("old\n", "new\n")
+    outputs.study_directory(study, files=["sweep.csv"])        # accepted, not refused
+    outputs.write_study_text(study, "sweep.csv", "third\n")
+    assert (study / "sweep.csv").read_text() == "third\n"
+    outputs.study_directory(study, files=["sweep.csv"])
+    # a file the user changed is still refused
+    (study / "sweep.csv").write_text("mine\n")
+    with pytest.raises(outputs.OutputError, match="not a file wearcheck wrote"):
+        outputs.study_directory(study, files=["sweep.csv"])
