@@ -2,7 +2,7 @@
 
 Every key is declared once, as a dataclass field whose metadata holds its unit,
 its check and its documentation. Reading, validation, ``--set`` overrides, the
-resolved ``case.toml`` and the README's key reference all derive from these
+resolved ``case.toml`` and the documentation's key reference all derive from these
 declarations.
 """
 
@@ -118,8 +118,10 @@ class Wear:
     mu: float = key(unit="1", positive=True, doc="coefficient of friction μ, τ = μ p (paper Eq. 14)")
     hardness: float = key(unit="Pa", positive=True, doc="hardness σ0 of the worn indenter")
     tangential_correction: bool = key(False,
-                                      doc="subtract the elastic tangential displacement of the "
-                                          "surface from the slip (paper Eqs. 15-16)")
+                                      doc="reciprocating sliding: take off the slip the "
+                                          "tangential springs lose at each stroke end while "
+                                          "they reverse (2μq/G* per stroke, paper Eqs. 15-16; "
+                                          "MDR only); needs sliding.stroke")
     pressure_exponent: float = key(1.0, minimum=1.0, maximum=4.0,
                                    doc="exponent n of the wear law dw/ds = (k μ/σ0)·σ0·(p/σ0)^n "
                                        "(1: Reye–Archard, the paper); in [1, 4] (below 1 the "
@@ -186,6 +188,19 @@ class MDRSettings:
                                    "√2·a0, the contact radius reached at complete wear under "
                                    "depth control; the domain grows (the grid is remapped) "
                                    "when a worn contact nears its edge")
+    linear_solver: str = key("auto", choices=("auto", "direct", "iterative"),
+                             doc="how the implicit wear steps are solved: direct (a nested LU "
+                                 "of the compliance per step size, 8 (N+1)² bytes each; "
+                                 "adaptive steps keep to the ladder 2^k ŝ so that each serves "
+                                 "many steps), iterative (FFT products and GMRES with a "
+                                 "coarse-grid preconditioner, memory O(N); adaptive steps are "
+                                 "set continuously), or auto: direct up to N = 2048. Both "
+                                 "solve the same equations (to GMRES's tolerance)")
+    krylov_precision: str = key("float32", choices=("float32", "float64"),
+                                doc="iterative solves: the GMRES iterations in float32 inside an "
+                                    "iterative refinement with float64 residuals (the answer "
+                                    "meets the float64 tolerance, 10-15 % faster at N = 102400), "
+                                    "or in float64 throughout (docs/mixed-precision.md)")
 
 
 @dataclass(frozen=True)
@@ -222,15 +237,37 @@ class BEMSettings:
 
 @dataclass(frozen=True)
 class CompareSettings:
+    """What ``wearcheck compare`` accepts as agreement.
+
+    Each stage is judged against its own magnitudes: a difference is divided by
+    the reference's value at that stage (its force, peak pressure, depth, contact
+    radius), floored at a small fraction of the unworn scale so that a quantity
+    near zero is not judged relative to itself.
+    """
+
     profile_tolerance: float = key(0.01, positive=True,
-                                   doc="max profile difference allowed, relative to the depth d")
-    force_tolerance: float = key(0.01, positive=True,
-                                 doc="max force difference allowed, relative to F0")
-    pressure_tolerance: float = key(0.02, positive=True,
+                                   doc="max profile difference allowed, relative to the "
+                                       "stage's depth (the approach of the unworn tip, "
+                                       "which includes the central wear)")
+    force_tolerance: float = key(0.03, positive=True,
+                                 doc="max force difference allowed, relative to the stage's "
+                                     "force")
+    pressure_tolerance: float = key(0.03, positive=True,
                                     doc="max pressure difference allowed away from the contact "
-                                        "edge, relative to p0")
+                                        "edge, relative to the stage's peak pressure")
     contact_radius_tolerance: float = key(0.02, positive=True,
-                                          doc="max contact-radius difference allowed, relative to a0")
+                                          doc="max contact-radius difference allowed, relative "
+                                              "to the stage's contact radius")
+    profile_floor: float = key(0.01, positive=True,
+                               doc="smallest profile scale of a stage, relative to the depth d "
+                                   "(d0 under force control)")
+    force_floor: float = key(0.01, positive=True,
+                             doc="smallest force scale of a stage, relative to F0")
+    pressure_floor: float = key(0.001, positive=True,
+                                doc="smallest pressure scale of a stage, relative to p0")
+    contact_radius_floor: float = key(0.1, positive=True,
+                                      doc="smallest contact-radius scale of a stage, relative "
+                                          "to a0")
     edge_band: float = key(0.1, minimum=0.0, maximum=1.0, open_maximum=True,
                            doc="width of the band at the contact edge, as a fraction of the "
                                "contact radius, whose pressure is reported separately")

@@ -3,9 +3,9 @@ column, array and field with its unit and meaning.
 
 This is the one definition. ``rundir`` writes and reads by it, every
 ``meta.json`` carries the part that applies to its run (``data_dictionary``),
-``metrics.json`` carries the comparison's, and the README's output tables are
-generated from it (``python -c "from wearcheck.comparisons import layout;
-layout.update_readme('README.md')"``). A solver documents its own extra history
+``metrics.json`` carries the comparison's, and the output tables of the
+documentation (``docs/outputs.md``) are generated from it at every docs build
+(:func:`doc_tables`). A solver documents its own extra history
 columns and ``fields.npz`` arrays in its registry entry.
 """
 
@@ -80,7 +80,8 @@ META = (
     Item("solve_seconds", "s", "time in the solver proper"),
     Item("stages_requested_s_hat", "", "the stages the case asked for"),
     Item("stages_reached", "", "how many of them the run stored"),
-    Item("warnings", "", "remarks on the case (e.g. elastic similarity violated)"),
+    Item("warnings", "", "remarks on the case and the run (e.g. elastic similarity violated, "
+                         "half-space theory stretched: docs/limits.md)"),
     Item("info", "", "the solver's facts about the run (steps, step used, grid, iterations)"),
     Item("command", "", "the command line that wrote this output"),
     Item("cwd", "", "the working directory of that command"),
@@ -91,6 +92,11 @@ META = (
     Item("created", "", "local time of writing, ISO 8601"),
     Item("host", "", "the machine's name"),
     Item("data_dictionary", "", "units and meanings of every file, column, array and key"),
+)
+#: meta.json keys that only some runs write
+META_OPTIONAL = (
+    Item("profile_table", "", "indenter.profile = \"table\": the table read: file, sha256 "
+                              "(of its bytes), rows, last_radius [m]"),
 )
 
 #: files of a comparison directory (``wearcheck compare``)
@@ -118,8 +124,16 @@ METRICS = (
     Item("pairs", "", "per solver: stages (list of STAGE_METRICS), stages_compared, worst "
                       "(largest share of each tolerance), history (over the common sliding "
                       "range), checks (stages_reached: the same number of stages as the "
-                      "reference), passed"),
+                      "reference), diagnosis (as `diagnosis`, for this solver; null when it "
+                      "passed), passed"),
     Item("passed", "", "the verdict: every check of every solver within its tolerance"),
+    Item("skipped", "", "per registered solver left out of the comparison: why (the "
+                        "reason it cannot run the case, or not asked for)"),
+    Item("diagnosis", "", "null when passed; else for the worst failed check: setting (the "
+                          "case key most likely to fix it, or null), value (its current "
+                          "value), suggestion, solver, reason, otherwise (the runner-up), "
+                          "rule, measures (per solver: points across the stage's contact "
+                          "radius, share of the tolerance its time-error estimate uses)"),
     Item("stages_compared", "", "stages reached by every solver"),
     Item("scales", "", "as in meta.json"),
     Item("profile_scale_depth", "m", "the depth d profiles are measured in (held depth, or d0)"),
@@ -129,6 +143,8 @@ METRICS = (
     Item("step_hat", "", "per solver: median sliding step in ŝ"),
     Item("run_end", "", "per solver: ŝ and F/F0 where the run ended"),
     Item("approximate", "", "per solver that solved an approximation of the case: why"),
+    Item("run_warnings", "", "per solver, its remarks on its run (e.g. half-space theory "
+                             "stretched; docs/limits.md)"),
     Item("anisotropy", "", "per solver with a square grid (BEM), per stage: largest "
                            "deviation of pressure (/p0) and wear (/d) from ring averages"),
     Item("edge_peaks", "", "per solver and stage: the edge-peak detector's finding"),
@@ -165,11 +181,19 @@ STAGE_METRICS = (
     Item("contact_radius", "", "|Δa|/a0"),
     Item("profile_max", "", "max |Δf|/d over the compared solver's radii"),
     Item("profile_rms", "", "RMS Δf/d"),
+    Item("profile_contact_max", "", "max |Δf|/d over the contact and its edge band, r <= "
+                                    "(1 + edge_band)·a (the larger a of the two)"),
+    Item("profile_contact_rms", "", "RMS Δf/d there"),
     Item("pressure_interior_max", "", "max |Δp|/p0 in r < (1 - edge_band)·a"),
     Item("pressure_interior_rms", "", "RMS Δp/p0 there"),
     Item("pressure_edge_max", "", "max |Δp|/p0 in the edge band"),
     Item("pressure_edge_rms", "", "RMS Δp/p0 there"),
-    Item("checks", "", "each check's value, tolerance and pass"),
+    Item("stage_scales", "", "per check, the stage's own scale in the unworn unit: the "
+                             "reference's depth (or central wear, if larger) /d, force /F0, "
+                             "peak pressure /p0, contact radius /a0"),
+    Item("checks", "", "per check: value (the difference over scale), tolerance, scale "
+                       "(max(the stage's own scale, the floor), in unit), scale_from ('stage' "
+                       "or 'floor'), unit, unworn (the difference in unit), passed"),
     Item("passed", "", "every check of the stage within tolerance"),
 )
 
@@ -181,14 +205,16 @@ def _table(items) -> dict:
 UNDECLARED = "not declared by the solver's registry entry"
 
 
-def run_dictionary(solver=None, history_names=(), field_names=(), stage_names=()) -> dict:
+def run_dictionary(solver=None, history_names=(), field_names=(), stage_names=(),
+                   meta_names=()) -> dict:
     """The data dictionary of one run directory (written into its meta.json).
 
     ``solver`` is its registry entry (or None): its extra history columns and
     fields that the run wrote are added (a solver may write different extras
     by mode, e.g. the MDR's fretting runs); written columns and fields it does
     not declare are listed as undeclared, never left out. ``stage_names``: the
-    optional stages.npz arrays written (``STAGES_OPTIONAL``).
+    optional stages.npz arrays written (``STAGES_OPTIONAL``); ``meta_names``:
+    the optional meta.json keys written (``META_OPTIONAL``).
     """
     history = _table(HISTORY)
     fields = {}
@@ -206,8 +232,10 @@ def run_dictionary(solver=None, history_names=(), field_names=(), stage_names=()
         history.setdefault(name, dict(unit="?", meaning=UNDECLARED))
     for name in field_names:
         fields.setdefault(name, dict(unit="?", meaning=UNDECLARED))
+    meta = _table(META)
+    meta.update({k: v for k, v in _table(META_OPTIONAL).items() if k in meta_names})
     return dict(files=_table(RUN_FILES), history_csv=history, stages_npz=stages,
-                fields_npz=fields, meta_json=_table(META), solver=info)
+                fields_npz=fields, meta_json=meta, solver=info)
 
 
 def comparison_dictionary() -> dict:
@@ -217,36 +245,21 @@ def comparison_dictionary() -> dict:
 
 
 def markdown(items, first="name") -> str:
-    """A Markdown table of items (the README's output tables)."""
+    """A Markdown table of items (the documentation's output tables)."""
     rows = [f"| {first} | unit | meaning |", "|---|---|---|"]
     rows += [f"| `{i.name}` | {i.unit} | {i.meaning} |" for i in items]
     return "\n".join(rows)
 
 
-def readme_sections() -> dict[str, str]:
-    """The README's generated output tables, by marker name."""
+def doc_tables() -> dict[str, str]:
+    """The documentation's output tables, by name (``docs/outputs.md`` includes
+    each as ``_generated/layout-NAME.md``, written at every docs build)."""
     return {
         "run-files": markdown(RUN_FILES, "file"),
         "history": markdown(HISTORY, "column"),
         "stages": markdown(STAGES + STAGES_OPTIONAL, "array"),
-        "meta": markdown(META, "key"),
+        "meta": markdown(META + META_OPTIONAL, "key"),
         "comparison-files": markdown(COMPARISON_FILES, "file"),
         "metrics": markdown(METRICS, "key"),
         "stage-metrics": markdown(STAGE_METRICS, "key"),
     }
-
-
-def update_readme(path) -> bool:
-    """Rewrite the generated tables between ``<!-- layout:NAME -->`` and
-    ``<!-- /layout:NAME -->`` in the README at ``path``; True if it changed."""
-    import re
-    from pathlib import Path
-    path = Path(path)
-    text = path.read_text(encoding="utf-8")
-    new = text
-    for name, table in readme_sections().items():
-        new = re.sub(rf"(<!-- layout:{name} -->\n).*?(<!-- /layout:{name} -->)",
-                     lambda m: m.group(1) + table + "\n" + m.group(2), new, flags=re.S)
-    if new != text:
-        path.write_text(new, encoding="utf-8")
-    return new != text

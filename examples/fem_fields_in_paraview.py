@@ -1,4 +1,8 @@
-"""A FEM run written as a run directory, its ParaView files, and reading them back.
+"""
+FEM fields in ParaView
+======================
+
+A FEM run written as a run directory, its ParaView files, and reading them back.
 
 Writes ``runs/hertz-fem`` (history.csv, stages.npz, fields.npz, meta.json) and its
 ``vtk/`` folder: open ``runs/hertz-fem/vtk/section.pvd`` or ``solid.pvd`` in

@@ -1,4 +1,8 @@
-"""How friction speeds up gross-slip wear: the paper's sphere at μ = 0.5 instead of 0.3.
+"""
+How friction speeds up wear
+===========================
+
+The paper's sphere at μ = 0.5 instead of 0.3, in gross slip under a held depth.
 
 Loads the shipped paper case, changes μ (validated like the case file), solves it
 with the MDR, prints the force left at the end and plots F/F0 against the

@@ -1,4 +1,8 @@
-"""A sweep over the coefficient of friction on Dask, from Python.
+"""
+A μ sweep on Dask
+=================
+
+A sweep over the coefficient of friction on Dask, from Python.
 
 Each μ runs in its own worker process (an embedded local cluster: nothing to
 set up; pass ``scheduler="tcp://host:8786"`` to use an existing one). Every run

@@ -10,7 +10,8 @@ REPO = Path(__file__).resolve().parent.parent
 THEORY = REPO / "docs" / "theory.md"
 SOURCES = [p for pattern in ("*.py", "*.toml", "*.md")
            for p in REPO.rglob(pattern)
-           if not any(part in {".git", "build", "dist", "runs", ".venv", "node_modules"}
+           if not any(part in {".git", "build", "_build", "_generated", "tutorials", "dist",
+                               "runs", ".venv", "node_modules"}
                       or part.endswith(".egg-info") for part in p.relative_to(REPO).parts)]
 
 pytestmark = pytest.mark.skipif(not THEORY.is_file(), reason="not run from a source checkout")
@@ -50,3 +51,78 @@ def test_nothing_cites_notes_outside_the_repository():
                  if any(name in p.read_text(encoding="utf-8", errors="replace")
                         for name in OUTSIDE)]
     assert offenders == []
+
+
+README = REPO / "README.md"
+DOCS = REPO / "docs"
+
+
+def test_readme_is_an_entry_point():
+    text = README.read_text(encoding="utf-8")
+    # issue 27: at most ~12 KB (it was 86 KB); the rest lives in docs/
+    assert len(text.encode("utf-8")) <= 12 * 1024
+    # the two set-up commands, unchanged, and the one command that builds the docs
+    for command in ('pip install . && wearcheck compare cases/paper.toml --out runs/paper',
+                    'pip install -e ".[test]" && python -m pytest -q',
+                    'pip install -e ".[docs]" && python -m sphinx -W --keep-going -b html '
+                    'docs docs/_build/html'):
+        assert command in text, command
+    # every relative link of the README reaches a file of the repository
+    links = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", text)
+    local = [link for link in links if "://" not in link]
+    assert len(local) > 15
+    for link in local:
+        assert (REPO / link).exists(), link
+
+
+def test_every_command_is_in_the_readme_table():
+    from wearcheck.comparisons.cli import build_parser
+    import argparse
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    table = README.read_text(encoding="utf-8").split("## Commands", 1)[1]
+    for name in sub.choices:
+        assert f"`wearcheck {name} " in table, name
+
+
+def _toctree_entries():
+    entries = set()
+    for page in DOCS.rglob("*.md"):
+        text = page.read_text(encoding="utf-8")
+        for block in re.findall(r"```\{toctree\}\n(.*?)```", text, re.S):
+            for line in block.splitlines():
+                line = line.strip()
+                if line and not line.startswith(":"):
+                    entries.add((page.parent / line).relative_to(DOCS).as_posix())
+    return entries
+
+
+def test_every_docs_page_is_in_the_site():
+    # Sphinx (-W) fails on a page outside every toctree; this says so without building
+    entries = _toctree_entries()
+    pages = {p.relative_to(DOCS).with_suffix("").as_posix() for p in DOCS.rglob("*.md")
+             if not p.relative_to(DOCS).parts[0].startswith("_")
+             and p.relative_to(DOCS).parts[0] != "tutorials"} - {"index"}
+    assert pages - entries == set()
+
+
+def test_cli_reference_has_every_command():
+    import sys
+    sys.path.insert(0, str(DOCS / "_ext"))
+    try:
+        import wearcheck_docs
+    finally:
+        sys.path.remove(str(DOCS / "_ext"))
+    from wearcheck.comparisons.cli import build_parser
+    import argparse
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    text = wearcheck_docs.cli_reference()
+    for name, p in sub.choices.items():
+        assert f"## `wearcheck {name}`" in text
+        # each option the parser knows appears in its help
+        for action in p._actions:
+            for flag in action.option_strings:
+                assert flag in text, (name, flag)
+    # every tutorial the gallery orders is an example script
+    assert {p.name for p in (REPO / "examples").glob("*.py")} == set(wearcheck_docs.TUTORIALS)

@@ -25,7 +25,8 @@ def run_script(path: Path, cwd: Path, timeout=600) -> str:
 
 
 def test_every_example_is_tested():
-    tested = {"friction_and_wear.py", "mu_sweep_on_dask.py", "fem_fields_in_paraview.py"}
+    tested = {"friction_and_wear.py", "mu_sweep_on_dask.py", "fem_fields_in_paraview.py",
+              "lab_rig_to_case.py"}
     assert {p.name for p in EXAMPLES.glob("*.py")} == tested
 
 
@@ -65,6 +66,24 @@ def test_fem_fields_in_paraview(tmp_path):
     assert "wear_volume     [m^3] worn volume" in out
 
 
+def test_lab_rig_to_case(tmp_path):
+    out = run_script(EXAMPLES / "lab_rig_to_case.py", tmp_path)
+    k = float(re.search(r"k = K σ0/μ = ([\d.e+-]+)", out).group(1))
+    # the conversion k = K σ0/μ with the script's K = 1e-15 m³/(N·m), σ0 = 7 GPa, μ = 0.6
+    assert k == pytest.approx(1e-15 * 7e9 / 0.6, rel=1e-3)
+    m = re.search(r"scar diameter ([\d.]+) µm, worn volume ([\d.e+-]+) m³, "
+                  r"K F s = ([\d.e+-]+) m³", out)
+    D, V, V_archard = float(m.group(1)) * 1e-6, float(m.group(2)), float(m.group(3))
+    # Archard under a held force: V = K F s exactly (the MDR's pressure quadrature: 2e-4)
+    assert V == pytest.approx(5e-15 * 100.0, rel=1e-3) and V_archard == pytest.approx(5e-13)
+    # the long-run scar, b ≫ a_H (here b/a_H = 4.6): D → 2 (4 R K F s/π)^¼ = 418 µm
+    # (ball_on_flat: within 0.3 % from b/a_H = 8 on; 2 % is a margin for the smaller ratio)
+    assert D == pytest.approx(2 * (4 * 3e-3 * 1e-15 * 5.0 * 100.0 / 3.141592653589793) ** 0.25,
+                              rel=0.02)
+    assert (tmp_path / "ball_6mm.toml").is_file()
+    assert (tmp_path / "lab_rig_to_case.png").stat().st_size > 10_000
+
+
 def readme_python_block() -> str:
     text = (ROOT / "README.md").read_text(encoding="utf-8")
     return re.search(r"```python\n(.*?)```", text, re.S).group(1)
@@ -74,7 +93,17 @@ def test_readme_python_block_runs_in_an_empty_directory(tmp_path):
     script = tmp_path / "readme_example.py"
     script.write_text(readme_python_block(), encoding="utf-8")
     out = run_script(script, tmp_path)
-    m = re.search(r"F/F0 at the end: ([\d.]+)", out)
-    assert m and float(m.group(1)) <= 0.01
+    ends = re.findall(r"μ = ([\d.]+): worn volume ([\d.e+-]+) m³ after ([\d.]+) m "
+                      r"\(K F s = ([\d.e+-]+) m³\), scar diameter ([\d.]+) µm", out)
+    assert [float(e[0]) for e in ends] == [0.3, 0.6]
+    for mu, V, s, _, D in ends:
+        # ball_on_flat: F = 2 N, k = 2e-5, σ0 = 6 GPa, 2 km; Archard under a held force,
+        # V = (k μ/σ0) F s exactly (the MDR's pressure quadrature: 2e-4)
+        assert float(s) == pytest.approx(2000.0)
+        assert float(V) == pytest.approx(2e-5 * float(mu) / 6e9 * 2.0 * 2000.0, rel=1e-3)
+        # the long-run scar (b/a_H > 12): D = 2 (4 R K F s/π)^¼ within 1 % (measured 0.1 %)
+        K = 2e-5 * float(mu) / 6e9
+        assert float(D) * 1e-6 == pytest.approx(
+            2 * (4 * 0.005 * K * 2.0 * 2000.0 / 3.141592653589793) ** 0.25, rel=0.01)
     pngs = list(tmp_path.glob("*.png"))
     assert len(pngs) == 1 and pngs[0].stat().st_size > 10_000

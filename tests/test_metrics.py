@@ -8,8 +8,11 @@ import pytest
 from wearcheck.cases import RunResult, reference
 from wearcheck.comparisons.analysis import metrics
 
+#: tolerances and floors of these tests (relative to each stage's scale; floors in the
+#: unworn scales)
 TOL = dict(profile_tolerance=0.01, force_tolerance=0.01, pressure_tolerance=0.02,
-           contact_radius_tolerance=0.02, edge_band=0.1)
+           contact_radius_tolerance=0.02, profile_floor=0.01, force_floor=0.01,
+           pressure_floor=0.001, contact_radius_floor=0.1, edge_band=0.1)
 
 
 def test_to_grid_is_exact_for_linear_data_and_nan_outside():
@@ -56,12 +59,37 @@ def test_edge_masks_use_smaller_and_larger_contact_radius():
 
 
 def test_verdict_fails_nan_and_values_above_tolerance():
-    st = dict(profile_max=0.005, force=0.02, pressure_interior_max=math.nan,
-              contact_radius=0.0)
+    st = dict(profile_contact_max=0.005, force=0.02, pressure_interior_max=math.nan,
+              contact_radius=0.0, stage_scales=dict(profile_contact_max=1.0, force=1.0,
+                                                    pressure_interior_max=1.0,
+                                                    contact_radius=1.0))
     v = metrics.verdict(st, TOL)
-    assert v["profile_max"]["passed"] and v["contact_radius"]["passed"]
+    assert v["profile_contact_max"]["passed"] and v["contact_radius"]["passed"]
     assert not v["force"]["passed"]
     assert not v["pressure_interior_max"]["passed"]  # nothing compared passes nothing
+
+
+def test_verdict_judges_each_stage_against_its_own_scale_floored():
+    # the same differences in unworn units at a late stage: force 0.02 F0, pressure
+    # 0.004 p0 and contact radius 0.01 a0
+    st = dict(profile_contact_max=0.005, force=0.0005, pressure_interior_max=0.0004,
+              contact_radius=0.01,
+              stage_scales=dict(profile_contact_max=1.0, force=0.02,
+                                pressure_interior_max=0.0002, contact_radius=1.4))
+    v = metrics.verdict(st, TOL)
+    # force: 0.0005 F0 of the stage's 0.02 F0 is 2.5 % > 1 %, though 0.05 % of F0
+    assert v["force"]["value"] == pytest.approx(0.025, rel=1e-12)
+    assert v["force"]["scale_from"] == "stage" and not v["force"]["passed"]
+    # pressure: the stage's peak 0.0002 p0 is below the floor 0.001 p0, so the floor is
+    # the scale: 0.0004 / 0.001 = 40 % (not 200 %)
+    assert v["pressure_interior_max"]["scale"] == 0.001
+    assert v["pressure_interior_max"]["scale_from"] == "floor"
+    assert v["pressure_interior_max"]["value"] == pytest.approx(0.4, rel=1e-12)
+    # contact radius: 0.01 a0 of 1.4 a0 = 0.71 % < 2 %
+    assert v["contact_radius"]["value"] == pytest.approx(0.01 / 1.4, rel=1e-12)
+    assert v["contact_radius"]["passed"]
+    # the difference in the unworn unit is kept beside the judged value
+    assert v["force"]["unworn"] == 0.0005 and v["force"]["unit"] == "F0"
 
 
 def _hertz_result(case_scales, r, n_stages, *, pressure_factor=1.0, force_factor=1.0,
@@ -104,6 +132,12 @@ def test_compare_results_recovers_constructed_differences(hertz_scales):
         assert st["force"] == pytest.approx(0.004, rel=1e-9)
         assert st["contact_radius"] == pytest.approx(0.015, rel=1e-9)
         assert st["profile_max"] == pytest.approx(0.002, rel=1e-6)
+        assert st["profile_contact_max"] == pytest.approx(0.002, rel=1e-6)
+        # the unworn Hertz contact at every stage: its own scales are the unworn ones
+        # (force F0, contact radius a0, depth d, peak pressure p0 at r = 0)
+        assert st["stage_scales"] == pytest.approx(dict(
+            profile_contact_max=1.0, force=1.0, pressure_interior_max=1.0, contact_radius=1.0),
+            rel=1e-12)
         # p0 is Hertz's maximum pressure, reached at r = 0 (a node of both grids): 1 % of
         # p(0) = 0.01 p0; the MDR pressure interpolated to FEM radii errs by O(h²), <1e-5
         assert st["pressure_interior_max"] == pytest.approx(0.01, abs=1e-5)
@@ -117,7 +151,7 @@ def test_compare_results_recovers_constructed_differences(hertz_scales):
                                 p0=sc["p0"], depth=1e-6, tolerances=tight, edge_band=0.1)
     assert not m["passed"]
     assert all(not st["checks"]["force"]["passed"] for st in m["stages"])
-    assert all(st["checks"]["profile_max"]["passed"] for st in m["stages"])
+    assert all(st["checks"]["profile_contact_max"]["passed"] for st in m["stages"])
 
 
 def test_compare_results_without_common_stage_fails(hertz_scales):

@@ -55,7 +55,7 @@ def toy():
 
 def test_a_registered_solver_is_compared_by_name(toy, tmp_path):
     # MDR at N = 800 against Hertz: the unworn contact is MDR's exact solution up to
-    # its grid, which the README puts at ~1e-4 p0 (spatial error 2.3e-5 in F/F0):
+    # its grid, which docs/performance.md puts at ~1e-4 p0 (spatial error 2.3e-5 in F/F0):
     # the default tolerances (2 % p0, 1 % F0, 2 % a0) must pass, and the toy's
     # results must arrive under its own name everywhere.
     case = wearcheck.load_case(HERTZ)
@@ -129,7 +129,7 @@ def test_a_solver_whose_numbers_break_down_is_a_numerical_failure(tmp_path, caps
     """``wearcheck run paper --solver mdr --set indenter.youngs_modulus=1e300`` (and
     1e-300) ended as exit 70, "internal error ... (a bug in wearcheck)": an SVD in the
     GMRES least squares, and int(inf), broke down on numbers out of range. A breakdown
-    of the arithmetic is a numerical failure (README: exit 3, one line), not a bug."""
+    of the arithmetic is a numerical failure (docs/cli.md: exit 3, one line), not a bug."""
     def breaks(case, progress=None):
         raise failure
     registry.register(registry.Solver(name="brittle", title="Brittle", solve_function=breaks))

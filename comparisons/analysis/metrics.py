@@ -3,24 +3,59 @@
 
 Solvers store their stages on different radii (MDR: its uniform grid; FEM: the
 contact-node radii; BEM: rings one pixel wide). Differences are taken on the
-compared solver's radii, with the reference's fields linearly interpolated onto them. Every difference is made
-dimensionless with the case's natural scales: profiles by the depth d,
-pressures by p0, forces by F0, contact radii by a0.
+compared solver's radii, with the reference's fields linearly interpolated onto
+them.
+
+Every difference is reported in the case's unworn scales (profiles by the depth
+d, pressures by p0, forces by F0, contact radii by a0): those are the columns of
+the tables. The verdict judges each stage against its own scale instead (see
+:data:`CHECKS`): late in a wear run the force and the pressure are small
+fractions of F0 and p0, and a tolerance in F0 could not fail there.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-#: checks that decide the verdict, with the tolerance key that bounds each
+
+@dataclass(frozen=True)
+class Check:
+    """One check that decides the verdict.
+
+    The stage's difference ``column`` (in the unworn scale ``unit``) is divided
+    by the stage's own scale (``scale``, in words), floored at ``floor`` (a
+    [compare] key, in the same unworn unit), and must not exceed ``tolerance``
+    (a [compare] key). ``label`` and ``difference`` name it in reports.
+    """
+
+    column: str
+    tolerance: str
+    floor: str
+    unit: str
+    scale: str
+    label: str
+    difference: str
+
+
+#: the checks that decide the verdict; the scale each one is judged against
 CHECKS = (
-    ("profile_max", "profile_tolerance"),
-    ("force", "force_tolerance"),
-    ("pressure_interior_max", "pressure_tolerance"),
-    ("contact_radius", "contact_radius_tolerance"),
+    Check("profile_contact_max", "profile_tolerance", "profile_floor", "d",
+          "the reference's depth at the stage (the approach of the unworn tip, which "
+          "includes the central wear), or its central wear if larger",
+          "profile", "max |Δf| over the contact and its edge band"),
+    Check("force", "force_tolerance", "force_floor", "F0",
+          "the reference's normal force at the stage", "force", "|ΔF|"),
+    Check("pressure_interior_max", "pressure_tolerance", "pressure_floor", "p0",
+          "the reference's peak pressure at the stage (outside a band left out around a "
+          "singularity)", "pressure", "max |Δp| in the interior"),
+    Check("contact_radius", "contact_radius_tolerance", "contact_radius_floor", "a0",
+          "the reference's contact radius at the stage", "contact radius", "|Δa|"),
 )
+#: the checks by their column
+CHECK_BY_COLUMN = {c.column: c for c in CHECKS}
 
 
 def to_grid(r_src, y_src, r_dst) -> np.ndarray:
@@ -71,16 +106,22 @@ def stage_differences(r, f_1, f_2, p_1, p_2, a_1, a_2, *, depth, p0, edge_band,
 
     Returns
     -------
-    dict of max and RMS differences: profile (over all r) relative to depth,
-    pressure in the interior and in the edge band relative to p0.
+    dict of max and RMS differences relative to depth and p0: the profile over
+    all r and over the contact (r up to the edge band's outer end, where the
+    profile is of the order of the depth; beyond it f grows as r² and its
+    difference measures the solvers' grids, not their wear), the pressure in the
+    interior and in the edge band.
     """
     df = (np.asarray(f_1, float) - np.asarray(f_2, float)) / depth
     dp = (np.asarray(p_1, float) - np.asarray(p_2, float)) / p0
     interior, edge = edge_masks(r, a_1, a_2, edge_band)
+    contact = interior | edge | (np.asarray(r, float) <= min(a_1, a_2))
     if exclude is not None:
         interior = interior & ~np.asarray(exclude, bool)
     out = {}
     out["profile_max"], out["profile_rms"], out["profile_points"] = max_rms(df)
+    (out["profile_contact_max"], out["profile_contact_rms"],
+     out["profile_contact_points"]) = max_rms(df[contact])
     (out["pressure_interior_max"], out["pressure_interior_rms"],
      out["pressure_interior_points"]) = max_rms(dp[interior])
     out["pressure_edge_max"], out["pressure_edge_rms"], out["pressure_edge_points"] = \
@@ -88,18 +129,44 @@ def stage_differences(r, f_1, f_2, p_1, p_2, a_1, a_2, *, depth, p0, edge_band,
     return out
 
 
-def verdict(stage: dict, tolerances: dict) -> dict:
-    """Each check of one stage against its tolerance: {name: {value, tolerance, passed}}.
+def stage_scale(own, floor) -> tuple[float, str]:
+    """The scale a stage is judged against: its own magnitude, or ``floor`` where that
+    is smaller (or undefined). Returns the scale and "stage" or "floor"."""
+    if np.isfinite(own) and own > floor:
+        return float(own), "stage"
+    return float(floor), "floor"
 
-    A NaN value (nothing to compare) fails: a check that compared nothing passes nothing.
+
+def verdict(stage: dict, tolerances: dict) -> dict:
+    """Each check of one stage against its tolerance, relative to the stage's own scale.
+
+    ``stage`` holds the differences in unworn units (the columns of :data:`CHECKS`)
+    and ``stage_scales``, the stage's own magnitudes in the same units. Returns
+    {column: {value, tolerance, scale, scale_from, unit, unworn, passed}}: value =
+    unworn / scale, scale = max(the stage's magnitude, the floor), unworn the
+    difference in the unworn unit. A NaN value (nothing to compare) fails: a check
+    that compared nothing passes nothing.
     """
     out = {}
-    for name, tol_key in CHECKS:
-        value = stage[name]
-        tol = tolerances[tol_key]
-        out[name] = dict(value=value, tolerance=tol,
-                         passed=bool(np.isfinite(value) and value <= tol))
+    for c in CHECKS:
+        column = float(stage[c.column])
+        scale, source = stage_scale(stage["stage_scales"][c.column], tolerances[c.floor])
+        value = column / scale
+        tol = tolerances[c.tolerance]
+        out[c.column] = dict(value=value, tolerance=tol, scale=scale, scale_from=source,
+                             unit=c.unit, unworn=column,
+                             passed=bool(np.isfinite(value) and value <= tol))
     return out
+
+
+def peak_pressure(r, p, exclude_radius=None, exclude_width=0.0) -> float:
+    """Largest pressure on the radii r, outside |r - exclude_radius| < exclude_width
+    (a singular band whose grid values are not comparable); NaN if none is left."""
+    r, p = np.asarray(r, float), np.asarray(p, float)
+    keep = np.isfinite(p)
+    if exclude_radius is not None:
+        keep &= np.abs(r - exclude_radius) >= exclude_width
+    return float(np.max(p[keep])) if keep.any() else math.nan
 
 
 def compare_results(ref, other, *, s_hat_per_m, a0, F0, p0, depth, tolerances, edge_band,
@@ -107,8 +174,8 @@ def compare_results(ref, other, *, s_hat_per_m, a0, F0, p0, depth, tolerances, e
     """Compare a result with the reference's (``cases.RunResult``-like) stage by stage.
 
     Stage k of one result is the k-th requested ŝ; the stages both reached are
-    compared. Forces and contact radii at a stage are the history values read
-    at the stage's sliding distance.
+    compared. Forces, contact radii and depths at a stage are the history values
+    read at the stage's sliding distance.
 
     Parameters
     ----------
@@ -117,21 +184,26 @@ def compare_results(ref, other, *, s_hat_per_m, a0, F0, p0, depth, tolerances, e
         on other's radii.
     s_hat_per_m, a0, F0, p0 : scales (``cases.reference.scales``).
     depth : profile scale d (the held depth, or the unworn depth d0 under force control).
-    tolerances : the ``[compare]`` tolerances as a dict.
+    tolerances : the ``[compare]`` tolerances and floors as a dict.
     edge_band : fraction of the contact radius treated as edge.
     exclude_radius, exclude_width : optionally leave |r - exclude_radius| <
-        exclude_width out of the pressure interior (a singularity at r = b).
+        exclude_width out of the pressure interior and of the peak pressure (a
+        singularity at r = b).
 
     Returns
     -------
-    dict with ``stages`` (list of per-stage dicts), ``history`` (force and
+    dict with ``stages`` (list of per-stage dicts: the differences in unworn
+    units, ``stage_scales`` and ``checks``), ``worst``, ``history`` (force and
     contact radius over the common sliding range) and ``passed``.
     """
     K = min(len(ref.stage_s), len(other.stage_s))
-    a_m = at_stages(ref.history["s"], ref.history["contact_radius"], ref.stage_s)
+    h = ref.history
+    a_m = at_stages(h["s"], h["contact_radius"], ref.stage_s)
     a_f = at_stages(other.history["s"], other.history["contact_radius"], other.stage_s)
-    F_m = at_stages(ref.history["s"], ref.history["force"], ref.stage_s)
+    F_m = at_stages(h["s"], h["force"], ref.stage_s)
     F_f = at_stages(other.history["s"], other.history["force"], other.stage_s)
+    d_m = at_stages(h["s"], h["depth"], ref.stage_s)
+    w_m = at_stages(h["s"], h["wear_center"], ref.stage_s)
     r = np.asarray(other.r, float)
     stages = []
     for k in range(K):
@@ -150,6 +222,12 @@ def compare_results(ref, other, *, s_hat_per_m, a0, F0, p0, depth, tolerances, e
         st["contact_radius"] = abs(st["contact_radius_reference"] - st["contact_radius_solver"])
         st.update(stage_differences(r, f_m, other.f[k], p_m, other.p[k], a_m[k], a_f[k],
                                     depth=depth, p0=p0, edge_band=edge_band, exclude=exclude))
+        st["stage_scales"] = dict(
+            profile_contact_max=max(abs(float(d_m[k])), abs(float(w_m[k]))) / depth,
+            force=abs(st["force_reference"]),
+            pressure_interior_max=peak_pressure(ref.r, ref.p[k], exclude_radius,
+                                                exclude_width) / p0,
+            contact_radius=st["contact_radius_reference"])
         st["checks"] = verdict(st, tolerances)
         st["passed"] = all(c["passed"] for c in st["checks"].values())
         stages.append(st)
@@ -163,18 +241,19 @@ def compare_results(ref, other, *, s_hat_per_m, a0, F0, p0, depth, tolerances, e
 def worst(stages) -> dict:
     """Per check, the stage using the largest fraction of its tolerance.
 
-    {name: {stage, value, tolerance, used}} with used = value / tolerance (NaN if none).
+    {column: {stage, value, tolerance, used}} with used = value / tolerance (NaN
+    if none); value is relative to that stage's scale, as in its check.
     """
     out = {}
-    for name, _ in CHECKS:
-        rows = [(st["checks"][name]["value"], st["checks"][name]["tolerance"], st["index"])
-                for st in stages]
+    for c in CHECKS:
+        rows = [(st["checks"][c.column]["value"], st["checks"][c.column]["tolerance"],
+                 st["index"]) for st in stages]
         rows = [r for r in rows if np.isfinite(r[0])]
         if not rows:
-            out[name] = dict(stage=None, value=math.nan, tolerance=math.nan, used=math.nan)
+            out[c.column] = dict(stage=None, value=math.nan, tolerance=math.nan, used=math.nan)
             continue
         value, tol, k = max(rows, key=lambda r: r[0] / r[1])
-        out[name] = dict(stage=k, value=value, tolerance=tol, used=value / tol)
+        out[c.column] = dict(stage=k, value=value, tolerance=tol, used=value / tol)
     return out
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from wearcheck import cases
 from wearcheck.comparisons import registry
-from wearcheck.comparisons.analysis import edge_peak
+from wearcheck.comparisons.analysis import diagnosis, edge_peak, metrics
 from wearcheck.comparisons.present import report
 
 
@@ -29,9 +29,13 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
     fmt = R.fmt
     blocks = []
     K = m["stages_compared"]
-    verdict_text = (f"{K} stage(s) compared; every check within its tolerance."
+    verdict_text = (f"{K} stage(s) compared; every check within its tolerance, each stage "
+                    "judged against its own force, peak pressure, depth and contact radius."
                     if m["passed"] else _failure_text(m))
     blocks.append(R.verdict_block(m["passed"], verdict_text))
+    if not m["passed"] and m.get("diagnosis"):
+        blocks.append(R.para("Most likely fix: " + diagnosis.sentence(m["diagnosis"])))
+    blocks += _skipped_blocks(m)
     ind = case.indenter
     blocks += [R.heading("Case"),
                R.para(f"Case file: {case.source}. Profile: {ind.profile}"
@@ -49,9 +53,11 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
                       "ŝ; the stages both reached are compared. The reference's fields are "
                       "interpolated linearly onto the other solver's radii and the differences "
                       "taken there. "
-                      "Profiles are relative to d, pressures to p0, forces to F0, contact "
-                      "radii to a0; force and contact radius of a stage are read from the "
-                      "run's history at the stage's sliding distance. The pressure is compared "
+                      "The tables report profiles relative to d, pressures to p0, forces to "
+                      "F0, contact radii to a0; the verdict judges each stage against its "
+                      "own scale (below). Force, contact radius and depth of a stage are read "
+                      "from the run's history at the stage's sliding distance. The pressure "
+                      "is compared "
                       f"in the interior r < (1 − {case.compare.edge_band:g})·a (a: the smaller "
                       "of the two contact radii) and reported separately in the edge band up "
                       f"to (1 + {case.compare.edge_band:g})·a of the larger one. F0 and a0 are "
@@ -67,14 +73,12 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
         blocks.append(R.para(f"Note: {w}"))
     for n, text in m.get("approximate", {}).items():
         blocks.append(R.para(f"Approximate: {title(n)} — {text}"))
+    for n, texts in m.get("run_warnings", {}).items():
+        blocks += [R.para(f"Note: {title(n)} — {t}") for t in texts
+                   if t != m.get("approximate", {}).get(n)]
     if m.get("reference_note"):
         blocks.append(R.para(f"Reference: {m['reference_note']}."))
-    tol = m["tolerances"]
-    blocks += [R.heading("Metrics per stage"),
-               R.para(f"Tolerances: profile {tol['profile_tolerance']:g}·d, force "
-                      f"{tol['force_tolerance']:g}·F0, pressure (interior) "
-                      f"{tol['pressure_tolerance']:g}·p0, contact radius "
-                      f"{tol['contact_radius_tolerance']:g}·a0. A failed check is marked ✗.")]
+    blocks += _checks_blocks(m)
     for name, pair in m["pairs"].items():
         blocks += _pair_blocks(m, name, pair)
     blocks.append(R.para("Solve time: " + ", ".join(
@@ -132,37 +136,74 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
     return blocks
 
 
+def _skipped_blocks(m) -> list:
+    """The registered solvers the comparison left out, each with its reason."""
+    skipped = m.get("skipped") or {}
+    if not skipped:
+        return []
+    return [report.para("Skipped: " + "; ".join(f"{title(n)} — {why}"
+                                                 for n, why in skipped.items()) + ".")]
+
+
+def _checks_blocks(m) -> list:
+    """What decides the verdict: each check's difference, scale, floor and tolerance."""
+    R = report
+    tol = m["tolerances"]
+    rows = [[c.label, c.difference, c.scale, f"{tol[c.floor]:g}·{c.unit}",
+             f"{tol[c.tolerance]:g}", f"{c.tolerance}, {c.floor}"] for c in metrics.CHECKS]
+    return [R.heading("Metrics per stage"),
+            R.para("Each check divides a stage's difference by that stage's own scale, or by "
+                   "the floor where the scale is smaller (so that a quantity near zero is not "
+                   "judged relative to itself), and must not exceed the tolerance. The "
+                   "second table of each solver gives the same differences in the unworn "
+                   "scales (d, F0, p0, a0); those do not decide the verdict. A failed check "
+                   "is marked ✗."),
+            R.table(["check", "difference", "judged against", "floor", "tolerance",
+                     "[compare] keys"], rows)]
+
+
 def _pair_blocks(m, name, pair) -> list:
-    """The metrics table of one solver against the reference."""
+    """The verdict table and the metrics table of one solver against the reference."""
     R = report
     fmt = R.fmt
     sc = m["scales"]
     ref, other = title(m["reference"]), title(name)
     blocks = [R.heading(f"{other} against {ref}", 3)]
-    rows = []
+    verdict_rows, rows = [], []
     for st in pair["stages"]:
         c = st["checks"]
 
-        def mark(check, value):
-            return fmt(value) + ("" if c[check]["passed"] else " ✗")
+        def judged(check):
+            x = c[check.column]
+            scale = f"{fmt(x['scale'], 4)}·{x['unit']}" + (" (floor)" if x["scale_from"] ==
+                                                           "floor" else "")
+            return [fmt(x["value"]) + ("" if x["passed"] else " ✗"), scale]
+        verdict_rows.append([st["index"], fmt(st["s_hat_reference"])]
+                            + sum((judged(ch) for ch in metrics.CHECKS), [])
+                            + ["pass" if st["passed"] else "FAIL"])
         rows.append([st["index"], fmt(st["s_hat_reference"]), fmt(st["s_hat_solver"]),
                      fmt(st["force_reference"], 4), fmt(st["force_solver"], 4),
-                     mark("force", st["force"]),
-                     fmt(st["contact_radius_reference"], 4),
-                     fmt(st["contact_radius_solver"], 4),
-                     mark("contact_radius", st["contact_radius"]),
-                     mark("profile_max", st["profile_max"]), fmt(st["profile_rms"]),
-                     mark("pressure_interior_max", st["pressure_interior_max"]),
+                     fmt(st["force"]), fmt(st["contact_radius_reference"], 4),
+                     fmt(st["contact_radius_solver"], 4), fmt(st["contact_radius"]),
+                     fmt(st["profile_contact_max"]), fmt(st["profile_max"]),
+                     fmt(st["profile_rms"]), fmt(st["pressure_interior_max"]),
                      fmt(st["pressure_interior_rms"]), fmt(st["pressure_edge_max"]),
-                     fmt(st["pressure_edge_rms"]), "pass" if st["passed"] else "FAIL"])
+                     fmt(st["pressure_edge_rms"])])
     blocks.append(R.para("Largest share of each tolerance used: " + "; ".join(
-        f"{check} {100 * w['used']:.0f}% (stage {w['stage']}, {fmt(w['value'])} of "
-        f"{fmt(w['tolerance'])})" for check, w in pair["worst"].items()
+        f"{metrics.CHECK_BY_COLUMN[check].label} {100 * w['used']:.0f}% (stage {w['stage']}, "
+        f"{fmt(w['value'])} of {fmt(w['tolerance'])})" for check, w in pair["worst"].items()
         if w["stage"] is not None) + "."))
+    if pair.get("diagnosis"):
+        blocks.append(R.para("Most likely fix: " + diagnosis.sentence(pair["diagnosis"])))
+    header = ["stage", "ŝ"]
+    for ch in metrics.CHECKS:
+        header += [f"{ch.label} / scale", f"{ch.label} scale"]
+    blocks.append(R.table(header + ["verdict"], verdict_rows))
     blocks.append(R.table(["stage", f"ŝ {ref}", f"ŝ {other}", f"F/F0 {ref}", f"F/F0 {other}",
-                           "|ΔF|/F0", f"a/a0 {ref}", f"a/a0 {other}", "|Δa|/a0", "max|Δf|/d",
-                           "rms Δf/d", "max|Δp|/p0 interior", "rms Δp/p0 interior",
-                           "max|Δp|/p0 edge", "rms Δp/p0 edge", "verdict"], rows))
+                           "|ΔF|/F0", f"a/a0 {ref}", f"a/a0 {other}", "|Δa|/a0",
+                           "max|Δf|/d contact", "max|Δf|/d all r", "rms Δf/d",
+                           "max|Δp|/p0 interior", "rms Δp/p0 interior", "max|Δp|/p0 edge",
+                           "rms Δp/p0 edge"], rows))
     h = pair["history"]
     blocks.append(R.para(f"Over the whole common sliding range (ŝ ≤ "
                          f"{fmt(h['s_common_max'] * sc['s_hat_per_m'])}): max |ΔF|/F0 = "
@@ -214,6 +255,16 @@ def _anisotropy_blocks(m) -> list:
             report.table(["solver", "stage", "max |p − ⟨p⟩|/p0", "max |w − ⟨w⟩|/d"], rows)]
 
 
+def _failed_check(name, c) -> str:
+    """One failed check: its value and tolerance, relative to what."""
+    label = metrics.CHECK_BY_COLUMN[name].label if name in metrics.CHECK_BY_COLUMN else name
+    if "scale" not in c:
+        return f"{label} {report.fmt(c['value'])} > {c['tolerance']:g}"
+    of = ("the floor" if c["scale_from"] == "floor" else "the stage's own")
+    return (f"{label} {report.fmt(c['value'])} > {c['tolerance']:g} of {of} scale "
+            f"{report.fmt(c['scale'], 4)}·{c['unit']}")
+
+
 def _failure_text(m) -> str:
     failed = []
     for solver, pair in m["pairs"].items():
@@ -221,15 +272,13 @@ def _failure_text(m) -> str:
             for name, c in st["checks"].items():
                 if not c["passed"]:
                     failed.append(f"{title(solver)} stage {st['index']} "
-                                  f"(ŝ={st['s_hat_reference']:.3g}) {name} "
-                                  f"{report.fmt(c['value'])} > {c['tolerance']:g}")
+                                  f"(ŝ={st['s_hat_reference']:.3g}) " + _failed_check(name, c))
     tr = m.get("truncated_reference")
     if tr is not None:
         for n, v in tr["solvers"].items():
             for name, c in v["checks"].items():
                 if not c["passed"]:
-                    failed.append(f"{title(n)} vs reference {name} {report.fmt(c['value'])} > "
-                                  f"{c['tolerance']:g}")
+                    failed.append(f"{title(n)} vs reference " + _failed_check(name, c))
         if not tr["solvers"]:
             failed.append("no solver has an ŝ = 0 stage to compare with the reference")
     for solver, pair in m["pairs"].items():
@@ -330,7 +379,7 @@ def _sphere_blocks(sw) -> list:
                      "Δa/a"], rows),
             R.para(f"Within the force tolerance {sw['force_tolerance']:g}: a0/R ≤ "
                    f"{fmt(lim)} (every swept ratio up to it). Fit over a0/R ≤ 0.02: ΔF/F ≈ "
-                   f"{fmt(sw['slope'])}·a0/R (docs/theory.md §13 estimate: 2/π ≈ 0.637), so the "
+                   f"{fmt(sw['slope'])}·a0/R (docs/theory.md §13: a0/R scaling, constant measured), so the "
                    f"finite sphere alone uses the whole force tolerance at a0/R ≈ "
                    f"{fmt(sw['ratio_at_tolerance'])}. Shipped cases: {shipped}."),
             ] + ([R.image(sw["figure"], f"{title(sw['solver'])} force relative to the half-space force against "
@@ -338,19 +387,30 @@ def _sphere_blocks(sw) -> list:
 
 
 def print_summary(m, out, stream=None) -> None:
-    """A few lines for the terminal: one per compared solver and stage (default: stderr).
+    """A few lines for the terminal: one per compared solver and stage (default: stderr),
+    the solvers skipped and why, and on a FAIL the setting most likely to fix it.
 
     The default is looked up at the call: a stream bound at import time may be
     one that was replaced and closed since (a notebook's, a test's capture).
     """
     stream = sys.stderr if stream is None else stream
     ref = title(m["reference"])
+    for name, why in (m.get("skipped") or {}).items():
+        print(f"skipped {title(name)}: {why}", file=stream)
+    for name, texts in m.get("run_warnings", {}).items():
+        for text in texts:
+            print(f"note: {title(name)}: {text}", file=stream)
     for name, pair in m["pairs"].items():
-        print(f"{title(name)} against {ref}:", file=stream)
+        print(f"{title(name)} against {ref} (differences relative to each stage's own scale):",
+              file=stream)
         for st in pair["stages"]:
+            c = st["checks"]
+            cells = "  ".join(f"{ch.label} {100 * c[ch.column]['value']:.2g}%"
+                              + ("" if c[ch.column]["passed"] else "!")
+                              for ch in metrics.CHECKS)
             print(f"  ŝ={st['s_hat_reference']:<6.3g} F/F0 {st['force_reference']:.4f}/"
-                  f"{st['force_solver']:.4f}  |Δf|/d {st['profile_max']:.2e}  |Δp|/p0 "
-                  f"{st['pressure_interior_max']:.2e} (edge {st['pressure_edge_max']:.2e})  "
-                  f"|Δa|/a0 {st['contact_radius']:.2e}  {'ok' if st['passed'] else 'FAIL'}",
+                  f"{st['force_solver']:.4f}  {cells}  {'ok' if st['passed'] else 'FAIL'}",
                   file=stream)
     print(f"compare: {'PASS' if m['passed'] else 'FAIL'} -> {out}/report.html", file=stream)
+    if not m["passed"] and m.get("diagnosis"):
+        print(f"most likely fix: {diagnosis.sentence(m['diagnosis'])}", file=stream)

@@ -26,7 +26,7 @@ import numpy as np
 from wearcheck import cases
 from wearcheck.cases import reference
 from wearcheck.comparisons import layout, registry, rundir
-from wearcheck.comparisons.analysis import edge_peak, metrics
+from wearcheck.comparisons.analysis import diagnosis, edge_peak, metrics
 
 #: how a solver is run; tests replace it with analytic stand-ins
 solve_case = registry.solve
@@ -139,8 +139,15 @@ def truncated_reference(case, results, scales) -> dict | None:
             metrics.max_rms(dp[interior & ~near_b])
         row["pressure_near_b_max"], _, _ = metrics.max_rms(dp[near_b])
         row["pressure_edge_max"], _, _ = metrics.max_rms(dp[edge])
-        tol = metrics.verdict(dict(row, profile_max=0.0), dataclasses.asdict(cmp))
-        tol.pop("profile_max")
+        # judged as a stage is: against the reference's own force, contact radius and
+        # peak pressure (away from the singularity); no profile is compared here
+        own = dict(profile_contact_max=1.0, force=out["force"],
+                   contact_radius=out["contact_radius"],
+                   pressure_interior_max=metrics.peak_pressure(r, p_ref, b, cmp.edge_band * a)
+                   / scales["p0"])
+        tol = metrics.verdict(dict(row, profile_contact_max=0.0, stage_scales=own),
+                              dataclasses.asdict(cmp))
+        tol.pop("profile_contact_max")
         row["checks"] = tol
         row["passed"] = all(c["passed"] for c in tol.values())
         out["solvers"][name] = row
@@ -203,6 +210,9 @@ def analyse(case, results, reference_solver=None) -> dict:
                     for k, v in results.items()}
     m["approximate"] = {k: v.info.get("approximate") for k, v in results.items()
                         if v.info.get("approximate")}
+    # each solver's remarks on its run (cases.validity: half-space theory stretched, ...)
+    m["run_warnings"] = {k: list(v.info["warnings"]) for k, v in results.items()
+                         if v.info.get("warnings")}
     m["anisotropy"] = {k: v.info["anisotropy"] for k, v in results.items()
                        if isinstance(v.info.get("anisotropy"), dict)}
     tr = truncated_reference(case, results, sc)
@@ -210,7 +220,83 @@ def analyse(case, results, reference_solver=None) -> dict:
         m["truncated_reference"] = tr
         m["passed"] = bool(m["passed"] and tr["passed"])
     m["edge_peaks"] = {k: peaks_of(v, sc) for k, v in results.items()}
+    diagnose(case, results, m)
     return m
+
+
+def skipped_solvers(case, chosen) -> dict:
+    """The registered solvers a comparison leaves out, each with its reason."""
+    out = {}
+    for name in registry.names():
+        if name not in chosen:
+            out[name] = registry.get(name).supports(case) or "not among the solvers asked for"
+    return out
+
+
+def _resolution(case, name, result, stage) -> diagnosis.Resolution:
+    """How finely one run resolved its stage ``stage`` (its own contact radius there)."""
+    try:
+        entry = registry.get(name)
+        title, key = entry.title, entry.resolution_key
+    except cases.CaseError:      # a result that no registered solver made
+        title, key = name.upper(), None
+    value = None
+    if key is not None:
+        section, field = key.split(".")
+        value = getattr(getattr(case, section, None), field, None)
+    points = math.nan
+    if stage < len(result.stage_s):
+        a = float(metrics.at_stages(result.history["s"], result.history["contact_radius"],
+                                    result.stage_s[stage:stage + 1])[0])
+        points = diagnosis.points_across(result.r, a)
+    err = result.info.get("time_error")
+    err = err.get("estimate") if isinstance(err, dict) else None
+    if err is None and case.sliding.scheme in ("implicit", "explicit"):
+        sc = cases.reference.scales(case)
+        err = diagnosis.first_order_time_error(result.history, sc["F0"], sc["d0"])
+    return diagnosis.Resolution(solver=name, title=title, key=key, value=value,
+                                points_across=points,
+                                time_error=float(err) if err is not None else None,
+                                approximate=result.info.get("approximate") or None,
+                                step_hat=_number(result.info.get("step_hat")))
+
+
+def _number(x):
+    """``x`` as a float when it is a finite number, else None."""
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return None
+    return x if math.isfinite(x) else None
+
+
+def diagnose(case, results, m) -> None:
+    """Add to each failed pair (and to a failed reference check) the setting most
+    likely to fix its worst check; ``m["diagnosis"]``: the worst of them."""
+    sl = case.sliding
+    found = []
+
+    def advice(failure, names):
+        runs = [_resolution(case, n, results[n], failure["stage"]) for n in names]
+        return diagnosis.advise(failure, runs, scheme=sl.scheme, tolerance=sl.tolerance,
+                                step_hat=sl.step_hat)
+
+    for name, pair in m["pairs"].items():
+        failure = diagnosis.worst_failure(pair["stages"])
+        pair["diagnosis"] = None
+        if failure is not None:
+            pair["diagnosis"] = dict(advice(failure, [name, m["reference"]]), pair=name,
+                                     used=failure["used"])
+            found.append(pair["diagnosis"])
+    tr = m.get("truncated_reference")
+    for name, row in (tr or {}).get("solvers", {}).items():
+        failure = diagnosis.worst_failure([dict(index=0, s_hat_reference=0.0,
+                                                checks=row["checks"])])
+        if failure is not None:
+            row["diagnosis"] = dict(advice(failure, [name]), pair=f"{name} / reference",
+                                    used=failure["used"])
+            found.append(row["diagnosis"])
+    m["diagnosis"] = max(found, key=lambda d: d["used"], default=None)
 
 
 def scar_tables(case, results) -> dict:
@@ -276,6 +362,7 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
             ref = exact[0]
             results = {ref: results[ref], **{n: r for n, r in results.items() if n != ref}}
     m = analyse(case, results, ref)
+    m["skipped"] = skipped_solvers(case, names)
     if switched:
         m["reference_note"] = (f"{registry.get(switched[0]).title} solved an approximation "
                                f"of this case, so {registry.get(switched[1]).title} is the "
