@@ -721,6 +721,8 @@ REPLACE_STEPS = ("built", "checked", "complete", "installed", "exchanged", "grav
                  "aside", "retiring", "retired")
 #: the steps of replacing a file of a study directory (:func:`write_study_file`)
 STUDY_FILE_STEPS = ("study-file-listed", "study-file-replaced")
+#: the steps of replacing a single file (``mesh --out FILE``, :func:`write_file`)
+FILE_STEPS = ("file-listed", "file-replaced")
 #: called with the name of each step when set (a test's kill); None in use
 STEP_HOOK = None
 #: devices (st_dev) whose file system refused an atomic exchange: plain renames there
@@ -1155,8 +1157,9 @@ def check_output_file(path, kind: str = "mesh") -> Path:
         side = _sidecar(path)
         with contextlib.suppress(OSError, ValueError):
             data = json.loads(side.read_text(encoding="utf-8"))
+            # "replacing": the file a write killed half-way was replacing (write_file)
             ok = (isinstance(data, dict) and data.get("kind") == kind
-                  and data.get("sha256") == _sha256(path))
+                  and _sha256(path) in (data.get("sha256"), data.get("replacing")))
         if not ok:
             raise OutputError(f"output '{path}' exists and is not a file wearcheck wrote "
                               "(or it has changed since); choose another output path or "
@@ -1191,19 +1194,31 @@ def write_file(path, source: Path, kind: str = "mesh") -> Path:
         shutil.copyfile(source, tmp)
         os.chmod(tmp, 0o666 & ~_umask())
         side = dict(marker_data(kind, True), sha256=_sha256(Path(tmp)))
+        # the side marker names the new file before it takes the old one's place, and
+        # the old one's until it has: a kill in between leaves a file it accepts
+        old = _sha256(path) if path.is_file() and not path.is_symlink() else None
+        _write_sidecar(path, dict(side, replacing=old) if old else side)
+        _step("file-listed")
         os.replace(tmp, path)
-        # the side marker by rename too: never written through a link put in its place
-        sfd, stmp = tempfile.mkstemp(prefix=f".{path.name}.marker-", dir=path.parent)
-        with os.fdopen(sfd, "w", encoding="utf-8") as fh:
-            fh.write(json.dumps(side) + "\n")
-        # mkstemp makes 0600: others sharing the file could not read that wearcheck wrote it
-        os.chmod(stmp, 0o666 & ~_umask())
-        os.replace(stmp, _sidecar(path))
+        _step("file-replaced")
+        if old:
+            _write_sidecar(path, side)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
     return path
+
+
+def _write_sidecar(path: Path, data: dict) -> None:
+    """The side marker of ``path`` by rename: never half written, never written
+    through a link put in its place."""
+    sfd, stmp = tempfile.mkstemp(prefix=f".{path.name}.marker-", dir=path.parent)
+    with os.fdopen(sfd, "w", encoding="utf-8") as fh:
+        fh.write(json.dumps(data) + "\n")
+    # mkstemp makes 0600: others sharing the file could not read that wearcheck wrote it
+    os.chmod(stmp, 0o666 & ~_umask())
+    os.replace(stmp, _sidecar(path))
 
 
 def _check_writable_ancestor(path: Path, inside: bool = False) -> None:

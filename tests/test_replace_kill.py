@@ -217,3 +217,27 @@ def test_a_kill_while_a_study_file_is_replaced_leaves_one_the_next_study_takes(t
     (study / "sweep.csv").write_text("mine\n")
     with pytest.raises(outputs.OutputError, match="not a file wearcheck wrote"):
         outputs.study_directory(study, files=["sweep.csv"])
+
+
+@pytest.mark.parametrize("step", outputs.FILE_STEPS)
+def test_a_kill_while_a_mesh_file_is_replaced_leaves_one_the_next_write_takes(tmp_path, step):
+    """``mesh --out FILE`` replaced, the writer killed between the file and its side
+    marker: the file is the old or the new one, whole, and the next write replaces
+    it (before, the side marker still held the old file's SHA-256 and every later
+    write refused the new file as not wearcheck's)."""
+    old, new, out = tmp_path / "old.msh", tmp_path / "new.msh", tmp_path / "m.msh"
+    old.write_text("$MeshFormat old\n")
+    new.write_text("$MeshFormat new\n")
+    outputs.write_file(out, old)
+    code = _fork(step, True, lambda: outputs.write_file(out, new))
+    assert code == -signal.SIGKILL
+    assert out.read_text() in (old.read_text(), new.read_text())
+    outputs.write_file(out, old)                      # accepted, not refused
+    assert out.read_text() == old.read_text()
+    side = json.loads((tmp_path / ".m.msh.wearcheck-output").read_text())
+    assert "replacing" not in side                    # the write finished: one file only
+    # a file the user changed is still refused, and so is the one it replaced
+    out.write_text("mine\n")
+    with pytest.raises(outputs.OutputError, match="not a file wearcheck wrote"):
+        outputs.write_file(out, new)
+    assert out.read_text() == "mine\n"
