@@ -25,6 +25,7 @@ import hashlib
 import json
 import os
 import platform
+import re
 import shutil
 import stat
 import struct
@@ -374,6 +375,9 @@ def check_output(path, kind: str) -> Path:
 #: the longest name wearcheck writes beside an output NAME: '.NAME.partial-' and
 #: mkdtemp's 8 characters (a file's side marker '.NAME.wearcheck-output' is as long)
 _HIDDEN_EXTRA = len("..partial-") + 8
+#: the same for a file wearcheck replaces (:func:`write_file`): its temporary
+#: '.NAME.partial-PID@HOST@XXXXXXXX' (:func:`_temporary`, a pid of up to 7 digits)
+_FILE_HIDDEN_EXTRA = len("..partial-") + 7 + 1 + 8 + 1 + 8
 #: room kept below PATH_MAX for the deepest file inside an output
 #: ('<solver>/vtk/.vtk.partial-XXXXXXXX/solid_stage000.vtu' and the like)
 _INNER_PATH = 120
@@ -396,9 +400,10 @@ def _limits(path: Path) -> tuple[int, int]:
         return 255, 4096
 
 
-def _check_name_length(raw: str, path: Path) -> None:
+def _check_name_length(raw: str, path: Path, extra: int = _HIDDEN_EXTRA) -> None:
     """Refuse, before any work, a name the file system would refuse only when the output
-    is written: a component, or the output's hidden sibling, or the whole path too long."""
+    is written: a component, or the output's hidden sibling (``extra`` bytes longer),
+    or the whole path too long."""
     name_max, path_max = _limits(path)
     for part in path.parts[1:-1]:
         if len(os.fsencode(part)) > name_max:
@@ -406,18 +411,18 @@ def _check_name_length(raw: str, path: Path) -> None:
                               f"{len(os.fsencode(part))} bytes; this file system takes names "
                               f"of at most {name_max}")
     n = len(os.fsencode(path.name))
-    if n + _HIDDEN_EXTRA > name_max:
+    if n + extra > name_max:
         raise OutputError(f"output '{raw[:60]}...': its name is {n} bytes, and wearcheck "
-                          f"writes it through a hidden '.NAME.partial-XXXXXXXX' beside it, "
-                          f"{_HIDDEN_EXTRA} bytes longer; this file system takes names of at "
+                          f"writes it through a hidden '.NAME.partial-...' beside it, "
+                          f"{extra} bytes longer; this file system takes names of at "
                           f"most {name_max} bytes: give a name of at most "
-                          f"{name_max - _HIDDEN_EXTRA} bytes")
-    total = len(os.fsencode(str(path))) + _HIDDEN_EXTRA + _INNER_PATH
+                          f"{name_max - extra} bytes")
+    total = len(os.fsencode(str(path))) + extra + _INNER_PATH
     if total > path_max:
         raise OutputError(f"output '{raw[:60]}...': the path is {len(os.fsencode(str(path)))} "
                           f"bytes, and the files inside the output would pass the system's "
                           f"limit of {path_max} bytes for a path: give a path of at most "
-                          f"{path_max - _HIDDEN_EXTRA - _INNER_PATH} bytes")
+                          f"{path_max - extra - _INNER_PATH} bytes")
 
 
 #: Linux inode flags (``chattr``): the file or directory cannot be changed, or
@@ -694,6 +699,51 @@ def _settle_graveyard(graveyard: Path, path: Path, restore: bool = True) -> None
     with contextlib.suppress(OSError):
         if [p.name for p in graveyard.iterdir()] in ([], [OUTPUT_MARKER]):
             remove_tree(graveyard)
+
+
+def _host_tag() -> str:
+    """8 hex digits naming this host in the name of a temporary file."""
+    return hashlib.sha256(platform.node().encode("utf-8", "replace")).hexdigest()[:8]
+
+
+#: a temporary file of :func:`_temporary`: '.NAME.partial-PID@HOST@XXXXXXXX[.suffix]'
+_TEMPORARY = re.compile(r"\.partial-(\d+)@([0-9a-f]{8})@[^@/]*$")
+
+
+def _temporary(directory: Path, name: str, suffix: str = "") -> Path:
+    """A new empty temporary file for ``name`` in ``directory`` whose name says which
+    process writes it: what a killed one left is found by :func:`remove_dead_temporaries`."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{name}.partial-{os.getpid()}@{_host_tag()}@",
+                               suffix=suffix, dir=directory)
+    os.close(fd)
+    return Path(tmp)
+
+
+def remove_dead_temporaries(directory: Path, names=None) -> list[Path]:
+    """Remove the temporary files (:func:`_temporary`) in ``directory`` (those of
+    ``names`` only, if given) that a process of this host left when it was killed;
+    those of running processes and of other hosts are left. Returns them."""
+    removed = []
+    try:
+        entries = list(os.scandir(directory))
+    except OSError:
+        return removed
+    prefixes = None if names is None else tuple(f".{n}.partial-" for n in names)
+    for e in entries:
+        m = _TEMPORARY.search(e.name)
+        if not m or not e.name.startswith(".") or \
+                (prefixes is not None and not e.name.startswith(prefixes)):
+            continue
+        try:
+            if not e.is_file(follow_symlinks=False):
+                continue
+        except OSError:
+            continue
+        if m.group(2) == _host_tag() and not _pid_alive(int(m.group(1))):
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(e.path)
+                removed.append(Path(e.path))
+    return removed
 
 
 def is_partial(path: Path) -> bool:
@@ -977,6 +1027,8 @@ def study_directory(path, runs=(), files=()) -> Path:
         raise OutputError(f"study '{path}' was written by an older wearcheck that kept no list "
                           "of its files, so it cannot tell whether you changed any; remove it "
                           "yourself or choose another output path")
+    # the study's files (and its marker) half written by a study that was killed
+    remove_dead_temporaries(path)
     for name in sorted({*recorded, *files}):
         if (path / name).exists() or (path / name).is_symlink():
             _check_study_file(path, name, recorded, marker)
@@ -1027,8 +1079,8 @@ def write_study_file(study, name: str, write) -> Path:
     if path.exists() or path.is_symlink():
         _check_study_file(study, name, recorded, marker)
         current = _path_fingerprint(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=Path(name).suffix, dir=study)
-    os.close(fd)
+    # (the suffix kept: writers choose the format by it, e.g. a figure's .png)
+    tmp = _temporary(study, name, Path(name).suffix)
     try:
         write(Path(tmp))
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; study files are shared
@@ -1084,8 +1136,8 @@ def remove_study_file(study, name: str) -> bool:
 
 
 def _rewrite_marker(directory: Path, data: dict) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f"{OUTPUT_MARKER}.", dir=directory)
-    with os.fdopen(fd, "w", encoding="utf-8") as fh:
+    tmp = _temporary(Path(directory), OUTPUT_MARKER[1:])
+    with open(tmp, "w", encoding="utf-8") as fh:
         fh.write(json.dumps(data) + "\n")
     os.chmod(tmp, 0o666 & ~_umask())
     os.replace(tmp, Path(directory) / OUTPUT_MARKER)
@@ -1175,7 +1227,7 @@ def check_output_path_common(path) -> Path:
     if not raw or Path(raw).name in ("", ".", "..") or raw.endswith(os.sep):
         raise OutputError(f"output '{raw}': name a file of its own")
     path = Path(raw).absolute()
-    _check_name_length(raw, path)
+    _check_name_length(raw, path, _FILE_HIDDEN_EXTRA)
     if path.is_file() and not path.is_symlink():
         why = _pinned(path, whole=False)
         if why:
@@ -1188,8 +1240,8 @@ def write_file(path, source: Path, kind: str = "mesh") -> Path:
     """Copy ``source`` to ``path`` atomically, with its side marker."""
     path = check_output_file(path, kind)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.partial-", dir=path.parent)
-    os.close(fd)
+    remove_dead_temporaries(path.parent, [path.name])    # of a write that was killed
+    tmp = _temporary(path.parent, path.name)
     try:
         shutil.copyfile(source, tmp)
         os.chmod(tmp, 0o666 & ~_umask())
@@ -1213,12 +1265,17 @@ def write_file(path, source: Path, kind: str = "mesh") -> Path:
 def _write_sidecar(path: Path, data: dict) -> None:
     """The side marker of ``path`` by rename: never half written, never written
     through a link put in its place."""
-    sfd, stmp = tempfile.mkstemp(prefix=f".{path.name}.marker-", dir=path.parent)
-    with os.fdopen(sfd, "w", encoding="utf-8") as fh:
-        fh.write(json.dumps(data) + "\n")
-    # mkstemp makes 0600: others sharing the file could not read that wearcheck wrote it
-    os.chmod(stmp, 0o666 & ~_umask())
-    os.replace(stmp, _sidecar(path))
+    stmp = _temporary(path.parent, path.name)
+    try:
+        with open(stmp, "w", encoding="utf-8") as fh:
+            fh.write(json.dumps(data) + "\n")
+        # mkstemp makes 0600: others sharing the file could not read that wearcheck wrote it
+        os.chmod(stmp, 0o666 & ~_umask())
+        os.replace(stmp, _sidecar(path))
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(stmp)
+        raise
 
 
 def _check_writable_ancestor(path: Path, inside: bool = False) -> None:

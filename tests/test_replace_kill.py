@@ -210,6 +210,8 @@ def test_a_kill_while_a_study_file_is_replaced_leaves_one_the_next_study_takes(t
     assert code == -signal.SIGKILL
     assert (study / "sweep.csv").read_text() in ("old\n", "new\n")
     outputs.study_directory(study, files=["sweep.csv"])        # accepted, not refused
+    # and the killed writer's temporary file is gone with it
+    assert sorted(p.name for p in study.iterdir()) == [".wearcheck-output", "sweep.csv"]
     outputs.write_study_text(study, "sweep.csv", "third\n")
     assert (study / "sweep.csv").read_text() == "third\n"
     outputs.study_directory(study, files=["sweep.csv"])
@@ -234,6 +236,9 @@ def test_a_kill_while_a_mesh_file_is_replaced_leaves_one_the_next_write_takes(tm
     assert out.read_text() in (old.read_text(), new.read_text())
     outputs.write_file(out, old)                      # accepted, not refused
     assert out.read_text() == old.read_text()
+    # the killed writer's temporary file is gone
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".m.msh.wearcheck-output",
+                                                          "m.msh", "new.msh", "old.msh"]
     side = json.loads((tmp_path / ".m.msh.wearcheck-output").read_text())
     assert "replacing" not in side                    # the write finished: one file only
     # a file the user changed is still refused, and so is the one it replaced
@@ -241,3 +246,24 @@ def test_a_kill_while_a_mesh_file_is_replaced_leaves_one_the_next_write_takes(tm
     with pytest.raises(outputs.OutputError, match="not a file wearcheck wrote"):
         outputs.write_file(out, new)
     assert out.read_text() == "mine\n"
+
+
+def test_only_the_temporary_files_of_dead_writers_of_this_host_are_removed(tmp_path):
+    """A temporary file names its writer (pid and host): one of a process that is
+    gone is debris, one of a running process or of another host (a directory shared
+    over NFS) is left alone, and so is a file of the same shape without that name."""
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    names = {
+        "dead": outputs._temporary(tmp_path, "sweep.csv", ".csv").name.replace(
+            f"-{os.getpid()}@", f"-{dead.pid}@"),
+        "alive": outputs._temporary(tmp_path, "sweep.csv", ".csv").name,
+        "other host": f".sweep.csv.partial-{dead.pid}@00000000@abcdefgh.csv",
+        "user": ".sweep.csv.partial-notes.csv",
+    }
+    for name in names.values():
+        (tmp_path / name).write_text("x")
+    assert outputs.remove_dead_temporaries(tmp_path) == [tmp_path / names["dead"]]
+    assert {p.name for p in tmp_path.iterdir()} >= {names["alive"], names["other host"],
+                                                    names["user"]}
+    assert not (tmp_path / names["dead"]).exists()
