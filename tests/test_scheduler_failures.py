@@ -233,3 +233,16 @@ def test_the_default_limits_hold_without_the_environment_variable(tmp_path, monk
     wall = time.perf_counter() - t0
     assert scheduler_mod.ANSWER_TIMEOUT <= wall < 30.0
     assert not (tmp_path / "s").exists()
+
+
+def test_a_workers_address_is_told_from_the_schedulers(tmp_path, scheduler):
+    """A user who copies a worker's address (from the dashboard, or the worker's log)
+    instead of the scheduler's is told so: a worker answers Dask's identity request
+    too, and before the check the study would have sent its tasks nowhere."""
+    address, _ = scheduler()
+    from distributed import Client
+    with Client(address, timeout="60s") as c:
+        worker = next(iter(c.scheduler_info()["workers"]))
+    assert scheduler_mod.probe(address, 10.0, {})["type"] == "Scheduler"
+    with pytest.raises(scheduler_mod.SchedulerError, match="is a Dask Worker, not the scheduler"):
+        scheduler_mod.probe(worker, 10.0, {})
