@@ -31,6 +31,7 @@ import stat
 import struct
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -1005,6 +1006,44 @@ def atomic_directory(path, kind: str = "run"):
         raise
 
 
+#: the study directories this process holds locked: {real path: [descriptor, depth]}
+_STUDY_LOCKS: dict = {}
+_STUDY_LOCKS_GUARD = threading.RLock()
+
+
+@contextlib.contextmanager
+def study_lock(study):
+    """Hold the study directory ``study`` for this process alone (``flock`` of the
+    directory; re-entrant within the process).
+
+    Studies write into their directory in place, reading what is there first (the
+    marker's list of files, ``meta.json``, an earlier ``sweep.csv``): two studies
+    into one directory at once would each write what it read plus its own, and
+    the last would drop the other's. Under the lock each reads what the other
+    wrote. Where the file system has no locks (some NFS) it goes unlocked.
+    """
+    key = os.path.realpath(study)
+    with _STUDY_LOCKS_GUARD:
+        held = _STUDY_LOCKS.get(key)
+        if held is not None:
+            held[1] += 1
+    if held is None:
+        fd = os.open(key, os.O_RDONLY | os.O_DIRECTORY)
+        if fcntl is not None:
+            with contextlib.suppress(OSError):
+                fcntl.flock(fd, fcntl.LOCK_EX)
+        with _STUDY_LOCKS_GUARD:
+            _STUDY_LOCKS[key] = held = [fd, 1]
+    try:
+        yield
+    finally:
+        with _STUDY_LOCKS_GUARD:
+            held[1] -= 1
+            if held[1] == 0:
+                del _STUDY_LOCKS[key]
+                os.close(held[0])       # releases the flock
+
+
 def study_directory(path, runs=(), files=()) -> Path:
     """Create (or reuse) the study directory ``path`` of ``wearcheck refine``/``sweep``.
 
@@ -1072,6 +1111,11 @@ def write_study_file(study, name: str, write) -> Path:
     replaced; the marker then lists the new one. Never written through a link.
     """
     study = Path(study)
+    with study_lock(study):
+        return _write_study_file(study, name, write)
+
+
+def _write_study_file(study: Path, name: str, write) -> Path:
     path = study / name
     marker = read_marker(study) or marker_data("study", True)
     recorded = marker.get("files") if isinstance(marker.get("files"), dict) else {}
@@ -1118,6 +1162,11 @@ def write_study_text(study, name: str, text: str) -> Path:
 def remove_study_file(study, name: str) -> bool:
     """Remove ``study/name`` if the study wrote it and it is unchanged; else leave it."""
     study = Path(study)
+    with study_lock(study):
+        return _remove_study_file(study, name)
+
+
+def _remove_study_file(study: Path, name: str) -> bool:
     marker = read_marker(study) or {}
     recorded = marker.get("files") if isinstance(marker.get("files"), dict) else {}
     path = study / name

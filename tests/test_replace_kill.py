@@ -267,3 +267,46 @@ def test_only_the_temporary_files_of_dead_writers_of_this_host_are_removed(tmp_p
     assert {p.name for p in tmp_path.iterdir()} >= {names["alive"], names["other host"],
                                                     names["user"]}
     assert not (tmp_path / names["dead"]).exists()
+
+
+def _record_study_slowly(study, name, entered, released):
+    """The child: records its study, pausing (up to 3 s) once it has read meta.json and
+    listed its new file, until the parent says its own study has been recorded."""
+    from wearcheck import cases
+    from wearcheck.comparisons.studies.distributed import record_study
+
+    def hook(step):
+        if step == "study-file-listed" and not entered.is_set():
+            entered.set()
+            released.wait(3.0)
+    outputs.STEP_HOOK = hook
+    record_study(study, name, cases.load(cases.shipped("hertz")), [], dict(command=name))
+
+
+def test_two_studies_ending_at_once_into_one_directory_keep_both(tmp_path):
+    """Two studies (a sweep and a refinement, or two sweeps) that end at the same time
+    each read meta.json, add their entry and write it back: without a lock the one
+    that writes last drops the other's entry (seen with two concurrent sweeps, whose
+    sweep.csv kept the rows of one). The child pauses between its read and its
+    write while the parent records its own study: the parent must wait for it."""
+    import threading
+    from wearcheck import cases
+    from wearcheck.comparisons.studies.distributed import record_study, study_meta
+    study = outputs.study_directory(tmp_path / "s")
+    ctx = multiprocessing.get_context("fork")
+    entered, released = ctx.Event(), ctx.Event()
+    child = ctx.Process(target=_record_study_slowly,
+                        args=(study, "sweep-mdr", entered, released))
+    child.start()
+    assert entered.wait(60)
+    parent = threading.Thread(target=record_study, args=(study, "refine-mdr",
+                                                         cases.load(cases.shipped("hertz")), [],
+                                                         dict(command="refine-mdr")))
+    parent.start()
+    parent.join(30)
+    released.set()
+    child.join(60)
+    parent.join(30)
+    assert child.exitcode == 0 and not parent.is_alive()
+    assert set(study_meta(study)["studies"]) == {"sweep-mdr", "refine-mdr"}
+    outputs.study_directory(study, files=["meta.json"])     # and the marker agrees

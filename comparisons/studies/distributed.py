@@ -527,17 +527,18 @@ def record_study(out: Path, study: str, case, overrides, prov) -> None:
     A study of the same name recorded before (a re-run, or a sweep that adds
     values) stays, under ``earlier`` in the new entry, latest first.
     """
-    meta = study_meta(out)
-    studies = meta.setdefault("studies", {})
-    entry = dict(prov, case_file=str(getattr(case, "source", "")), overrides=list(overrides),
-                 resolved_case=cases.to_toml(case))
-    previous = studies.get(study)
-    if isinstance(previous, dict):
-        earlier = previous.pop("earlier", [])
-        entry["earlier"] = [previous] + (earlier if isinstance(earlier, list) else [])
-    studies[study] = entry
-    from wearcheck.comparisons.outputs import write_study_text
-    write_study_text(out, "meta.json", json.dumps(jsonable(meta), indent=2) + "\n")
+    from wearcheck.comparisons.outputs import study_lock, write_study_text
+    with study_lock(out):       # read and written by one study at a time
+        meta = study_meta(out)
+        studies = meta.setdefault("studies", {})
+        entry = dict(prov, case_file=str(getattr(case, "source", "")),
+                     overrides=list(overrides), resolved_case=cases.to_toml(case))
+        previous = studies.get(study)
+        if isinstance(previous, dict):
+            earlier = previous.pop("earlier", [])
+            entry["earlier"] = [previous] + (earlier if isinstance(earlier, list) else [])
+        studies[study] = entry
+        write_study_text(out, "meta.json", json.dumps(jsonable(meta), indent=2) + "\n")
 
 
 def _flat(table: dict, prefix: str = "") -> dict:

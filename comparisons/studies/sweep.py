@@ -18,7 +18,7 @@ from wearcheck.cases.case import parse_override
 from wearcheck.cases.reference import scales as case_scales
 from wearcheck.cases.schema import section_fields
 from wearcheck.comparisons.studies.distributed import Task, fmt, record_study, run_cases
-from wearcheck.comparisons.outputs import write_study_text
+from wearcheck.comparisons.outputs import study_lock, write_study_text
 from wearcheck.comparisons.rundir import provenance
 
 
@@ -148,7 +148,7 @@ def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=No
         tasks = [Task(f"{t.name}-{i}", t.solver, t.overrides) for i, t in enumerate(tasks)]
     prov = provenance()
     out = Path(out)
-    earlier = earlier_rows(out, solver, case)
+    earlier_rows(out, solver, case)      # refused now, before the cluster, if it must be
     outcomes = run_cases(case_path, overrides, tasks, out, scheduler=scheduler, workers=workers,
                          quiet=quiet, solve=solve, extra_meta=dict(study=f"sweep-{solver}"),
                          study_files=("meta.json", "sweep.csv"))
@@ -170,8 +170,11 @@ def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=No
                          final_contact_radius_over_a0=float(h["contact_radius"][-1]) / sc["a0"])
         row.update(final)
         rows.append(row)
-    record_study(out, f"sweep-{solver}", case, overrides, prov)
-    write_study_text(out, "sweep.csv", table_text(earlier, rows, solver, case, prov))
+    with study_lock(out):
+        # read again: a sweep into the directory may have ended since this one began
+        earlier = earlier_rows(out, solver, case)
+        record_study(out, f"sweep-{solver}", case, overrides, prov)
+        write_study_text(out, "sweep.csv", table_text(earlier, rows, solver, case, prov))
     return rows
 
 
