@@ -25,11 +25,16 @@ Outputs: history columns of ``cases.HISTORY_COLUMNS`` (contact_radius is
 the equivalent radius √(A/π) of the contact area A, wear_center the wear of
 the centre pixel) plus s_hat, max_pressure, cg_iterations,
 complementarity_residual; ``r``, ``f``, ``p`` are azimuthal averages on
-rings one pixel wide (ring k holds the pixels with round(ρ/Δ) = k, r = kΔ);
+rings one pixel wide (ring k holds the pixels with round(ρ/Δ) = k), each at
+the root-mean-square radius of its pixels (:func:`bem.solver.ring_radii`);
 ``fields``: ``x``, ``y`` (n,) pixel centres and ``profile``,
 ``wear_depth``, ``pressure``, ``gap`` (K, n, n) per stage, x along the
 first axis; ``info["anisotropy"]``: per stage the largest deviation of the
 pressure and of the wear from their ring averages, over p0 and d.
+``bem.coupling = true``: the friction traction μp (Cerruti's (1 − 2ν) term,
+Dundurs' β) moves the surface normally in every contact solve
+(:func:`bem.contact.solve_coupled`); one sliding direction, or reciprocating
+strokes when sliding.stroke is given (docs/bem-tangential.md §6).
 Not modelled: wear.tangential_correction.
 """
 

@@ -10,6 +10,10 @@ WORKING_ARRAYS = 40.0
 #: N × N double arrays kept per stored stage (profile, pressure, gap in the
 #: run's stages; profile, wear, pressure, gap in the result's fields)
 PER_STAGE = 7.0
+#: bem.coupling: the coupling operator's padded (2N)² work array, its complex
+#: half-spectrum and the transforms of an application, and the sweeps' lagged
+#: displacements (measured on paper.toml at 512²: +44 MB, 21 arrays)
+COUPLING_ARRAYS = 22.0
 
 
 def memory_bytes(case, grid: int | None = None) -> float:
@@ -22,4 +26,5 @@ def memory_bytes(case, grid: int | None = None) -> float:
     """
     n = float(case.bem.grid if grid is None else grid)
     stages = len(case.stages.s_hat)
-    return 40e6 + 8.0 * n * n * (WORKING_ARRAYS + PER_STAGE * stages)
+    coupling = COUPLING_ARRAYS if case.bem.coupling else 0.0
+    return 40e6 + 8.0 * n * n * (WORKING_ARRAYS + coupling + PER_STAGE * stages)

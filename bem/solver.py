@@ -8,10 +8,12 @@ import time
 import numpy as np
 from scipy import optimize
 
-from wearcheck.cases import CaseError, RunResult, profiles, programme, reference, validity
+from wearcheck.cases import (CaseError, RunResult, dundurs_beta, profiles, programme, reference,
+                             validity)
 
 from . import wear
 from .operator import HalfSpace
+from .tangential import ShearToNormal
 
 #: implicit Euler's and BDF2's step in ŝ when sliding.step_hat = "auto" (as
 #: the MDR: the BEM's time error is the same ODE's, 0.08 Δŝ in F/F0 for
@@ -108,6 +110,41 @@ def ring_average(values: np.ndarray, ring: np.ndarray, rings: int) -> np.ndarray
     return total / np.maximum(count, 1)
 
 
+def ring_radii(rho: np.ndarray, ring: np.ndarray, rings: int) -> np.ndarray:
+    """The radius each ring's average stands for: the root-mean-square ρ of its pixels.
+
+    A ring average of f = c ρ² is c·mean(ρ²), the value at this radius exactly
+    (ring 1, the pixels at ρ = Δ and √2 Δ, has mean ρ² = 1.5 Δ²; placed at Δ
+    it read 1.5 times the paraboloid there). For a smooth f the offset left is
+    (f'' − f'/ρ)·var(ρ)/2, var(ρ) ≈ Δ²/12 within a ring.
+    """
+    return np.sqrt(ring_average(rho**2, ring, rings))
+
+
+def coupling(case, n: int, dx: float) -> tuple[wear.Coupling | None, dict | str]:
+    """The normal–tangential coupling of ``bem.coupling`` and its description for ``info``.
+
+    None when the key is off or β = 0 (elastically similar: nothing to couple).
+    """
+    if not case.bem.coupling:
+        return None, "off"
+    beta = dundurs_beta(case.indenter, case.counterface)
+    if beta == 0.0:
+        return None, "on, without effect: Dundurs' beta = 0 (elastically similar bodies)"
+    reciprocating = case.sliding.stroke is not None
+    return (wear.Coupling(shear=ShearToNormal(n, dx, beta, case.E_star), mu=case.wear.mu,
+                          reciprocating=reciprocating),
+            dict(beta=beta, mu=case.wear.mu, beta_mu=beta * case.wear.mu,
+                 sliding="reciprocating: strokes along +x and -x, the wear their mean; the "
+                         "stored pressure is the +x stroke's (the -x stroke's is its mirror "
+                         "image)" if reciprocating else
+                         "one direction: the counterface slides along +x relative to the "
+                         "worn body",
+                 note="friction traction mu*p along the sliding direction moves the surface "
+                      "normally by beta/(pi E*) * (tau_x conv x/rho^2), iterated with the "
+                      "contact solve (docs/bem-tangential.md section 6)"))
+
+
 def supports(case) -> str | None:
     """None when the BEM can run ``case``, else why not.
 
@@ -139,11 +176,13 @@ def solve(case, progress=None) -> RunResult:
     f0 = profiles.height_xy(case.indenter, X, Y, case.table)
     f0 -= f0[n // 2, n // 2]
     op = HalfSpace(n, dx, case.E_star)
+    coupled, coupling_info = coupling(case, n, dx)
     d_scale = case.loading.depth if case.loading.control == "depth" else sc["d0"]
     model = wear.Model(op=op, f0=f0, wear_rate=case.wear_rate, depth=case.loading.depth,
                        force=case.loading.force, p_scale=sc["p0"], g_scale=d_scale,
                        tol=bem.tolerance, centre=(n // 2, n // 2),
-                       exponent=case.wear.pressure_exponent, hardness=case.wear.hardness)
+                       exponent=case.wear.pressure_exponent, hardness=case.wear.hardness,
+                       coupling=coupled)
     limit_hat = wear.explicit_limit(op, case.wear_rate) * per_m
     if model.exponent != 1.0:
         # the rate's derivative n (p/σ0)^(n-1) scales the stiffness; bounded at
@@ -157,7 +196,8 @@ def solve(case, progress=None) -> RunResult:
                 contact_solver="preconditioned constrained CG (Polonsky-Keer)",
                 tangential_correction=("not modelled: wear.tangential_correction = "
                                        f"{str(case.wear.tangential_correction).lower()} ignored")
-                if case.wear.tangential_correction else "off")
+                if case.wear.tangential_correction else "off",
+                coupling=coupling_info)
     if sl.scheme == "explicit":
         step_hat = 0.5 * limit_hat if sl.step_hat == "auto" else float(sl.step_hat)
         if step_hat > limit_hat:
@@ -176,7 +216,7 @@ def solve(case, progress=None) -> RunResult:
     rho = np.hypot(X, Y)
     ring = np.rint(rho / dx).astype(np.int64)
     rings = n // 2                      # whole rings inside the box
-    r = np.arange(rings) * dx
+    r = ring_radii(rho, ring, rings)
     watch = validity.BodyWatch(case, spacing=dx)
     out = wear.run(model, plan, progress, ring=(ring, rings, r), watch=watch)
     if watch.remarks:

@@ -85,6 +85,26 @@ def rectangle_integrals(x, y, half_x, half_y):
     return ones, xx, yy, xy
 
 
+def _corner_x_over_rho2(X, Y):
+    """Y ln ρ + X atan(Y/X): the double antiderivative of X/ρ² (zero terms at X = 0, ρ = 0).
+
+    ∂/∂Y of it is 1 + ln ρ (continuous off the origin, integrable there), whose
+    ∂/∂X is X/ρ², so the four-corner sum is the integral over a rectangle.
+    """
+    X = np.asarray(X, dtype=float)
+    Y = np.asarray(Y, dtype=float)
+    rho2 = X * X + Y * Y
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ty = np.where(rho2 > 0.0, 0.5 * Y * np.log(np.where(rho2 > 0.0, rho2, 1.0)), 0.0)
+        tx = np.where(X != 0.0, X * np.arctan(Y / np.where(X != 0.0, X, 1.0)), 0.0)
+    return tx + ty
+
+
+def rectangle_integral_x_over_rho2(x, y, half_x, half_y):
+    """∫∫ X/ρ² over the rectangle |x'| <= half_x, |y'| <= half_y (X = x - x') [dimensionless]."""
+    return _four_corners(_corner_x_over_rho2, x, y, half_x, half_y)
+
+
 def padded_size(n):
     """The FFT length of the zero padding: at least 2n, and fast for scipy.fft."""
     return sfft.next_fast_len(2 * n, real=True)
@@ -176,6 +196,68 @@ class TangentialHalfSpace:
         uy = sfft.irfft2(c * fx + b * fy, s=s, workers=w)[:n, :n]
         self.applications += 1
         return ux, uy
+
+
+def shear_to_normal_kernel(n, spacing, beta, E_star, m=None):
+    """Normal displacement [m/Pa] at pixel offset (i, j) of a unit traction τx on one pixel.
+
+    The (1 − 2ν) term of Cerruti's solution: a tangential point force Q_x
+    moves the surface normally by (1 − 2ν)/(4πG) Q_x X/ρ² into the solid
+    (Betti's theorem with Boussinesq's radial displacement, which points
+    towards a normal load, gives the sign: ahead of the force the surface
+    sinks; Tamaas's operator agrees, tests/test_bem_coupling.py). For two bodies the relative normal displacement is
+    β/(π E*) Q_x X/ρ², β Dundurs' second parameter (rigid counterface:
+    β/(πE*) = (1 − 2ν)/(4πG)). Laid out as :func:`cerruti_kernels` on the
+    m × m wrap-around grid.
+    """
+    m = padded_size(n) if m is None else m
+    if m < 2 * n:
+        raise ValueError(f"padding {m} < 2n = {2 * n}")
+    off = np.arange(m)
+    off = np.where(off < n, off, off - m).astype(float)
+    far = np.abs(off) >= n
+    off[far] = 0.0
+    X, Y = np.meshgrid(off * spacing, off * spacing, indexing="ij")
+    K = beta / (math.pi * E_star) * spacing * rectangle_integral_x_over_rho2(
+        X / spacing, Y / spacing, 0.5, 0.5)
+    K[far, :] = 0.0
+    K[:, far] = 0.0
+    return K
+
+
+class ShearToNormal:
+    """u_z = C τx: the normal displacement [m] of a traction along x [Pa] (DC-FFT).
+
+    The coupling of the tangential into the normal problem for bodies that
+    are not elastically similar (Dundurs' β ≠ 0); C is odd in x (its
+    transform imaginary) and antisymmetric as a matrix, Cᵀ = −C: it does no
+    work on the pressure, pᵀ C p = 0.
+
+    Parameters
+    ----------
+    n : pixels per side.
+    spacing : pixel side [m].
+    beta : Dundurs' β of the pair (:func:`cases.dundurs_beta`).
+    E_star : effective modulus [Pa].
+    workers : threads of scipy.fft.
+    """
+
+    def __init__(self, n, spacing, beta, E_star, workers=1):
+        self.n, self.spacing, self.beta, self.workers = n, spacing, beta, workers
+        m = padded_size(n)
+        self.hat = sfft.rfft2(shear_to_normal_kernel(n, spacing, beta, E_star, m),
+                              workers=workers)
+        self._pad = np.zeros((m, m))
+        self.applications = 0
+
+    def __call__(self, tx):
+        """Normal displacement [m] at the pixel centres of the traction τx [Pa], (n, n)."""
+        n = self.n
+        self._pad[:n, :n] = tx
+        out = sfft.irfft2(sfft.rfft2(self._pad, workers=self.workers) * self.hat,
+                          s=self._pad.shape, workers=self.workers)[:n, :n]
+        self.applications += 1
+        return out
 
 
 @dataclass

@@ -31,6 +31,45 @@ from wearcheck.numerics import stepping
 
 from . import contact
 from .operator import HalfSpace
+from .tangential import ShearToNormal
+
+
+@dataclass
+class Coupling:
+    """The friction traction τx = μp moving the surface normally (bodies not elastically similar).
+
+    shear : the normal displacement of a traction along x (Dundurs' β in it).
+    mu : friction coefficient; the traction on the worn body points along +x,
+        the direction the counterface slides relative to it.
+    reciprocating : strokes alternate +x, -x. The wear of a step is then the
+        mean of the two strokes' (the stroke is short against the wear's time
+        scale): the pressure of the -x stroke is the mirror image x -> -x of
+        the +x stroke's on a profile symmetric in x, which the symmetric
+        wear keeps (the unworn profiles are all symmetric in x). An implicit
+        step solves the +x stroke's contact on base + σ·(stroke mean of p):
+        the wear compliance acts on the stroke mean (:func:`contact.solve`
+        ``stroke_mean``), so the step is backward Euler of the averaged law.
+    """
+
+    shear: ShearToNormal
+    mu: float
+    reciprocating: bool = False
+
+
+def stroke_mean(model: "Model", field_: np.ndarray) -> np.ndarray:
+    """The mean of a +x stroke's field and its mirror image (the -x stroke's); itself otherwise.
+
+    :func:`contact.mirror_x` (for even n pixel 0 keeps its value: it carries
+    no load, the contact may not reach the box's edge).
+    """
+    if not reciprocating(model):
+        return field_
+    return 0.5 * (field_ + contact.mirror_x(field_))
+
+
+def reciprocating(model: "Model") -> bool:
+    """Coupled with reciprocating strokes: the wear is the two strokes' mean."""
+    return model.coupling is not None and model.coupling.reciprocating
 
 
 @dataclass
@@ -49,6 +88,7 @@ class Model:
     centre: tuple[int, int] = (0, 0)
     exponent: float = 1.0      # n of the wear law dw/ds = K σ0 (p/σ0)^n
     hardness: float = 1.0      # σ0 [Pa]; enters only when exponent != 1
+    coupling: Coupling | None = None   # bem.coupling: friction traction into the normal problem
 
 
 @dataclass
@@ -64,8 +104,12 @@ class State:
 
 
 def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
-    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard): :func:`cases.wear_law.speed`."""
-    return wear_law.speed(p, model.wear_rate, model.exponent, model.hardness)
+    """dw/ds = K σ0 (p/σ0)^n (K p for n = 1, Reye–Archard): :func:`cases.wear_law.speed`.
+
+    Reciprocating with coupling: averaged over the two strokes (:func:`stroke_mean`).
+    """
+    return stroke_mean(model, wear_law.speed(p, model.wear_rate, model.exponent,
+                                             model.hardness))
 
 
 def wear_speed_slope(model: Model, p: np.ndarray) -> np.ndarray:
@@ -104,13 +148,21 @@ def contact_state(model: Model, base: np.ndarray, sigma: float = 0.0,
                   p_init=None) -> State:
     """Contact of the profile ``base`` (+ wear compliance σ) under the model's load.
 
-    The returned profile is base + σ p (the worn profile of an implicit step).
+    The returned profile is base + σ p (the worn profile of an implicit step),
+    base + σ·(stroke mean of p) when reciprocating with coupling: the +x
+    stroke's contact is solved with the wear compliance on the stroke mean,
+    so p is the +x stroke's pressure on the returned profile, which stays
+    exactly symmetric in x (σ must be symmetric in x).
     """
-    c = contact.solve(model.op, base, depth=model.depth, force=model.force, sigma=sigma,
-                      p_init=p_init, p_scale=model.p_scale, g_scale=model.g_scale,
-                      tol=model.tol, maxiter=model.maxiter)
+    kw = dict(depth=model.depth, force=model.force, sigma=sigma, p_init=p_init,
+              p_scale=model.p_scale, g_scale=model.g_scale, tol=model.tol,
+              maxiter=model.maxiter, stroke_mean=reciprocating(model))
+    if model.coupling is None:
+        c = contact.solve(model.op, base, **kw)
+    else:
+        c = contact.solve_coupled(model.op, model.coupling.shear, base, model.coupling.mu, **kw)
     check_edge(c.pressure)
-    f = base + sigma * c.pressure if np.any(sigma) else base
+    f = base + stroke_mean(model, sigma * c.pressure) if np.any(sigma) else base
     return State(f=f, p=c.pressure, gap=c.gap, depth=c.depth, force=c.force,
                  iterations=c.iterations, residual=c.residual)
 
@@ -134,7 +186,9 @@ def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> 
     BDF2). n = 1: one contact solve with wear compliance eff·K. n != 1: the
     wear speed is linearised about the last iterate (Newton: per-pixel wear
     compliance eff K n (p_k/σ0)^(n-1), base shifted by eff (r(p_k) - r'(p_k)
-    p_k)) until p settles; the profile is then base + eff r(p).
+    p_k)) until p settles; the profile is then base + eff r(p) (reciprocating
+    with coupling: r(p) and its linearisation averaged over the two strokes,
+    as :func:`contact_state`).
     """
     K = model.wear_rate
     if model.exponent == 1.0:
@@ -147,7 +201,11 @@ def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> 
         # enter unworn and leave worn, iterate after iterate (any slope leaves
         # the fixed point p = p_k unchanged)
         slope = wear_speed_slope(model, np.maximum(p_k, NEWTON_FLOOR * np.max(p_k)))
-        shift = eff * (wear_speed(model, p_k) - K * slope * p_k)
+        # reciprocating: the wear is the stroke mean S r(p), linearised with a
+        # slope symmetric in x (S·diag(slope) is then symmetric, as the
+        # solve needs; Newton's fixed point does not depend on the slope)
+        slope = stroke_mean(model, slope)
+        shift = eff * (wear_speed(model, p_k) - stroke_mean(model, K * slope * p_k))
         new = contact_state(model, base + shift, eff * K * slope, p_k)
         iterations += new.iterations
         change = float(np.max(np.abs(new.p - p_k))) / float(np.max(new.p))

@@ -13,14 +13,16 @@ import argparse
 import tempfile
 import time
 
+from wearcheck import cases
 from wearcheck.comparisons.studies.distributed import Task, run_cases
 from wearcheck.comparisons.analysis.convergence import levels
 
 
 def study(solver, lvls, scheduler, out):
-    tasks = [Task(lv.name, solver, lv.overrides) for lv in lvls]
+    tasks = [Task(lv.name, solver, lv.changes) for lv in lvls]
     t0 = time.perf_counter()
-    outcomes = run_cases("cases/paper.toml", [], tasks, out, scheduler=scheduler, quiet=True)
+    outcomes = run_cases(cases.load(cases.shipped("paper")), tasks, out, scheduler=scheduler,
+                         quiet=True)
     wall = time.perf_counter() - t0
     assert all(o.ok for o in outcomes), [o.message for o in outcomes if not o.ok]
     return wall, sum(o.wall_seconds for o in outcomes), outcomes

@@ -2,11 +2,7 @@
 
 from __future__ import annotations
 
-import csv
-import hashlib
-import io
 import math
-import os
 import tomllib
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -14,12 +10,14 @@ from typing import Any
 
 import numpy as np
 
-from .errors import CaseError
-from .schema import (BEMSettings, did_you_mean, OPTIONAL_SECTIONS, PROFILE_KEYS, PROFILE_REQUIRED,
-                     REQUIRED_SECTIONS,
+from . import rules
+from .loader_checks import special_file
+from .errors import ArgumentError, CaseError
+from .schema import (BEMSettings, CCXSettings, did_you_mean, OPTIONAL_SECTIONS, REQUIRED_SECTIONS,
                      SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
                      Loading,
                      MDRSettings, Sliding, Stages, Wear, format_value, build_section,
+                     key_problem,
                      section_fields, toml_string)
 
 
@@ -36,6 +34,7 @@ class Case:
     mdr: MDRSettings
     fem: FEMSettings
     bem: BEMSettings
+    ccx: CCXSettings
     compare: CompareSettings
     #: partial-slip (fretting) programme; None for a gross-slip run
     fretting: Fretting | None = None
@@ -47,6 +46,29 @@ class Case:
     table_file: dict | None = field(default=None, compare=False, repr=False)
     #: non-fatal remarks on the case (e.g. elastic similarity violated)
     warnings: tuple[str, ...] = ()
+
+    def __repr__(self) -> str:
+        """One line per section: the keys given (defaults filled in), with units."""
+        head = f"Case({toml_string(Path(self.source).name) if self.source else ''})"
+        return "\n".join([head] + [f"  [{name}] " + ", ".join(
+            f"{k} = {v}" + (f" {u}" if u else "") for k, v, u, _ in rows)
+            for name, rows in _shown(self)])
+
+    def _repr_html_(self) -> str:
+        """The case as a table per section (key, value, unit, meaning) in Jupyter."""
+        import html
+        title = html.escape(Path(self.source).name if self.source else "case")
+        parts = [f"<details open><summary><b>Case</b> {title}</summary>"]
+        for name, rows in _shown(self):
+            parts.append(f"<table><caption style='text-align:left'><code>[{name}]</code>"
+                         "</caption>")
+            for k, v, u, f in rows:
+                parts.append("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in (
+                    k, v, u, f.metadata.get("doc", ""))) + "</tr>")
+            parts.append("</table>")
+        if self.warnings:
+            parts.append("<p>" + "<br>".join(html.escape(w) for w in self.warnings) + "</p>")
+        return "".join(parts) + "</details>"
 
     # -- derived material constants (paper Eqs. 5-7) ------------------------
     @property
@@ -73,6 +95,18 @@ class Case:
         if sl.until == "cycles":
             return 2.0 * sl.stroke * sl.cycles
         return None
+
+    @property
+    def end_condition(self) -> str:
+        """How the run ends, in words: ``"it stops once F < 0.01 F0"``."""
+        sl = self.sliding
+        if self.fretting is not None:
+            return f"it stops after {self.fretting.cycles} fretting cycles"
+        if sl.until == "force_fraction":
+            return f"it stops once F < {sl.force_fraction:g} F0"
+        if sl.until == "distance":
+            return f"it stops at s = {sl.distance:g} m"
+        return f"it stops after {sl.cycles:g} cycles (s = {self.end_distance:g} m)"
 
     @property
     def cycles_per_metre(self) -> float | None:
@@ -140,11 +174,11 @@ class Case:
             if section in raw and not isinstance(raw[section], dict):
                 raise CaseError(f"'{section}' must be a table [{section}]")
             raw.setdefault(section, {})[key] = value
-            # a fretting amplitude given the other way replaces the case's
-            other = _OTHER_WAY.get((section, key)) if section == "fretting" else None
-            if other and f"{section}.{other}" not in items:
-                raw[section].pop(other, None)
-        _drop_inapplicable(raw, {tuple(name.split(".")) for name in items})
+            # a key given the other way (stages, a fretting amplitude) replaces the case's
+            for other in rules.partners(section, key):
+                if f"{section}.{other}" not in items:
+                    raw[section].pop(other, None)
+        rules.drop_inapplicable(raw, {tuple(name.split(".")) for name in items})
         return from_dict(raw, source=self.source)
 
 
@@ -198,22 +232,41 @@ def parse_override(text: str) -> tuple[str, str, Any]:
     return section, k, parsed
 
 
-def special_file(path: Path) -> str | None:
-    """What ``path`` is when it exists but is no regular file nor directory: "a pipe"
-    (``/dev/stdin`` fed by ``|``, ``<(...)``), "a character device" (``/dev/null``),
-    "a socket", "a block device"; None otherwise. Such a path exists, but a case or
-    a table cannot be read from it as from a file (more than once, beside its
-    other files), which "does not exist" would hide."""
-    import stat
-    try:
-        mode = os.stat(path).st_mode
-    except (OSError, ValueError):
-        return None
-    for test, what in ((stat.S_ISFIFO, "a pipe"), (stat.S_ISCHR, "a character device"),
-                       (stat.S_ISSOCK, "a socket"), (stat.S_ISBLK, "a block device")):
-        if test(mode):
-            return what
-    return None
+def split_values(text: str) -> list[str]:
+    """Split at commas outside brackets and quotes: ``[0, 1],[2]`` is two values."""
+    values, depth, quote, cur = [], 0, None, ""
+    for ch in text:
+        if quote:
+            quote = None if ch == quote else quote
+        elif ch in "\"'":
+            quote = ch
+        elif ch == "[":
+            depth += 1
+        elif ch == "]":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            values.append(cur.strip())
+            cur = ""
+            continue
+        cur += ch
+    values.append(cur.strip())
+    return values
+
+
+def parse_vary(text: str) -> tuple[str, list]:
+    """``section.key=v1,v2`` -> (``"section.key"``, [v1, v2]), each value read as ``--set``
+    reads it (TOML, or a bare word): the command line's values, typed once."""
+    if "=" not in text:
+        raise ArgumentError("vary", "expected section.key=v1,v2,...", value=text)
+    name, _, rest = text.partition("=")
+    name = name.strip()
+    problem = key_problem(name)
+    if problem:
+        raise ArgumentError("vary", problem, value=text)
+    texts = split_values(rest)
+    if not all(texts):
+        raise ArgumentError("vary", "an empty value", value=text)
+    return name, [parse_override(f"{name}={v}")[2] for v in texts]
 
 
 def read_raw(path: str | Path) -> dict:
@@ -241,41 +294,6 @@ def read_raw(path: str | Path) -> dict:
         raise CaseError(f"case file '{path}': nested too deeply to be a case") from None
 
 
-#: keys of which a case gives one; setting one by an override drops the other
-_OTHER_WAY = {("stages", "s_hat"): "cycles", ("stages", "cycles"): "s_hat",
-              ("fretting", "amplitude"): "force_amplitude",
-              ("fretting", "force_amplitude"): "amplitude"}
-
-
-def _inapplicable(section: str, key: str, value) -> tuple[str, ...]:
-    """The keys of ``section`` that do not apply once the switch ``section.key`` is ``value``.
-
-    A case file gives only the keys of its choice (the depth of a depth-controlled
-    run, the moduli of an elastic body); an override that flips the choice makes
-    them wrong, and ``--set`` cannot remove a key, so they are dropped with it.
-    """
-    if (section, key) == ("loading", "control") and value in ("depth", "force"):
-        return ("force",) if value == "depth" else ("depth",)
-    if section in ("indenter", "counterface") and key == "rigid" and value is True:
-        return ("youngs_modulus", "poisson_ratio")
-    if (section, key) == ("indenter", "profile") and value in PROFILE_KEYS:
-        return tuple(sorted(set().union(*PROFILE_KEYS.values()) - PROFILE_KEYS[value]))
-    if (section, key) == ("sliding", "until") and isinstance(value, str):
-        return tuple(k for k in ("distance", "cycles")
-                     if (k, value) not in (("distance", "distance"), ("cycles", "cycles")))
-    return ()
-
-
-def _drop_inapplicable(raw: dict, changed) -> None:
-    """Drop from ``raw`` the keys a changed switch makes inapplicable, unless also changed."""
-    for section, key in list(changed):
-        table = raw.get(section)
-        if isinstance(table, dict) and key in table:
-            for other in _inapplicable(section, key, table[key]):
-                if (section, other) not in changed:
-                    table.pop(other, None)
-
-
 def load(path: str | Path, overrides: list[str] | tuple[str, ...] = ()) -> Case:
     """Read a case file, apply ``section.key=value`` overrides, validate."""
     path = Path(path)
@@ -300,331 +318,48 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
         overridden.add((section, k))
         # stages (a fretting amplitude) given one way by an override replace
         # the file's other way
-        other = _OTHER_WAY.get((section, k))
-        if other and (section, other) not in overridden:
-            raw[section].pop(other, None)
-    _drop_inapplicable(raw, overridden)
+        for other in rules.partners(section, k):
+            if (section, other) not in overridden:
+                raw[section].pop(other, None)
+    rules.drop_inapplicable(raw, overridden)
     for section in REQUIRED_SECTIONS:
         if section not in raw:
             raise CaseError(f"missing section [{section}]")
-    st = raw.get("stages", {})
-    if isinstance(st, dict) and "s_hat" in st and "cycles" in st:
-        raise CaseError(f"keys 'stages.s_hat' = {format_value(st['s_hat'])} and 'stages.cycles' = "
-                        f"{format_value(st['cycles'])} both given; give the stages one way only")
     built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS
              if name not in OPTIONAL_SECTIONS or name in raw}
-    if "fretting" in raw:
-        for section in ("sliding", "stages"):
-            # (a case derived from a gross-slip one carries their defaults: harmless)
-            if raw.get(section) and built[section] != SECTIONS[section]():
-                raise CaseError(f"section [{section}] given with [fretting]; a fretting run "
-                                "lasts fretting.cycles and keeps fretting.stage_cycles — "
-                                f"remove [{section}] (to start from a shipped case: "
-                                "wearcheck cases NAME > my.toml, then edit it)")
-    base = Path(source).parent if source != "<dict>" else Path.cwd()
-    built, table, table_file = _check_indenter(built, base)
-    _check_materials(built)
-    _check_programme(built)
-    case = Case(**built, source=str(source), table=table, table_file=table_file)
-    _check_sphere_depth(case)
-    _check_sphere_force(case)
-    _check_scales(case)
-    if case.fretting is None:
-        _check_tangential_correction(case)
+    rules.check(raw, built)
+    case = rules.check_loader_only(Case(**built, source=str(source)))
     if case.stages.cycles is not None:
         # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
         from . import reference
         per_m = reference.scales(case)["s_hat_per_m"]
         s_hat = tuple(c * 2.0 * case.sliding.stroke * per_m for c in case.stages.cycles)
         case = replace(case, stages=replace(case.stages, s_hat=s_hat))
-    if case.fretting is not None:
-        _check_fretting(case)
     return replace(case, warnings=_warnings(case))
-
-
-def _check_sphere_depth(case: Case) -> None:
-    """A sphere pressed as deep as its radius has no surface there to touch."""
-    ind, ld = case.indenter, case.loading
-    if ind.profile == "sphere" and ld.control == "depth" and ld.depth >= ind.radius:
-        raise CaseError(f"key 'loading.depth' = {ld.depth!r}: not below the sphere's radius "
-                        f"(indenter.radius = {ind.radius!r} m), where the sphere has no "
-                        "surface; the depth must be smaller (half-space theory wants it far "
-                        "smaller: d/R <= 0.01 gives a0/R <= 0.1)")
-
-
-def _usable(value) -> bool:
-    """A positive finite number."""
-    return math.isfinite(value) and value > 0
-
-
-def _check_sphere_force(case: Case) -> None:
-    """A force that would press the sphere deeper than its radius (as _check_sphere_depth).
-
-    Checked before the contact is solved for: past about 34 E* R² (a = R - 1e-15 R)
-    no contact radius on the sphere carries the force, and the root finder's
-    failure said only "not computable in floating point".
-    """
-    from . import reference
-    ind, ld = case.indenter, case.loading
-    if ind.profile != "sphere" or ld.control != "force":
-        return
-    try:
-        deepest = reference.sphere(case.E_star, ind.radius, depth=ind.radius)["force"]
-        valid = reference.sphere(case.E_star, ind.radius,
-                                 depth=0.1 * ind.radius * math.atanh(0.1))["force"]
-    except (ArithmeticError, ValueError, RuntimeError):
-        return   # moduli out of range: _check_scales says so
-    if _usable(deepest) and ld.force >= deepest:
-        raise CaseError(f"key 'loading.force' = {ld.force!r}: presses the sphere deeper than its "
-                        f"radius (indenter.radius = {ind.radius!r} m), where it has no surface; "
-                        f"the force must be below {deepest:.4g} N, which presses it as deep as "
-                        f"its radius (half-space theory wants a0/R <= 0.1: at most "
-                        f"{valid:.4g} N)")
-
-
-def _check_scales(case: Case) -> None:
-    """The unworn contact must be computable: extreme (valid) numbers can underflow."""
-    from . import reference
-    try:
-        sc = reference.scales(case)
-        ok = all(_usable(sc[k]) for k in ("a0", "d0", "F0", "p0"))
-    except (ArithmeticError, ValueError, RuntimeError):  # RuntimeError: a root not found
-        ok = False
-    if ok and not _usable(sc["s_hat_per_m"]):
-        # the contact is fine: the wear keys put the sliding scale out of range
-        w = case.wear
-        raise CaseError(f"keys 'wear.k' = {w.k!r}, 'wear.mu' = {w.mu!r}, 'wear.hardness' = "
-                        f"{w.hardness!r}: the sliding scale k μ E*/(σ0 a0) comes out "
-                        f"{sc['s_hat_per_m']!r} per metre (E* = {sc['E_star']:.4g} Pa, a0 = "
-                        f"{sc['a0']:.4g} m), not a positive finite number; check their "
-                        "magnitudes (σ0 in Pa)")
-    if not ok:
-        control = case.loading.control
-        raise CaseError(f"key 'loading.{control}' = {getattr(case.loading, control)!r}: the "
-                        "unworn contact of this profile under this load is not computable in "
-                        "floating point (its radius, force or pressure comes out 0 or "
-                        "infinite); check the load against the profile's size"
-                        + (f" (indenter.radius = {case.indenter.radius!r})"
-                           if case.indenter.radius is not None else ""))
-
-
-def _check_tangential_correction(case: Case) -> None:
-    """The correction is the springs' reversal at each stroke end: it needs a stroke
-    longer than that reversal (docs/theory.md §4)."""
-    if not case.wear.tangential_correction:
-        return
-    sl = case.sliding
-    if sl.stroke is None:
-        # case files written for the earlier reading (an increment of paper
-        # Eq. 15, which changed F/F0 by 1e-6) have the key without a stroke
-        raise CaseError("key 'wear.tangential_correction' = true needs 'sliding.stroke' (m): "
-                        "the correction is the sliding each stroke end loses while the "
-                        "tangential springs reverse (2μq/G* per stroke), so it depends on the "
-                        "stroke; give the reciprocating stroke (one way), or remove the key "
-                        "(the earlier reading without a stroke changed nothing measurable)")
-    from . import reference
-    sc = reference.scales(case)
-    # the largest spring limit of the unworn contact, μ E* d0/G* (the line load
-    # E*(d0 - g) peaks where g = 0): u* of Cattaneo-Mindlin for the paraboloid.
-    # Wear lowers it (the line load spreads), so the start decides
-    u_star = case.wear.mu * case.E_star * sc["d0"] / case.G_star
-    if sl.stroke <= 2.0 * u_star:
-        raise CaseError(f"key 'sliding.stroke' = {sl.stroke!r}: with "
-                        "wear.tangential_correction the stroke must exceed the springs' "
-                        f"reversal 2u* = 2μE*d0/G* = {2.0 * u_star:.4g} m of the unworn contact; "
-                        "a shorter stroke is partial slip (give a [fretting] section instead)")
-
-
-def _check_indenter(built, base: Path):
-    ind: Indenter = built["indenter"]
-    allowed, needed = PROFILE_KEYS[ind.profile], PROFILE_REQUIRED[ind.profile]
-    geometry = ("radius", "radius_y", "flat_radius", "slope_angle", "coefficient", "exponent", "file")
-    for name in geometry:
-        given = getattr(ind, name) is not None
-        if given and name not in allowed:
-            raise CaseError(f"key 'indenter.{name}' does not apply to profile "
-                            f"\"{ind.profile}\"; it takes: " + ", ".join(sorted(allowed)))
-        if not given and name in needed:
-            raise CaseError(f"missing key 'indenter.{name}', required by profile \"{ind.profile}\"")
-    if ind.profile == "truncated_paraboloid" and ind.flat_radius >= ind.radius:
-        raise CaseError(f"key 'indenter.flat_radius' = {ind.flat_radius!r}: must be smaller "
-                        f"than indenter.radius = {ind.radius!r}")
-    table = table_file = None
-    if ind.profile == "table":
-        file = Path(ind.file)
-        if not file.is_absolute():
-            file = (base / file).resolve()
-        table, digest = read_profile_table(file)
-        table_file = dict(file=str(file), sha256=digest, rows=len(table[0]),
-                          last_radius=float(table[0][-1]))
-        built["indenter"] = replace(ind, file=str(file))
-    return built, table, table_file
-
-
-def read_profile_table(file: Path) -> tuple[tuple[np.ndarray, np.ndarray], str]:
-    """Read a tabulated profile: two columns r, f in metres; and the SHA-256 of the file."""
-    name = "indenter.file"
-    if file.is_dir():
-        raise CaseError(f"key '{name}' = \"{file}\": is a directory, not a CSV file")
-    if special_file(file):
-        raise CaseError(f"key '{name}' = \"{file}\": is {special_file(file)}, not a file; "
-                        "save the table to a CSV file and name that")
-    if not file.is_file():
-        raise CaseError(f"key '{name}' = \"{file}\": file does not exist")
-    rows = []
-    try:
-        # one read: the digest is of the bytes parsed (the file may change afterwards)
-        raw = file.read_bytes()
-        # utf-8-sig: a byte-order mark would otherwise glue onto the first number
-        lines = list(csv.reader(io.StringIO(raw.decode("utf-8-sig"), newline="")))
-    except UnicodeDecodeError as exc:
-        raise CaseError(f"key '{name}' = {format_value(str(file))}: not UTF-8 text ({exc.reason} at "
-                        f"byte {exc.start}); save the table as UTF-8") from None
-    except (OSError, csv.Error) as exc:
-        raise CaseError(f"key '{name}' = {format_value(str(file))}: cannot be read: {exc}") from None
-    for lineno, row in enumerate(lines, start=1):
-        row = [c.strip() for c in row if c.strip()]
-        if not row or row[0].startswith("#"):
-            continue
-        try:
-            values = [float(c) for c in row]
-        except ValueError:
-            if not rows and lineno == 1:
-                continue  # header line
-            other = next((sep for sep in (";", "\t", " ") if len(row) == 1 and sep in row[0]),
-                         None)
-            said = {";": "semicolons", "\t": "tabs", " ": "spaces"}
-            hint = f" (columns are separated by commas, not {said[other]})" if other else ""
-            raise CaseError(f"key '{name}' = \"{file}\": line {lineno} is not two numbers: "
-                            f"{','.join(row)}{hint}") from None
-        if len(values) != 2:
-            raise CaseError(f"key '{name}' = \"{file}\": line {lineno} has {len(values)} "
-                            "columns; expected 2 (r, f)")
-        rows.append(values)
-    if len(rows) < 3:
-        raise CaseError(f"key '{name}' = \"{file}\": needs at least 3 rows (r, f), got {len(rows)}")
-    data = np.array(rows)
-    r, f = data[:, 0], data[:, 1]
-    if not np.all(np.isfinite(data)):
-        raise CaseError(f"key '{name}' = \"{file}\": contains NaN or inf")
-    if r[0] != 0.0:
-        raise CaseError(f"key '{name}' = \"{file}\": the first radius must be 0, got {float(r[0])!r}")
-    if np.any(np.diff(r) <= 0):
-        i = int(np.argmax(np.diff(r) <= 0))
-        raise CaseError(f"key '{name}' = \"{file}\": radii must increase strictly; "
-                        f"row {i + 2} has r = {float(r[i + 1])!r} after r = {float(r[i])!r}")
-    if f[0] != 0.0:
-        raise CaseError(f"key '{name}' = \"{file}\": the profile must start at f(0) = 0 "
-                        f"(the unworn tip), got {float(f[0])!r}")
-    if np.any(f[1:] <= 0):
-        raise CaseError(f"key '{name}' = \"{file}\": f must be positive for r > 0 "
-                        "(the tip at r = 0 touches first)")
-    return (r, f), hashlib.sha256(raw).hexdigest()
-
-
-def _check_materials(built):
-    ind, cf = built["indenter"], built["counterface"]
-    for sec, body in (("indenter", ind), ("counterface", cf)):
-        if body.rigid:
-            for name in ("youngs_modulus", "poisson_ratio"):
-                if getattr(body, name) is not None:
-                    raise CaseError(f"key '{sec}.{name}' given but '{sec}.rigid' = true")
-        else:
-            for name in ("youngs_modulus", "poisson_ratio"):
-                if getattr(body, name) is None:
-                    raise CaseError(f"missing key '{sec}.{name}' (or set '{sec}.rigid = true')")
-    if ind.rigid and cf.rigid:
-        raise CaseError("indenter.rigid = true and counterface.rigid = true: at least one body "
-                        "must be elastic")
-
-
-def _check_programme(built):
-    ld: Loading = built["loading"]
-    sl: Sliding = built["sliding"]
-    other = "force" if ld.control == "depth" else "depth"
-    if getattr(ld, ld.control) is None:
-        raise CaseError(f"missing key 'loading.{ld.control}', required by loading.control = "
-                        f"\"{ld.control}\"")
-    if getattr(ld, other) is not None:
-        raise CaseError(f"key 'loading.{other}' given but loading.control = \"{ld.control}\"; "
-                        f"remove it or set loading.control = \"{other}\"")
-    if built.get("fretting") is not None:
-        return  # [sliding] and [stages] do not apply (from_dict refuses them)
-    if sl.until == "distance" and sl.distance is None:
-        raise CaseError("missing key 'sliding.distance', required by sliding.until = \"distance\"")
-    if sl.until == "force_fraction" and sl.distance is not None:
-        raise CaseError("key 'sliding.distance' given but sliding.until = \"force_fraction\"; "
-                        "set sliding.until = \"distance\" to stop at a distance")
-    if sl.until == "force_fraction" and ld.control == "force":
-        raise CaseError("sliding.until = \"force_fraction\" cannot end a force-controlled run "
-                        "(the force does not fall); use sliding.until = \"distance\" or "
-                        "\"cycles\"")
-    if sl.until == "cycles":
-        for name in ("stroke", "cycles"):
-            if getattr(sl, name) is None:
-                raise CaseError(f"missing key 'sliding.{name}', required by sliding.until = "
-                                "\"cycles\"")
-        if sl.distance is not None:
-            raise CaseError(f"key 'sliding.distance' = {sl.distance!r} given but sliding.until = "
-                            "\"cycles\" (the distance is 2·stroke·cycles); remove one")
-    elif sl.cycles is not None:
-        raise CaseError(f"key 'sliding.cycles' = {sl.cycles!r} given but sliding.until = "
-                        f"\"{sl.until}\"; set sliding.until = \"cycles\" to stop after cycles")
-    st = built["stages"]
-    if st.cycles is not None:
-        if sl.stroke is None:
-            raise CaseError(f"key 'stages.cycles' = {list(st.cycles)} needs 'sliding.stroke' "
-                            "(one cycle slides 2·stroke)")
-        if any(b <= a for a, b in zip(st.cycles, st.cycles[1:])):
-            raise CaseError(f"key 'stages.cycles' = {list(st.cycles)}: must increase strictly")
-    s = st.s_hat
-    if any(b <= a for a, b in zip(s, s[1:])):
-        raise CaseError(f"key 'stages.s_hat' = {list(s)}: must increase strictly")
-
-
-def _check_fretting(case: Case) -> None:
-    """Combinations of [fretting] keys with each other and with the rest of the case."""
-    fr = case.fretting
-    given = [k for k in ("amplitude", "force_amplitude") if getattr(fr, k) is not None]
-    if len(given) != 1:
-        raise CaseError("[fretting] needs exactly one of 'fretting.amplitude' (m) and "
-                        "'fretting.force_amplitude' (N); got "
-                        + (" and ".join(given) if given else "neither"))
-    if fr.increments % 4:
-        raise CaseError(f"key 'fretting.increments' = {fr.increments}: must be a multiple of 4 "
-                        "(a quarter cycle ramps from 0 to the amplitude)")
-    if case.wear.tangential_correction:
-        raise CaseError("key 'wear.tangential_correction' = true: a fretting run always "
-                        "includes the elastic tangential displacement (the springs' "
-                        "deformation); remove the key")
-    if fr.stage_cycles is not None:
-        st = fr.stage_cycles
-        if any(c != int(c) for c in st):
-            raise CaseError(f"key 'fretting.stage_cycles' = {list(st)}: must be whole cycle "
-                            "numbers")
-        if any(b <= a for a, b in zip(st, st[1:])):
-            raise CaseError(f"key 'fretting.stage_cycles' = {list(st)}: must increase strictly")
-    if fr.force_amplitude is not None:
-        from . import reference
-        F = reference.scales(case)["F0"]
-        if fr.force_amplitude >= case.wear.mu * F:
-            raise CaseError(f"key 'fretting.force_amplitude' = {fr.force_amplitude!r}: must be "
-                            f"below μF = {case.wear.mu * F:.4g} N (the friction limit of the "
-                            "unworn contact); a larger force has no partial-slip equilibrium — "
-                            "use fretting.amplitude for gross slip")
 
 
 def _warnings(case: Case) -> tuple[str, ...]:
     out = []
     beta = dundurs_beta(case.indenter, case.counterface)
     if abs(beta) > 1e-9:
+        beta_mu = beta * case.wear.mu
+        # the sizes measured by benchmarks/bench_coupling.py (docs/bem-tangential.md §6.5)
         out.append(
             f"elastic similarity (paper Eq. 7) does not hold: Dundurs' beta = {beta:.4f} "
-            "(0 when similar). The normal and tangential problems are coupled in reality; "
-            "they are treated as uncoupled here"
-            + (", and the tangential correction is approximate" if case.wear.tangential_correction
+            f"(0 when similar), beta·mu = {beta_mu:.3f}. The normal and tangential problems "
+            "are treated as uncoupled: the friction traction moves each stroke's pressure "
+            "against the traction on the worn body by 3·beta·mu/(2π) = "
+            f"{3 * abs(beta_mu) / (2 * math.pi):.3f} contact radii, which bem.coupling = true "
+            "solves (docs/bem-tangential.md §6). "
+            "Measured so on paper.toml and ball_on_flat.toml (beta·mu = 0.086): each "
+            "stroke's pressure changes by up to 12 % of its peak inside 0.9 a; with "
+            "reciprocating strokes F/F0 changes by at most 0.6 % of itself and the "
+            "ring-averaged worn profile by 1e-3 d; in one sliding direction F/F0 by 0.2 %, "
+            "the profile by 2.5e-3 d, and the wear is asymmetric (up to 9 % of the central "
+            "wear, early in the run)"
+            + ("; the tangential correction is approximate" if case.wear.tangential_correction
                else "")
-            + (", and the partial-slip (fretting) solution is approximate"
+            + ("; the partial-slip (fretting) solution is approximate"
                if case.fretting is not None else "") + ".")
     return tuple(out)
 
@@ -678,6 +413,33 @@ def key_reference() -> str:
                 doc += " (" + " \\| ".join(f"`{c}`" for c in meta["choices"]) + ")"
             rows.append(f"| `{section}.{name}` | {meta['unit'] or ''} | {default} | {doc} |")
     return "\n".join(rows)
+
+
+def _shown(case: Case):
+    """(section, [(key, value text, unit, Field)]) of the sections a case has (numbers
+    to 6 significant digits: a display, not the resolved case file)."""
+    out = []
+    for name in SECTIONS:
+        obj = getattr(case, name, None)
+        if obj is None:
+            continue
+        rows = []
+        for f in fields(obj):
+            value = getattr(obj, f.name)
+            if value is None:
+                continue
+            unit = f.metadata.get("unit", "") if f.metadata else ""
+            rows.append((f.name, _shown_value(value), "" if unit == "1" else unit, f))
+        out.append((name, rows))
+    return out
+
+
+def _shown_value(value) -> str:
+    if isinstance(value, tuple):
+        return "[" + ", ".join(_shown_value(v) for v in value) + "]"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return format_value(value)
 
 
 def _section_dict(obj) -> dict:

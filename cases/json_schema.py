@@ -6,12 +6,13 @@ ships it as ``case.schema.json``; regenerate that file after changing a key::
 
     python -m wearcheck.cases.json_schema > cases/case.schema.json
 
-The schema states types, units, allowed values, ranges, defaults, unknown keys,
-which keys each profile, load control, end of run and rigid or elastic body
-needs or refuses. The loader's other checks (a table file's contents, flat
-radius below radius, strictly increasing stages, at least one elastic body,
-the unworn contact computable) stay with ``cases.load``, which remains the
-authority: a file the schema accepts may still be refused there, with a message.
+The schema states every key's type, unit, allowed values, range and default,
+unknown keys, and every rule between keys of ``cases/rules.py`` but those the
+table marks loader-only (numeric relations between keys such as a flat radius
+below the radius, strictly increasing stages, a profile table's contents, the
+unworn contact computable): ``cases.load`` checks those too, so a file the
+schema accepts may still be refused there, with a message; a file the schema
+refuses the loader refuses (tests/test_case_rules.py).
 """
 
 from __future__ import annotations
@@ -20,8 +21,8 @@ import json
 import math
 from pathlib import Path
 
-from .schema import (PROFILE_KEYS, PROFILE_REQUIRED, REQUIRED_SECTIONS, SECTIONS, base_types,
-                     section_fields)
+from . import rules
+from .schema import REQUIRED_SECTIONS, SECTIONS, base_types, section_fields
 
 #: where the package keeps the generated schema
 SCHEMA_FILE = Path(__file__).resolve().parent / "case.schema.json"
@@ -41,6 +42,8 @@ def _number_bounds(meta) -> dict:
         out["exclusiveMinimum" if meta["open_minimum"] else "minimum"] = lo
     if hi is not None:
         out["exclusiveMaximum" if meta["open_maximum"] else "maximum"] = hi
+    if meta["multiple_of"] is not None:
+        out["multipleOf"] = meta["multiple_of"]
     return out
 
 
@@ -94,59 +97,14 @@ def _section_schema(section: str) -> dict:
     return out
 
 
-def _indenter_rules() -> list[dict]:
-    """Per profile: the geometry keys it needs, and those it does not take."""
-    geometry = sorted(set().union(*PROFILE_KEYS.values()))
-    rules = []
-    for profile in PROFILE_KEYS:
-        then: dict = {}
-        if PROFILE_REQUIRED[profile]:
-            then["required"] = sorted(PROFILE_REQUIRED[profile])
-        banned = [k for k in geometry if k not in PROFILE_KEYS[profile]]
-        if banned:
-            then["properties"] = {k: False for k in banned}
-        rules.append({"if": {"properties": {"profile": {"const": profile}},
-                             "required": ["profile"]},
-                      "then": then})
-    return rules
-
-
-def _loading_rules() -> list[dict]:
-    """The load control needs its own key and refuses the other one."""
-    return [{"if": {"properties": {"control": {"const": control}}, "required": ["control"]},
-             "then": {"required": [control], "properties": {other: False}}}
-            for control, other in (("depth", "force"), ("force", "depth"))]
-
-
-def _sliding_rules() -> list[dict]:
-    """until = distance needs sliding.distance; until = force_fraction (the default)
-    refuses it."""
-    by_distance = {"properties": {"until": {"const": "distance"}}, "required": ["until"]}
-    return [{"if": by_distance, "then": {"required": ["distance"]},
-             "else": {"properties": {"distance": False}}}]
-
-
-def _body_rules(section: str) -> list[dict]:
-    """A rigid body takes no elastic constants; an elastic one needs both."""
-    default = dict(section_fields(section))["rigid"].default
-    elastic = ["youngs_modulus", "poisson_ratio"]
-    if default:
-        rigid = {"not": {"properties": {"rigid": {"const": False}}, "required": ["rigid"]}}
-    else:
-        rigid = {"properties": {"rigid": {"const": True}}, "required": ["rigid"]}
-    return [{"if": rigid, "then": {"properties": {k: False for k in elastic}},
-             "else": {"required": elastic}}]
-
-
 def case_schema() -> dict:
     """The JSON Schema (draft-07) of a wearcheck case file, as a dict."""
     sections = {name: _section_schema(name) for name in SECTIONS}
-    sections["indenter"]["allOf"] = _indenter_rules()
-    sections["loading"]["allOf"] = _loading_rules()
-    sections["sliding"]["allOf"] = _sliding_rules()
-    sections["indenter"]["allOf"] += _body_rules("indenter")
-    sections["counterface"]["allOf"] = _body_rules("counterface")
-    return {
+    placed = rules.schema_rules()
+    for name, fragments in placed.items():
+        if name is not None:
+            sections[name]["allOf"] = fragments
+    out = {
         "$schema": DIALECT,
         "title": "wearcheck case file",
         "description": "One wearcheck case (TOML, SI units). Generated from "
@@ -157,6 +115,9 @@ def case_schema() -> dict:
         "required": list(REQUIRED_SECTIONS),
         "properties": sections,
     }
+    if None in placed:   # rules across sections
+        out["allOf"] = placed[None]
+    return out
 
 
 def schema_text() -> str:

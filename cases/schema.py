@@ -21,11 +21,18 @@ REQUIRED = object()
 
 
 def key(default=REQUIRED, *, unit="", doc="", choices=None, positive=False,
-        minimum=None, maximum=None, open_minimum=False, open_maximum=False):
-    """Declare one case key as a dataclass field."""
+        minimum=None, maximum=None, open_minimum=False, open_maximum=False,
+        multiple_of=None, why=""):
+    """Declare one case key as a dataclass field.
+
+    The key's own constraints (type, range, choices, ``multiple_of``, for a list
+    each entry's) are declared here; ``why`` is said with a value that breaks
+    ``multiple_of``. Rules between keys: ``cases/rules.py``.
+    """
     meta = dict(unit=unit, doc=doc, choices=choices, positive=positive,
                 minimum=minimum, maximum=maximum, open_minimum=open_minimum,
-                open_maximum=open_maximum, required=default is REQUIRED)
+                open_maximum=open_maximum, multiple_of=multiple_of, why=why,
+                required=default is REQUIRED)
     if default is REQUIRED:
         return field(default=None, metadata=meta)
     return field(default=default, metadata=meta)
@@ -39,25 +46,7 @@ PROFILES = ("paraboloid", "sphere", "truncated_paraboloid", "cone", "power_law",
 #: profiles that are not bodies of revolution
 NON_AXISYMMETRIC = ("ellipsoid",)
 
-# which optional geometry keys each profile takes (besides `profile`)
-PROFILE_KEYS = {
-    "paraboloid": {"radius"},
-    "sphere": {"radius"},
-    "truncated_paraboloid": {"radius", "flat_radius"},
-    "cone": {"slope_angle", "radius"},
-    "power_law": {"coefficient", "exponent", "radius"},
-    "table": {"file", "radius"},
-    "ellipsoid": {"radius", "radius_y"},
-}
-PROFILE_REQUIRED = {
-    "paraboloid": {"radius"},
-    "sphere": {"radius"},
-    "truncated_paraboloid": {"radius", "flat_radius"},
-    "cone": {"slope_angle"},
-    "power_law": {"coefficient", "exponent"},
-    "table": {"file"},
-    "ellipsoid": {"radius", "radius_y"},
-}
+# which geometry keys each profile takes and needs: cases/rules.py (PROFILE_KEYS)
 
 
 @dataclass(frozen=True)
@@ -233,6 +222,30 @@ class BEMSettings:
                                "max |min(p/p0, gap/d)| over the pixels (1e-6: on the paper "
                                "case at 128², 3e-5 p0 and 2e-6 F0 from 1e-7, far inside the "
                                "pixel error, at 2/3 of the iterations)")
+    coupling: bool = key(False,
+                         doc="couple the normal and tangential problems (bodies not "
+                             "elastically similar, Dundurs' β ≠ 0): the friction traction "
+                             "μp along the sliding direction moves the surface normally, "
+                             "which moves the pressure against it (docs/bem-tangential.md "
+                             "§6); one sliding direction, or reciprocating strokes when "
+                             "sliding.stroke is given; no effect when β = 0")
+
+
+@dataclass(frozen=True)
+class CCXSettings:
+    mode: str = key("superelement", choices=("superelement", "in_loop"),
+                    doc="superelement: CalculiX computes the contact nodes' compliance once "
+                        "(cached), wearcheck's contact and time schemes run the wear; in_loop: "
+                        "one CalculiX contact solve (gap elements) per explicit Euler step, a "
+                        "cross-check for short runs on coarse meshes (docs/ccx.md)")
+    contact_nodes: int = key(250, minimum=2,
+                             doc="number of nodes on the candidate contact arc of the CAX6 "
+                                 "sphere (the FEM's mesh at the same fem.contact_nodes)")
+    contact_factor: float = key(1.25, minimum=0.0, open_minimum=True,
+                                doc="extent of the candidate contact arc as a multiple of the "
+                                    "predicted final contact radius (as fem.contact_factor)")
+    executable: str = key("ccx", doc="the CalculiX solver: a command on PATH or a path to "
+                                     "it (version 2.20 or later)")
 
 
 @dataclass(frozen=True)
@@ -292,7 +305,8 @@ class Fretting:
                                             "amplitude (an override of one replaces the "
                                             "other)")
     cycles: int = key(unit="1", minimum=1, doc="number of fretting cycles (+U -> -U -> +U)")
-    increments: int = key(40, unit="1", minimum=4,
+    increments: int = key(40, unit="1", minimum=4, multiple_of=4,
+                          why="a quarter cycle ramps from 0 to the amplitude",
                           doc="load increments per cycle, a multiple of 4 (the first "
                               "quarter cycle from 0 to +U takes a quarter of them); a run "
                               "they do not resolve (increment wear number past 1.3, "
@@ -302,7 +316,8 @@ class Fretting:
                                 doc="cycle jumping: a jump over many cycles is accepted when "
                                     "the wear per cycle changed by at most 2·jump_tolerance "
                                     "(relative, max norm) across it; 0 simulates every cycle")
-    stage_cycles: tuple[float, ...] | None = key(None, unit="1", minimum=0.0,
+    stage_cycles: tuple[float, ...] | None = key(None, unit="1", minimum=0.0, multiple_of=1,
+                                                 why="cycle numbers",
                                                  doc="cycle numbers (increasing integers) at "
                                                      "which profile, pressure and shear "
                                                      "traction are kept (0: after the first "
@@ -321,6 +336,7 @@ SECTIONS: dict[str, type] = {
     "mdr": MDRSettings,
     "fem": FEMSettings,
     "bem": BEMSettings,
+    "ccx": CCXSettings,
     "compare": CompareSettings,
     "fretting": Fretting,
 }
@@ -408,6 +424,11 @@ def _check_number(name, value, meta):
         allowed = f"in {lb}{lo:g}, {hi:g}{rb}" if lo is not None else \
             f"{'<' if meta['open_maximum'] else '<='} {hi:g}"
         raise CaseError(f"key '{name}' = {format_value(value)}: must be {allowed}{unit}")
+    step = meta["multiple_of"]
+    if step is not None and value % step:
+        want = "a whole number" if step == 1 else f"a multiple of {step:g}"
+        raise CaseError(f"key '{name}' = {format_value(value)}: must be {want}"
+                        + (f" ({meta['why']})" if meta["why"] else ""))
     return value
 
 
@@ -465,6 +486,21 @@ def did_you_mean(name: str, allowed) -> str:
     import difflib
     close = difflib.get_close_matches(str(name), list(allowed), n=1, cutoff=0.6)
     return f" (did you mean '{close[0]}'?)" if close else ""
+
+
+def key_problem(name) -> str | None:
+    """What is wrong with ``name`` as a dotted case key (``"wear.mu"``), or None if declared."""
+    section, _, key = str(name).partition(".")
+    if not isinstance(name, str) or not key or "." in key:
+        return "a key must be section.key, e.g. wear.mu"
+    if section not in SECTIONS:
+        return (f"unknown section '{section}'{did_you_mean(section, SECTIONS)}; allowed: "
+                + ", ".join(SECTIONS))
+    names = [f.name for f in dataclasses.fields(SECTIONS[section])]
+    if key not in names:
+        return (f"unknown key '{name}'{did_you_mean(key, names)}; allowed in [{section}]: "
+                + ", ".join(names))
+    return None
 
 
 def build_section(section: str, raw: dict) -> Any:

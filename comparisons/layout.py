@@ -128,7 +128,7 @@ METRICS = (
                       "passed), passed"),
     Item("passed", "", "the verdict: every check of every solver within its tolerance"),
     Item("skipped", "", "per registered solver left out of the comparison: why (the "
-                        "reason it cannot run the case, or not asked for)"),
+                        "reason it cannot run the case or here, opt-in, or not asked for)"),
     Item("diagnosis", "", "null when passed; else for the worst failed check: setting (the "
                           "case key most likely to fix it, or null), value (its current "
                           "value), suggestion, solver, reason, otherwise (the runner-up), "

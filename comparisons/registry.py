@@ -50,6 +50,8 @@ class Solver:
     fields : its ``fields.npz`` arrays, ``layout.Item`` each.
     solve_function, supports_function : for solvers that are not packages
         (tests, notebooks): callables used instead of ``module``.
+    default : whether ``compare`` runs it when no solvers are named; False for
+        an opt-in solver (ccx: an external program), which runs when named.
     """
 
     name: str
@@ -67,6 +69,7 @@ class Solver:
     fields: tuple = ()
     solve_function: Callable | None = None
     supports_function: Callable | None = None
+    default: bool = True
 
     def _package(self):
         return importlib.import_module(self.module)
@@ -242,3 +245,27 @@ register(Solver(
             Item("wear_depth", "m", "wear depth per stage (K, N, N)"),
             Item("pressure", "Pa", "pixel pressure per stage (K, N, N)"),
             Item("gap", "m", "gap f - d + u per stage (K, N, N)"))))
+
+register(Solver(
+    name="ccx", title="CalculiX", module="wearcheck.ccx", section="ccx",
+    resolution_key="ccx.contact_nodes", default_levels=(60, 125, 250, 500),
+    resolution_label="contact nodes",
+    description="CalculiX (third-party FE code, external ccx 2.20+): the FEM's sphere as CAX6 "
+                "elements; its compliance drives wearcheck's wear loop, or ccx.mode = in_loop "
+                "solves gap-element contact in every explicit step",
+    style=dict(ls="none", marker="^", ms=3.5, mfc="none", mew=0.9),
+    export_vtk="wearcheck.comparisons.present.vtk:write_fem_fields",
+    run_report="wearcheck.ccx.run:write_decks",
+    history_columns=get("fem").history_columns,   # the FEM's sphere, the same columns
+    fields=(Item("points", "m", "r, z of the CAX6 mesh nodes, undeformed (Np, 2); CalculiX "
+                                "node i + 1 is row i"),
+            Item("cells", "", "CAX6 triangles, counter-clockwise, meshio triangle6 order (Nt, 6)"),
+            Item("displacement", "m", "u_r, u_z per stage from CalculiX's .frd (K, Np, 2); the "
+                                      "top face has u_z = -d"),
+            Item("stress", "Pa", "σ_rr, σ_zz, σ_θθ, σ_rz per stage, CalculiX's nodal values "
+                                 "from its .frd (K, Np, 4)"),
+            Item("contact_nodes", "", "indices into points of the candidate contact nodes, "
+                                      "by increasing r (Nc,)"),
+            Item("contact_pressure", "Pa", "nodal contact pressure per stage (K, Nc)"),
+            Item("wear_depth", "m", "nodal wear depth per stage (K, Nc)")),
+    default=False))

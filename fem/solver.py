@@ -79,36 +79,8 @@ def mesh_parameters(case) -> meshes.SphereMeshParameters:
     """The mesh of a case, after checking that the FEM can represent it."""
     check_case(case)
     validity.check_planned(case, fem_sphere=True)
-    fem, order, R = case.fem, case.fem.element_order, case.indenter.radius
-    a0 = reference.scales(case)["a0"]
-    # the arc is sized for the contact's final radius: √2·a0 under depth control,
-    # the long-run scar radius at the end of the run under force control
-    s_end = case.end_distance or 0.0
-    predicted = reference.predicted_scar_radius(case, s_end)
-    rc = fem.contact_factor * predicted
-    if rc <= a0:
-        raise CaseError(f"key 'fem.contact_factor' = {fem.contact_factor!r}: the candidate "
-                        f"contact arc ends at r = {rc:.4g} m, inside the unworn contact radius "
-                        f"a0 = {a0:.4g} m; must be > {a0 / predicted:.4f} (≥ 1 to reach the "
-                        f"predicted final contact radius {predicted:.4g} m)")
-    edges = meshes.contact_edges_for(fem.contact_nodes, order)
-    spacing = rc / (edges * order)
-    inside = int(a0 / spacing) + 1
-    if inside < MIN_NODES_IN_CONTACT:
-        need = math.ceil((MIN_NODES_IN_CONTACT - 1) * rc / a0) + 1
-        raise CaseError(f"key 'fem.contact_nodes' = {fem.contact_nodes}: only {inside} nodes "
-                        f"would lie inside the unworn contact (a0 = {a0:.4g} m); at least "
-                        f"{MIN_NODES_IN_CONTACT} are needed, i.e. fem.contact_nodes >= {need}")
-    if rc >= R:
-        # (a predicted scar past R itself was refused by validity.check_planned, as
-        # by the other solvers: here only the arc's margin beyond it does not fit)
-        raise CaseError(f"key 'fem.contact_factor' = {fem.contact_factor!r}: the candidate "
-                        f"arc would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m "
-                        f"(predicted final scar radius {predicted:.4g} m); use "
-                        f"fem.contact_factor < {math.floor(R / predicted * 1000) / 1000:g} "
-                        "(>= 1 reaches the predicted scar), or shorten the run or lower the load")
-    return meshes.SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges,
-                                       growth=GROWTH[order])
+    order = case.fem.element_order
+    return meshes.contact_arc(case, "fem", order, GROWTH[order], MIN_NODES_IN_CONTACT)
 
 
 def solve(case, progress=None) -> RunResult:
@@ -196,7 +168,7 @@ def _solve(case, progress=None) -> RunResult:
     problem = superelement.Superelement(
         C, z, r, area, rate, control=control, value=getattr(case.loading, control),
         gap_scale=d0, force_scale=F0, pressure_scale=p0, center=center, exponent=n_exp,
-        hardness=case.wear.hardness)
+        hardness=case.wear.hardness, arc_key="fem.contact_factor")
 
     def loop_progress(frac, text):
         if progress:

@@ -177,8 +177,8 @@ def _generate(params: SphereMeshParameters, msh_path: Path) -> dict:
     return arrays
 
 
-def _atomic_save(path: Path, write) -> None:
-    """Write ``path`` through a temporary file in its directory, then rename."""
+def atomic_save(path: Path, write) -> None:
+    """Write ``path`` through a temporary file in its directory, then rename (caches use it)."""
     fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     try:
@@ -263,10 +263,10 @@ def sphere_mesh(params: SphereMeshParameters, use_cache: bool = True) -> SphereM
     def write_msh(tmp):
         arrays.update(_generate(params, tmp))
 
-    _atomic_save(msh, write_msh)
+    atomic_save(msh, write_msh)
     seconds = time.perf_counter() - t0
     checksum = entry_checksum(arrays, params.key(), _file_sha256(msh))
-    _atomic_save(npz, lambda tmp: np.savez(tmp, checksum=np.array(checksum), **arrays))
+    atomic_save(npz, lambda tmp: np.savez(tmp, checksum=np.array(checksum), **arrays))
     mesh = _from_arrays(arrays, params, msh)
     mesh.generate_seconds = seconds
     return mesh
@@ -283,5 +283,50 @@ def contact_edges_for(contact_nodes: int, element_order: int) -> int:
     return max(1, contact_nodes - 1)
 
 
-__all__ = ["SphereMesh", "SphereMeshParameters", "sphere_mesh", "contact_edges_for", "cache_dir",
+def contact_arc(case, section: str, element_order: int, growth: float,
+                min_nodes_in_contact: int) -> SphereMeshParameters:
+    """The sphere mesh of a case for the solver whose keys are ``section``
+    (``fem`` or ``ccx``: its ``contact_nodes`` and ``contact_factor``).
+
+    The candidate contact arc reaches ``contact_factor`` times the predicted
+    final contact radius (√2·a0 under depth control, the long-run scar radius
+    under force control). Refused, naming the key: an arc ending inside the
+    unworn contact, fewer than ``min_nodes_in_contact`` nodes inside it, an
+    arc past the sphere's equator.
+    """
+    from wearcheck.cases import CaseError, reference
+
+    keys, R = getattr(case, section), case.indenter.radius
+    factor, nodes = keys.contact_factor, keys.contact_nodes
+    a0 = reference.scales(case)["a0"]
+    predicted = reference.predicted_scar_radius(case, case.end_distance or 0.0)
+    rc = factor * predicted
+    if rc <= a0:
+        raise CaseError(f"key '{section}.contact_factor' = {factor!r}: the candidate contact "
+                        f"arc ends at r = {rc:.4g} m, inside the unworn contact radius a0 = "
+                        f"{a0:.4g} m; must be > {a0 / predicted:.4f} (>= 1 to reach the "
+                        f"predicted final contact radius {predicted:.4g} m)")
+    edges = contact_edges_for(nodes, element_order)
+    inside = int(a0 / (rc / (edges * element_order))) + 1
+    if inside < min_nodes_in_contact:
+        need = math.ceil((min_nodes_in_contact - 1) * rc / a0) + 1
+        raise CaseError(f"key '{section}.contact_nodes' = {nodes}: only {inside} nodes would "
+                        f"lie inside the unworn contact (a0 = {a0:.4g} m); at least "
+                        f"{min_nodes_in_contact} are needed, i.e. {section}.contact_nodes >= "
+                        f"{need}")
+    if rc >= R:
+        # (a predicted scar past R itself is refused by cases.validity.check_planned, as
+        # by every solver: here only the arc's margin beyond it does not fit)
+        raise CaseError(f"key '{section}.contact_factor' = {factor!r}: the candidate arc "
+                        f"would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m "
+                        f"(predicted final scar radius {predicted:.4g} m); use "
+                        f"{section}.contact_factor < {math.floor(R / predicted * 1000) / 1000:g}"
+                        " (>= 1 reaches the predicted scar), or shorten the run or lower the "
+                        "load")
+    return SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges, growth=growth)
+
+
+__all__ = ["SphereMesh", "SphereMeshParameters", "sphere_mesh", "contact_edges_for",
+           "contact_arc", "cache_dir",
+           "atomic_save",
            "GROUPS"]

@@ -265,12 +265,14 @@ class Superelement(stepping.Problem):
     r = 0 as center @ w (default: node 0). ``exponent`` n and ``hardness``
     σ0: wear speed K σ0 (p/σ0)^n (implicit steps linearise it, Newton).
     Explicit steps stop when the pressure alternates with growing amplitude
-    for ``oscillation_steps`` steps.
+    for ``oscillation_steps`` steps. ``arc_key``: the case key that lengthens
+    the candidate arc (``fem.contact_factor``), named when the contact reaches
+    its end.
     """
 
     def __init__(self, C, z, r, area, rate, *, control, value, gap_scale, force_scale,
                  pressure_scale, center=None, exponent=1.0, hardness=1.0,
-                 oscillation_steps=5):
+                 oscillation_steps=5, arc_key=None):
         self.C, self.z, self.r, self.area, self.rate = C, z, r, area, rate
         self.kw = {control: value}
         self.gap_scale, self.force_scale = gap_scale, force_scale
@@ -278,6 +280,7 @@ class Superelement(stepping.Problem):
         self.center = np.eye(1, len(z))[0] if center is None else center
         self.exponent, self.hardness = exponent, hardness
         self.oscillation_steps = oscillation_steps
+        self.arc_key = arc_key
         self.factors: dict[float, PrefixCholesky] = {}
         self.counts = dict(lcp_iterations=0, max_residual=0.0, refactorisations=0,
                            borderings=0)
@@ -319,7 +322,8 @@ class Superelement(stepping.Problem):
             raise SolverError(
                 f"the contact reached the end of the candidate arc (r = {self.r[-1]:.4g} m) "
                 f"at s = {s:.4g} m: the scar outgrew the radius predicted when the mesh was "
-                "built; increase fem.contact_factor")
+                "built; " + (f"increase {self.arc_key}" if self.arc_key else
+                             "lengthen the candidate arc"))
         return res
 
     def unworn(self) -> State:
@@ -399,6 +403,20 @@ class WearRun:
     steps: int = 0
     outcome: stepping.Outcome | None = None
 
+    def record(self, s, f, gap, depth, w, stages=0, *, r, area, center) -> None:
+        """Append the state at ``s`` (forces f, gaps, depth, wear w of the nodes at radii
+        r with lumped areas ``area``; ``center @ w`` the wear at r = 0) to the history,
+        and ``stages`` copies of it to the stages."""
+        self.s.append(s)
+        self.force.append(float(np.sum(f)))
+        self.depth.append(depth)
+        self.contact_radius.append(contact_radius(r, f, gap))
+        self.wear_center.append(float(center @ w))
+        self.wear_volume.append(float(area @ w))
+        self.scar_radius.append(scar_radius(r, w))
+        for _ in range(stages):
+            self.stages.append((s, f.copy(), w.copy(), depth, gap.copy()))
+
 
 def run(problem: Superelement, plan: stepping.Plan, progress=None, watch=None) -> WearRun:
     """Slide and wear ``problem`` as ``plan`` says; the history and the stored stages.
@@ -411,18 +429,10 @@ def run(problem: Superelement, plan: stepping.Plan, progress=None, watch=None) -
     r, area, center = problem.r, problem.area, problem.center
 
     def observe(state, s, stages):
-        res, w = state.contact, state.w
-        out.s.append(s)
-        out.force.append(res.f.sum())
-        out.depth.append(res.depth)
-        out.contact_radius.append(contact_radius(r, res.f, res.gap))
-        out.wear_center.append(float(center @ w))
-        out.wear_volume.append(float(area @ w))
-        out.scar_radius.append(scar_radius(r, w))
+        res = state.contact
+        out.record(s, res.f, res.gap, res.depth, state.w, stages, r=r, area=area, center=center)
         if watch is not None:
             watch(s, out.contact_radius[-1], out.scar_radius[-1])
-        for _ in range(stages):
-            out.stages.append((s, res.f.copy(), w.copy(), res.depth, res.gap.copy()))
 
     start = problem.unworn()
     if not start.contact.f.sum() > 0:

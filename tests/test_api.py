@@ -62,7 +62,8 @@ def test_read_run_of_a_missing_directory(tmp_path):
 
 
 def test_compare_names_solvers_as_a_string_or_list(tmp_path):
-    with pytest.raises(cases.CaseError, match="only fem can.*mdr: not selected"):
+    with pytest.raises(cases.CaseError,
+                       match="only fem can.*mdr: not among the solvers asked for"):
         wearcheck.compare("hertz", tmp_path / "a", solvers="fem")
     with pytest.raises(cases.CaseError, match="solvers = \\[\\]"):
         wearcheck.compare("hertz", tmp_path / "b", solvers=[])
@@ -253,8 +254,8 @@ def test_studies_take_their_arguments_as_the_command_line_writes_them(tmp_path, 
     from wearcheck.comparisons.studies import refine as refine_mod, sweep as sweep_mod
     seen = {}
 
-    def no_cluster(case_path, overrides, tasks, out, **kwargs):
-        seen[Path(out).name] = [t.overrides for t in tasks]
+    def no_cluster(case, tasks, out, **kwargs):
+        seen[Path(out).name] = [t.changes for t in tasks]
         raise KeyboardInterrupt   # stop here: the tasks are what is checked
     for module in (sweep_mod, refine_mod):
         monkeypatch.setattr(module, "run_cases", no_cluster)
@@ -263,9 +264,9 @@ def test_studies_take_their_arguments_as_the_command_line_writes_them(tmp_path, 
                        ("r", lambda o: wearcheck.refine("hertz", o, "mdr", levels="50,100"))):
         with pytest.raises(KeyboardInterrupt):
             call(tmp_path / name)
-    assert seen["s"] == [("wear.mu=0.2",), ("wear.mu=0.3",)]
-    assert seen["t"] == [("wear.mu=0.2", "wear.k=1e-05")]
-    assert sorted(seen["r"]) == [("mdr.elements=100",), ("mdr.elements=50",)]
+    assert seen["s"] == [{"wear.mu": 0.2}, {"wear.mu": 0.3}]
+    assert seen["t"] == [{"wear.mu": 0.2, "wear.k": 1e-5}]
+    assert seen["r"] == [{"mdr.elements": 100}, {"mdr.elements": 50}]   # finest first
     for vary in ({}, 5):
         with pytest.raises(cases.CaseError, match="vary"):
             wearcheck.sweep("hertz", vary, tmp_path / "x")

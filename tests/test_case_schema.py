@@ -1,5 +1,6 @@
 """The JSON Schema of case files: shipped file = generated, shipped cases valid,
-bad input rejected as the loader rejects it."""
+bad input rejected as the loader rejects it (and tests/test_case_rules.py: the two
+agree on generated cases)."""
 
 import json
 import tomllib
@@ -10,11 +11,13 @@ from wearcheck import cases
 from wearcheck.cases import CaseError, from_dict, json_schema
 from wearcheck.cases.schema import SECTIONS, section_fields
 
+import jsonschema
+
+#: the keywords the schema may use: draft-07 ones that taplo (Even Better TOML) reads
 KEYWORDS = {"$schema", "title", "description", "type", "properties", "additionalProperties",
             "required", "enum", "const", "minimum", "maximum", "exclusiveMinimum",
-            "exclusiveMaximum", "items", "minItems", "anyOf", "allOf", "if", "then", "else",
-            "not", "default", "x-unit"}
-TYPES = {"object": dict, "array": list, "string": str, "boolean": bool}
+            "exclusiveMaximum", "multipleOf", "items", "minItems", "anyOf", "allOf", "oneOf",
+            "if", "then", "else", "not", "default", "x-unit"}
 
 
 def _keywords(schema):
@@ -25,7 +28,7 @@ def _keywords(schema):
     for k in ("items", "if", "then", "else", "not"):
         if k in schema:
             used |= _keywords(schema[k])
-    for k in ("anyOf", "allOf"):
+    for k in ("anyOf", "allOf", "oneOf"):
         for s in schema.get(k, []):
             used |= _keywords(s)
     for s in schema.get("properties", {}).values():
@@ -33,76 +36,12 @@ def _keywords(schema):
     return used
 
 
-def _valid(schema, value) -> bool:
-    """A small draft-07 validator for exactly the keywords in KEYWORDS, so the test
-    does not depend on the jsonschema package (it is compared with it when present)."""
-    if isinstance(schema, bool):
-        return schema
-    tp = schema.get("type")
-    if tp == "number" and (isinstance(value, bool) or not isinstance(value, (int, float))):
-        return False
-    # draft-06 on: an integer is any number with a zero fractional part (1.6e3 is one)
-    if tp == "integer" and (isinstance(value, bool) or not isinstance(value, (int, float))
-                            or (isinstance(value, float) and not value.is_integer())):
-        return False
-    if tp in TYPES and not isinstance(value, TYPES[tp]):
-        return False
-    if "enum" in schema and value not in schema["enum"]:
-        return False
-    if "const" in schema and not (value == schema["const"]
-                                  and type(value) is type(schema["const"])):
-        return False
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        if "minimum" in schema and value < schema["minimum"]:
-            return False
-        if "maximum" in schema and value > schema["maximum"]:
-            return False
-        if "exclusiveMinimum" in schema and value <= schema["exclusiveMinimum"]:
-            return False
-        if "exclusiveMaximum" in schema and value >= schema["exclusiveMaximum"]:
-            return False
-    if isinstance(value, list):
-        if len(value) < schema.get("minItems", 0):
-            return False
-        if "items" in schema and not all(_valid(schema["items"], v) for v in value):
-            return False
-    if isinstance(value, dict):
-        if any(k not in value for k in schema.get("required", [])):
-            return False
-        props = schema.get("properties", {})
-        for k, v in value.items():
-            if k in props:
-                if not _valid(props[k], v):
-                    return False
-            elif schema.get("additionalProperties", True) is False:
-                return False
-    if "anyOf" in schema and not any(_valid(s, value) for s in schema["anyOf"]):
-        return False
-    if "allOf" in schema and not all(_valid(s, value) for s in schema["allOf"]):
-        return False
-    if "not" in schema and _valid(schema["not"], value):
-        return False
-    if "if" in schema:
-        branch = schema.get("then" if _valid(schema["if"], value) else "else", True)
-        if not _valid(branch, value):
-            return False
-    return True
-
-
-try:
-    import jsonschema
-except ImportError:  # not a dependency: the walker above then stands alone
-    jsonschema = None
-
 SCHEMA = json_schema.case_schema()
+VALIDATOR = jsonschema.Draft7Validator(SCHEMA)
 
 
-def _validators():
-    out = [_valid]
-    if jsonschema is not None:
-        v = jsonschema.Draft7Validator(SCHEMA)
-        out.append(lambda schema, value: v.is_valid(value))
-    return out
+def _valid(schema, value) -> bool:
+    return jsonschema.Draft7Validator(schema).is_valid(value)
 
 
 def test_the_shipped_file_is_the_generated_schema():
@@ -114,8 +53,7 @@ def test_the_shipped_file_is_the_generated_schema():
 
 def test_the_schema_uses_only_known_keywords_and_is_a_draft7_schema():
     assert _keywords(SCHEMA) <= KEYWORDS
-    if jsonschema is not None:
-        jsonschema.Draft7Validator.check_schema(SCHEMA)
+    jsonschema.Draft7Validator.check_schema(SCHEMA)
 
 
 def test_every_declared_key_is_in_the_schema_with_unit_and_default():
@@ -144,8 +82,7 @@ def test_every_declared_key_is_in_the_schema_with_unit_and_default():
 @pytest.mark.parametrize("name", sorted(cases.shipped_cases()))
 def test_every_shipped_case_validates(name):
     raw = tomllib.loads(cases.shipped(name).read_text(encoding="utf-8"))
-    for valid in _validators():
-        assert valid(SCHEMA, raw), name
+    assert VALIDATOR.is_valid(raw), name
 
 
 BASE = tomllib.loads("""
@@ -197,6 +134,13 @@ GOOD = {
     "integral float for an integer": _with(("mdr", "elements", 1.6e3)),
     "step auto and stages": _with(("sliding", "step_hat", "auto"), ("stages", "s_hat", [0, 1.5])),
     "numeric step": _with(("sliding", "scheme", "bdf2"), ("sliding", "step_hat", 0.05)),
+    "until = cycles": _with(("sliding", "until", "cycles"), ("sliding", "stroke", 1e-3),
+                            ("sliding", "cycles", 100)),
+    "stages in cycles with a stroke": _with(("sliding", "stroke", 1e-3),
+                                            ("stages", "cycles", [0, 10])),
+    "fretting, [sliding] at its defaults": _with(
+        ("fretting", None, {"amplitude": 1e-7, "cycles": 10, "stage_cycles": [0.0, 2.0]}),
+        ("sliding", "until", "force_fraction"), ("stages", "s_hat", [0])),
 }
 
 BAD = {
@@ -225,19 +169,44 @@ BAD = {
     "until = distance without a distance": _with(("sliding", "until", "distance")),
     "rigid body with a modulus": _with(("counterface", "youngs_modulus", 70e9)),
     "elastic body without moduli": _with(("indenter", "youngs_modulus", None)),
+    # rules the loader enforced and the schema had lost before cases/rules.py
+    "until = cycles without a stroke": _with(("sliding", "until", "cycles"),
+                                             ("sliding", "cycles", 100)),
+    "cycles without until = cycles": _with(("sliding", "stroke", 1e-3),
+                                           ("sliding", "cycles", 100)),
+    "force_fraction under force control": _with(("loading", "control", "force"),
+                                                ("loading", "depth", None),
+                                                ("loading", "force", 1.0)),
+    "stages both ways": _with(("sliding", "stroke", 1e-3), ("stages", "s_hat", [0.0]),
+                              ("stages", "cycles", [0.0])),
+    "stages in cycles without a stroke": _with(("stages", "cycles", [0, 10])),
+    "both bodies rigid": _with(("indenter", "rigid", True), ("indenter", "youngs_modulus", None),
+                               ("indenter", "poisson_ratio", None)),
+    "tangential correction without a stroke": _with(("wear", "tangential_correction", True)),
+    "fretting with [sliding]": _with(("fretting", None, {"amplitude": 1e-7, "cycles": 10}),
+                                     ("sliding", "until", "distance"),
+                                     ("sliding", "distance", 1.0)),
+    "fretting without an amplitude": _with(("fretting", None, {"cycles": 10})),
+    "fretting with both amplitudes": _with(("fretting", None, {"amplitude": 1e-7, "cycles": 10,
+                                                               "force_amplitude": 1.0})),
+    "fretting with the tangential correction": _with(
+        ("fretting", None, {"amplitude": 1e-7, "cycles": 10}),
+        ("wear", "tangential_correction", True)),
+    "fretting increments not a multiple of 4": _with(
+        ("fretting", None, {"amplitude": 1e-7, "cycles": 10, "increments": 10})),
+    "fretting stage not a whole cycle": _with(
+        ("fretting", None, {"amplitude": 1e-7, "cycles": 10, "stage_cycles": [0, 1.5]})),
 }
 
 
 @pytest.mark.parametrize("label", GOOD)
 def test_cases_the_loader_accepts_validate(label):
     from_dict(GOOD[label])  # the loader accepts it: the example is a valid case
-    for valid in _validators():
-        assert valid(SCHEMA, GOOD[label]), label
+    assert VALIDATOR.is_valid(GOOD[label]), label
 
 
 @pytest.mark.parametrize("label", BAD)
 def test_bad_input_is_rejected_by_schema_and_loader(label):
     with pytest.raises(CaseError):
         from_dict(BAD[label])
-    for valid in _validators():
-        assert not valid(SCHEMA, BAD[label]), label
+    assert not VALIDATOR.is_valid(BAD[label]), label

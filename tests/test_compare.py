@@ -129,9 +129,34 @@ def test_a_solver_that_cannot_run_the_case_is_listed_as_skipped(tmp_path, monkey
         "counterface.poisson_ratio=0.3"]))
     assert reason.startswith("counterface.rigid = false")
     m = json.loads((out / "metrics.json").read_text())
-    assert m["solvers"] == ["mdr", "bem"] and m["skipped"] == {"fem": reason}
+    assert m["solvers"] == ["mdr", "bem"] and m["skipped"]["fem"] == reason
+    # every other registered solver is listed too (CalculiX: the same model limit)
+    assert set(m["skipped"]) == set(registry.names()) - {"mdr", "bem"}
     assert f"skipped FEM: {reason}" in capsys.readouterr().err
     assert f"Skipped: FEM — {reason}" in (out / "report.md").read_text()
+
+
+@pytest.mark.parametrize("executable", ["ccx", "/nowhere/ccx"])
+def test_calculix_is_listed_as_opt_in_or_with_why_it_cannot_run(tmp_path, monkeypatch,
+                                                                  capsys, executable):
+    # CalculiX runs only when named: a plain compare lists it as opt-in when it could run
+    # here, and with supports()'s reason (the key and the install line) when it cannot
+    monkeypatch.setattr(compare_mod, "solve_case", analytic_solver())
+    out = tmp_path / "cmp"
+    sets = ["--set", f"ccx.executable={executable}"]
+    assert cli_main(["compare", HERTZ, "--out", str(out), "--no-render", "--solvers",
+                     "mdr,fem"] + sets + STAGES) == 0
+    reason = registry.get("ccx").supports(cases.load(HERTZ, [f"ccx.executable={executable}"]))
+    m = json.loads((out / "metrics.json").read_text())
+    if reason is None:
+        assert m["skipped"]["ccx"].startswith("opt-in (an external program): name it")
+        assert "--solvers mdr,fem,ccx" in m["skipped"]["ccx"]
+    else:
+        assert m["skipped"]["ccx"] == reason
+    if executable.startswith("/nowhere"):
+        assert "apt-get install calculix-ccx" in m["skipped"]["ccx"]
+    assert f"skipped CalculiX: {m['skipped']['ccx']}" in capsys.readouterr().err
+    assert f"CalculiX — {m['skipped']['ccx']}" in (out / "report.md").read_text()
 
 
 def test_truncated_case_is_checked_against_the_reference(tmp_path, monkeypatch):

@@ -82,8 +82,10 @@ def test_sphere_sweep_recovers_a_known_finite_size_error(tmp_path):
 def test_sphere_sweep_refuses_profiles_without_a_radius():
     case = cases.load(PAPER, ["indenter.profile=\"cone\"", "indenter.slope_angle=0.1",
                               "indenter.radius=0.01"])
-    with pytest.raises(cases.CaseError, match="sphere-sweep"):
+    with pytest.raises(cases.ArgumentError, match="^sphere_sweep: needs") as caught:
         sphere_mod.sphere_sweep(case, (0.01,), solve=stand_in())
+    # the command line names its flag
+    assert caught.value.on_command_line().startswith("--sphere-sweep: needs")
 
 
 def test_shipped_cases_at_the_same_ratio_share_one_mark_in_the_sphere_figure():

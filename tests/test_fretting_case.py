@@ -43,7 +43,7 @@ def test_shipped_case_reads():
     (dict(cycles=10, amplitude=-1e-7), {}, "'fretting.amplitude' = -1e-07"),
     (dict(cycles=10, force_amplitude=9.5), {}, "'fretting.force_amplitude' = 9.5"),
     (dict(cycles=10, amplitude=1e-7, stage_cycles=[5, 1]), {}, "increase strictly"),
-    (dict(cycles=10, amplitude=1e-7, stage_cycles=[0.5]), {}, "whole cycle numbers"),
+    (dict(cycles=10, amplitude=1e-7, stage_cycles=[0.5]), {}, "'fretting.stage_cycles' = 0.5: must be a whole number"),
     (dict(cycles=10, amplitude=1e-7, jump_tolerance=1.0), {}, "'fretting.jump_tolerance'"),
     (dict(cycles=10, amplitude=1e-7, bogus=1), {}, "unknown key 'fretting.bogus'"),
     (dict(cycles=10, amplitude=1e-7), dict(sliding=dict(until="distance", distance=1.0)),

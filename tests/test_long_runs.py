@@ -72,7 +72,7 @@ def test_cycles_need_a_stroke():
         cases.from_dict(raw)
     raw["sliding"] = dict(until="distance", distance=1.0)
     raw["stages"] = dict(cycles=[0.0, 1.0])
-    with pytest.raises(CaseError, match=r"stages\.cycles.*needs 'sliding\.stroke'"):
+    with pytest.raises(CaseError, match=r"missing key 'sliding\.stroke', required by stages\.cycles = \[0\.0, 1\.0\]"):
         cases.from_dict(raw)
 
 

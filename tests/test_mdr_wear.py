@@ -241,7 +241,8 @@ def test_tangential_correction_slows_the_wear_by_the_closed_form(ratio):
 def test_tangential_correction_needs_a_stroke_longer_than_the_reversal():
     u_star = u_star_of(make(N=50))
     # a case file of the earlier reading (no stroke) is told what to do
-    with pytest.raises(cases.CaseError, match=r"wear\.tangential_correction.*sliding\.stroke"):
+    with pytest.raises(cases.CaseError, match=r"missing key 'sliding\.stroke', required by "
+                                                    r"wear\.tangential_correction = true"):
         make(N=50, tangential=True)
     # a stroke within 2u* is partial slip: the fretting solver's case
     with pytest.raises(cases.CaseError, match=r"sliding\.stroke.*partial slip.*\[fretting\]"):

@@ -101,7 +101,7 @@ def test_levels_pair_resolutions_and_steps():
     lv = rf.levels("mdr", [400, 100, 200], [0.1])
     assert [x.name for x in lv] == ["mdr-elements-100-step-0.1", "mdr-elements-200-step-0.1",
                                     "mdr-elements-400-step-0.1"]
-    assert lv[0].overrides == ("mdr.elements=100", "sliding.step_hat=0.1")
+    assert lv[0].changes == {"mdr.elements": 100, "sliding.step_hat": 0.1}
     steps = rf.levels("fem", [250], [0.1, 0.05, 0.2])
     assert [x.step_hat for x in steps] == [0.2, 0.1, 0.05]  # coarsest first
     assert rf.refined_parameter(steps) == "step"
@@ -158,7 +158,7 @@ def fake_study(cluster, tmp_path_factory):
     out = tmp_path_factory.mktemp("study")
     case = cases.shipped("paper")
     # 24 fails in the solver (a level the case rejects is refused up front, below)
-    summary = refine(case, ["stages.s_hat=[0.0, 0.5, 1.0]"], "mdr", out,
+    summary = refine(cases.load(case, ["stages.s_hat=[0.0, 0.5, 1.0]"]), "mdr", out,
                      levels=[8, 16, 24, 32, 64, 128], scheduler=cluster, quiet=True,
                      solve=fake_solve)
     return out, summary
@@ -201,7 +201,7 @@ def test_second_solver_joins_the_same_directory(fake_study, cluster):
     from wearcheck.comparisons.studies.refine import refine
     from wearcheck.comparisons.present.study_figures import FIGURES, studies
     out, _ = fake_study
-    refine(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"], "fem", out,
+    refine(cases.load(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"]), "fem", out,
            levels=[10, 20, 40], scheduler=cluster, quiet=True, solve=fake_solve)
     assert [s["solver"] for s in studies(out)] == ["mdr", "fem"]
     # refinement.csv holds both studies' rows, each as in its own per-solver file
@@ -268,9 +268,9 @@ def crashing_solve(case, solver, progress=None):
 def test_a_dead_worker_fails_only_its_level(tmp_path):
     from wearcheck.comparisons.studies.distributed import Task, run_cases
     # the embedded cluster (no scheduler given): loopback, one task per worker
-    tasks = [Task(f"mdr-elements-{n}", "mdr", (f"mdr.elements={n}",)) for n in (8, 16, 32, 64)]
-    outcomes = run_cases(cases.shipped("paper"), [], tasks, tmp_path, workers=2, quiet=True,
-                         solve=crashing_solve)
+    tasks = [Task(f"mdr-elements-{n}", "mdr", {"mdr.elements": n}) for n in (8, 16, 32, 64)]
+    outcomes = run_cases(cases.load(cases.shipped("paper")), tasks, tmp_path, workers=2,
+                         quiet=True, solve=crashing_solve)
     status = {o.task.name: o for o in outcomes}
     assert "worker died" in status["mdr-elements-16"].message
     for n in (8, 32, 64):
@@ -282,9 +282,9 @@ def test_mdr_step_refinement_shows_backward_euler_first_order(cluster, tmp_path)
     from wearcheck.comparisons.studies.refine import refine
     # implicit (backward) Euler in ŝ has a global error Δŝ e1(ŝ) + O(Δŝ²): order
     # 1. With Δŝ <= 0.2 the O(Δŝ²) part moves the fitted slope by O(0.1)
-    summary = refine(cases.shipped("paper"), ["sliding.force_fraction=0.3",
-                                              "stages.s_hat=[0.0, 1.0, 2.0]",
-                                              "sliding.scheme=implicit"],
+    summary = refine(cases.load(cases.shipped("paper"), ["sliding.force_fraction=0.3",
+                                                         "stages.s_hat=[0.0, 1.0, 2.0]",
+                                                         "sliding.scheme=implicit"]),
                      "mdr", tmp_path, levels=[50], steps=[0.2, 0.1, 0.05, 0.025],
                      scheduler=cluster, quiet=True)
     assert summary["refined"] == "step"
@@ -297,11 +297,11 @@ def test_a_failed_level_removes_an_earlier_run_of_that_level(cluster, tmp_path):
     import shutil
     from wearcheck.comparisons.studies.refine import refine
     out = tmp_path / "study"
-    refine(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"], "mdr", out,
+    refine(cases.load(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"]), "mdr", out,
            levels=[8, 16], scheduler=cluster, quiet=True, solve=fake_solve)
     # a complete run of level 24 from an earlier study (here: a copy of level 16)
     shutil.copytree(out / "mdr-elements-16", out / "mdr-elements-24")
-    refine(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"], "mdr", out,
+    refine(cases.load(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"]), "mdr", out,
            levels=[8, 24], scheduler=cluster, quiet=True, solve=fake_solve)  # 24 fails
     assert not (out / "mdr-elements-24").exists()
     assert (out / "mdr-elements-8" / "meta.json").is_file()

@@ -280,7 +280,7 @@ def _record_study_slowly(study, name, entered, released):
             entered.set()
             released.wait(3.0)
     outputs.STEP_HOOK = hook
-    record_study(study, name, cases.load(cases.shipped("hertz")), [], dict(command=name))
+    record_study(study, name, cases.load(cases.shipped("hertz")), dict(command=name))
 
 
 def test_two_studies_ending_at_once_into_one_directory_keep_both(tmp_path):
@@ -300,7 +300,7 @@ def test_two_studies_ending_at_once_into_one_directory_keep_both(tmp_path):
     child.start()
     assert entered.wait(60)
     parent = threading.Thread(target=record_study, args=(study, "refine-mdr",
-                                                         cases.load(cases.shipped("hertz")), [],
+                                                         cases.load(cases.shipped("hertz")),
                                                          dict(command="refine-mdr")))
     parent.start()
     parent.join(30)

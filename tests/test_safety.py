@@ -409,7 +409,7 @@ def test_a_study_whose_workers_all_leave_ends_instead_of_hanging(tmp_path, monke
                       dashboard_address=None) as cluster:
         threading.Timer(2.0, lambda: cluster.scale(0)).start()
         t0 = time.perf_counter()
-        summary = refine(HERTZ, [], "mdr", tmp_path / "s", levels=[20, 40], quiet=True,
+        summary = refine(cases.load(HERTZ), "mdr", tmp_path / "s", levels=[20, 40], quiet=True,
                          scheduler=cluster.scheduler_address, solve=_slow_solve)
         assert time.perf_counter() - t0 < 25  # well before the 30 s task would end
     assert [lv["status"].startswith("error: no worker left") for lv in summary["levels"]] \
@@ -737,7 +737,7 @@ def test_refine_rerun_where_every_level_fails_removes_the_old_figures(tmp_path, 
     from wearcheck.comparisons.studies.refine import refine
     from wearcheck.comparisons.present.study_figures import FIGURES
     out = tmp_path / "study"
-    refine(HERTZ, [], "mdr", out, levels=[20, 40, 80], workers=1, quiet=True)
+    refine(cases.load(HERTZ), "mdr", out, levels=[20, 40, 80], workers=1, quiet=True)
     umask = os.umask(0)
     os.umask(umask)
     for name in FIGURES:
@@ -745,7 +745,7 @@ def test_refine_rerun_where_every_level_fails_removes_the_old_figures(tmp_path, 
 
     def failing(case, solver, progress=None):
         raise cases.SolverError("made to fail")
-    summary = refine(HERTZ, [], "mdr", out, levels=[20, 40, 80], workers=1, quiet=True,
+    summary = refine(cases.load(HERTZ), "mdr", out, levels=[20, 40, 80], workers=1, quiet=True,
                      solve=failing)
     assert all(lv["status"] != "ok" for lv in summary["levels"])
     assert not any((out / name).exists() for name in FIGURES)

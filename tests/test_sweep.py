@@ -10,9 +10,11 @@ import cloudpickle
 import numpy as np
 import pytest
 
+import wearcheck
 from wearcheck import cases
 from wearcheck.cases import reference
-from wearcheck.comparisons.studies.sweep import parse_vary, split_values, sweep
+from wearcheck.cases.case import parse_vary, split_values
+from wearcheck.comparisons.studies.sweep import sweep
 from wearcheck.comparisons.rundir import Run
 
 # the stand-in solvers below travel to the Dask workers by value, so the
@@ -45,6 +47,9 @@ def test_vary_values_split_like_set():
     assert split_values("1e-5, 1e-4,1e-3") == ["1e-5", "1e-4", "1e-3"]
     assert split_values("[0.0, 1.0],[0.0, 2.0]") == ["[0.0, 1.0]", "[0.0, 2.0]"]
     assert parse_vary("loading.control=depth,force") == ("loading.control", ["depth", "force"])
+    # typed once, as --set types a value
+    assert parse_vary("stages.s_hat=[0, 1],[0.0, 2.0]") == ("stages.s_hat", [[0, 1], [0.0, 2.0]])
+    assert parse_vary("wear.k=1e-5,2") == ("wear.k", [1e-5, 2])
     for bad in ("wear.k", "wear.kk=1,2", "nosection.k=1", "wear.k=1,,2"):
         with pytest.raises(cases.CaseError):
             parse_vary(bad)
@@ -54,8 +59,9 @@ def test_sweep_writes_one_run_per_value(cluster, tmp_path):
     out = tmp_path / "sweep"
     # 2 x 2 x 2 combinations; sliding.until = "distance" is a fine value whose
     # runs fail (the case gives no sliding.distance): error rows, no directory
-    rows = sweep(cases.shipped("paper"), [], ["wear.k=1e-5,1e-4", "loading.depth=1e-6,2e-6",
-                                              "sliding.until=force_fraction,distance"],
+    rows = sweep(cases.load(cases.shipped("paper")),
+                 {"wear.k": [1e-5, 1e-4], "loading.depth": [1e-6, 2e-6],
+                  "sliding.until": ["force_fraction", "distance"]},
                  "mdr", out, scheduler=cluster, quiet=True, solve=fake_solve)
     assert len(rows) == 8
     with open(out / "sweep.csv", newline="") as fh:
@@ -88,7 +94,7 @@ def test_mdr_sweep_over_the_wear_coefficient_is_self_similar(cluster, tmp_path):
     assert code == 0
     with open(out / "sweep.csv", newline="") as fh:
         rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
-    assert [r["wear.k"] for r in rows] == ["1e-5", "1e-4", "1e-3"]
+    assert [float(r["wear.k"]) for r in rows] == [1e-5, 1e-4, 1e-3]
     # Archard wear depends on k and s only through ŝ ∝ k s (docs/theory.md §5): the
     # runs are one solution in ŝ, so k·s at the end and F/F0 agree to rounding
     # (sweep.csv keeps 10 digits)
@@ -152,7 +158,8 @@ def test_a_solver_that_cannot_run_the_case_is_refused_before_the_cluster(tmp_pat
 def test_a_sweep_holding_some_cases_the_solver_can_run_still_runs(cluster, tmp_path):
     """Varying the profile from the ellipsoid to a paraboloid: the FEM can run the
     paraboloid, so the sweep is not refused (the stand-in solver runs both)."""
-    rows = sweep(cases.shipped("ellipsoid"), [], ["indenter.profile=ellipsoid,paraboloid"],
+    rows = sweep(cases.load(cases.shipped("ellipsoid")),
+                 {"indenter.profile": ["ellipsoid", "paraboloid"]},
                  "fem", tmp_path / "s", scheduler=cluster, quiet=True, solve=fake_solve)
     assert {r["indenter.profile"]: r["status"] for r in rows} == {"ellipsoid": "ok",
                                                                    "paraboloid": "ok"}
@@ -165,18 +172,20 @@ def test_a_value_is_judged_with_the_other_varied_keys(tmp_path, monkeypatch):
     from wearcheck.comparisons.studies import sweep as sweep_mod
     seen = []
 
-    def no_cluster(case_path, overrides, tasks, out, **kwargs):
-        seen.extend(t.overrides for t in tasks)
+    def no_cluster(case, tasks, out, **kwargs):
+        seen.extend(t.changes for t in tasks)
         raise KeyboardInterrupt
     monkeypatch.setattr(sweep_mod, "run_cases", no_cluster)
+    hertz = cases.load(cases.shipped("hertz"))
     with pytest.raises(KeyboardInterrupt):
-        sweep(cases.shipped("hertz"), [], ["loading.control=force", "loading.force=1,2"],
-              "mdr", tmp_path / "s", quiet=True)
-    assert seen == [("loading.control=force", "loading.force=1"),
-                    ("loading.control=force", "loading.force=2")]
-    with pytest.raises(cases.CaseError, match="--vary loading.force: key 'loading.force' = -1"):
-        sweep(cases.shipped("hertz"), [], ["loading.control=force", "loading.force=1,-1"],
-              "mdr", tmp_path / "t", quiet=True)
+        sweep(hertz, {"loading.control": "force", "loading.force": [1, 2]}, "mdr",
+              tmp_path / "s", quiet=True)
+    assert seen == [{"loading.control": "force", "loading.force": 1},
+                    {"loading.control": "force", "loading.force": 2}]
+    with pytest.raises(cases.CaseError,
+                       match=r"vary\['loading.force'\]: key 'loading.force' = -1"):
+        sweep(hertz, {"loading.control": "force", "loading.force": [1, -1]}, "mdr",
+              tmp_path / "t", quiet=True)
 
 
 def _table(out):
@@ -189,19 +198,19 @@ def test_a_second_sweep_into_a_study_keeps_the_first(cluster, tmp_path):
     Now its runs join the first's table (more values, another key; a run done
     again replaces its row) and meta.json keeps both commands."""
     out = tmp_path / "s"
-    paper = cases.shipped("paper")
-    sweep(paper, [], ["wear.k=1e-5,1e-4"], "mdr", out, scheduler=cluster, quiet=True,
+    paper = cases.load(cases.shipped("paper"))
+    sweep(paper, {"wear.k": [1e-5, 1e-4]}, "mdr", out, scheduler=cluster, quiet=True,
           solve=fake_solve)
     first = {r["run"]: r for r in _table(out)}
-    sweep(paper, [], ["wear.k=1e-4,1e-3"], "mdr", out, scheduler=cluster, quiet=True,
+    sweep(paper, {"wear.k": [1e-4, 1e-3]}, "mdr", out, scheduler=cluster, quiet=True,
           solve=fake_solve)
-    sweep(paper, [], ["wear.mu=0.2"], "mdr", out, scheduler=cluster, quiet=True,
+    sweep(paper, {"wear.mu": [0.2]}, "mdr", out, scheduler=cluster, quiet=True,
           solve=fake_solve)
     table = {r["run"]: r for r in _table(out)}
     assert sorted(table) == sorted(["mdr-wear.k-1e-5", "mdr-wear.k-1e-4", "mdr-wear.k-1e-3",
                                     "mdr-wear.mu-0.2"])
     # the first sweep's row, as it wrote it; a key it did not vary holds the base value
-    base = cases.load(paper)
+    base = paper
     assert table["mdr-wear.k-1e-5"]["final_s"] == first["mdr-wear.k-1e-5"]["final_s"]
     assert float(table["mdr-wear.k-1e-5"]["wear.mu"]) == base.wear.mu
     assert float(table["mdr-wear.mu-0.2"]["wear.k"]) == base.wear.k
@@ -225,8 +234,8 @@ def test_a_sweep_of_another_base_into_a_study_is_refused(cluster, tmp_path, caps
     from wearcheck.comparisons.studies import sweep as sweep_mod
     out = tmp_path / "s"
     paper = str(cases.shipped("paper"))
-    sweep(paper, [], ["wear.k=1e-5,1e-4"], "mdr", out, scheduler=cluster, quiet=True,
-          solve=fake_solve)
+    sweep(cases.load(paper), {"wear.k": [1e-5, 1e-4]}, "mdr", out, scheduler=cluster,
+          quiet=True, solve=fake_solve)
     before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
 
     def no_cluster(*args, **kwargs):
@@ -237,3 +246,95 @@ def test_a_sweep_of_another_base_into_a_study_is_refused(cluster, tmp_path, caps
     err = [l for l in capsys.readouterr().err.splitlines() if not l.startswith("note:")]
     assert len(err) == 1 and what in err[0], err
     assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+
+
+
+def test_the_same_sweep_from_python_and_from_the_command_line_gives_the_same_runs(cluster,
+                                                                                tmp_path):
+    """The command line types its text once and hands the study what Python hands it:
+    the same run directories, the same cases and the same histories, a list-valued key
+    (stages.s_hat) included."""
+    from wearcheck.comparisons.cli import main
+    cli_out, py_out = tmp_path / "cli", tmp_path / "py"
+    assert main(["sweep", "hertz", "--set", "mdr.elements=50", "--vary", "wear.mu=0.2,0.3",
+                 "--vary", "stages.s_hat=[0.0, 0.5],[0.0, 1.0]", "--scheduler", cluster,
+                 "--out", str(cli_out), "--quiet"]) == 0
+    rows = wearcheck.sweep(wearcheck.load_case("hertz", {"mdr.elements": 50}),
+                           {"wear.mu": [0.2, 0.3], "stages.s_hat": [[0.0, 0.5], [0.0, 1.0]]},
+                           py_out, scheduler=cluster)
+    assert [(r["wear.mu"], r["stages.s_hat"]) for r in rows] == [
+        (0.2, [0.0, 0.5]), (0.2, [0.0, 1.0]), (0.3, [0.0, 0.5]), (0.3, [0.0, 1.0])]
+    with open(cli_out / "sweep.csv", newline="") as fh:
+        cli_rows = list(csv.DictReader(line for line in fh if not line.startswith("#")))
+    assert [r["run"] for r in cli_rows] == [r["run"] for r in rows]
+    assert all(r["status"] == "ok" for r in rows)
+    for row in rows:
+        a, b = Run(cli_out / row["run"]), Run(py_out / row["run"])
+        for section in cases.schema.SECTIONS:
+            assert getattr(a.case, section) == getattr(b.case, section), section
+        assert b.case.wear.mu == row["wear.mu"]
+        assert list(b.case.stages.s_hat) == row["stages.s_hat"]
+        # one case, one solver, one code: the same numbers (the tolerance allows only
+        # a different order of floating-point sums in another process)
+        for column in ("s", "force", "wear_center"):
+            np.testing.assert_allclose(a.history[column], b.history[column], rtol=1e-12)
+
+
+@pytest.mark.parametrize("python, argv, said_in_python, said_on_the_command_line", [
+    (lambda out: wearcheck.sweep("hertz", {"wear.mu": [0.3, -1.0]}, out),
+     ["sweep", "hertz", "--vary", "wear.mu=0.3,-1.0"],
+     "vary['wear.mu']: key 'wear.mu' = -1.0: must be > 0",
+     "--vary wear.mu: key 'wear.mu' = -1.0: must be > 0"),
+    (lambda out: wearcheck.sweep("hertz", {"wear.mu": [0.3]}, out, workers=-1),
+     ["sweep", "hertz", "--vary", "wear.mu=0.3", "--workers", "-1"],
+     "workers = -1: must be a whole number", "--workers -1: must be a whole number"),
+    (lambda out: wearcheck.refine("hertz", out, levels=[20, 40], tolerance=0),
+     ["refine", "hertz", "--levels", "20,40", "--tolerance", "0"],
+     "tolerance = 0: must be a number > 0", "--tolerance 0.0: must be a number > 0"),
+    (lambda out: wearcheck.refine("hertz", out, levels=[20, 40, 80], steps=[0.1, 0.2]),
+     ["refine", "hertz", "--levels", "20,40,80", "--steps", "0.1,0.2"],
+     "steps = [0.1, 0.2]: 2 steps for 3 levels:", "--steps 0.1,0.2: 2 steps for 3 --levels:"),
+    (lambda out: wearcheck.refine("hertz", out, levels=[1, 40]),
+     ["refine", "hertz", "--levels", "1,40"],
+     "levels: key 'mdr.elements' = 1:", "--levels: key 'mdr.elements' = 1:"),
+], ids=["vary", "workers", "tolerance", "steps", "levels"])
+def test_study_errors_name_the_python_argument_or_the_flag(tmp_path, capsys, monkeypatch, python,
+                                                          argv, said_in_python,
+                                                          said_on_the_command_line):
+    """Called from Python a study's error names the argument the caller wrote; only the
+    command line's names its flag (it said --vary, --tolerance from Python too)."""
+    from wearcheck.comparisons.cli import main
+    from wearcheck.comparisons.studies import distributed
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("the cluster started")
+    monkeypatch.setattr(distributed, "_Client", no_cluster)
+    with pytest.raises(cases.ArgumentError) as caught:
+        python(tmp_path / "py")
+    assert str(caught.value).startswith(said_in_python), str(caught.value)
+    assert "--" not in str(caught.value)
+    assert main([*argv, "--out", str(tmp_path / "cli"), "--quiet"]) == 2
+    err = [l for l in capsys.readouterr().err.splitlines() if not l.startswith("note:")]
+    assert len(err) == 1 and f"error: {said_on_the_command_line}" in err[0], err
+    assert not (tmp_path / "py").exists() and not (tmp_path / "cli").exists()
+
+
+def test_the_command_line_reads_a_varied_table_file_as_set_does(tmp_path, monkeypatch):
+    """``--set indenter.file=t.csv`` is relative to the case file; so is ``--vary``'s, typed
+    once on the command line. From Python a relative file is relative to the working
+    directory (as ``Case.derive`` reads it), made absolute before it goes to a worker,
+    whose working directory may differ."""
+    from types import SimpleNamespace
+    from wearcheck.comparisons.cli._common import varied
+    from wearcheck.comparisons.studies.sweep import task_changes
+    case_file = tmp_path / "sub" / "case.toml"
+    args = SimpleNamespace(case=case_file, overrides=["wear.mu=0.3"],
+                           vary=["indenter.file=a.csv,/abs/b.csv", "wear.k=1e-5"])
+    assert varied(args) == {"indenter.file": [str(tmp_path / "sub" / "a.csv"), "/abs/b.csv"],
+                            "wear.k": [1e-5]}
+    args.vary.append("wear.mu=0.2")
+    with pytest.raises(cases.CaseError, match="wear.mu is both in --set and --vary"):
+        varied(args)
+    monkeypatch.chdir(tmp_path)
+    assert task_changes({"indenter.file": "a.csv", "wear.k": 1e-5}) == {
+        "indenter.file": str(tmp_path / "a.csv"), "wear.k": 1e-5}

@@ -344,6 +344,10 @@ def test_every_vtu_reads_back_with_meshio_and_pyvista(exported):
                 assert float(np.ravel(data["s_hat"])[0]) == pytest.approx(
                     run.stages["s_hat"][k], rel=1e-15)
                 assert int(np.ravel(data["stage"])[0]) == k
+            # every point array's unit, as the layout and the docs give it
+            for data in (m.field_data, g.field_data):
+                assert vtk.read_units(data["units"]) == {n: vtk.UNITS[n] for n in names}
+                assert float(np.ravel(data["warp_scale"])[0]) >= 1.0
             if name == "section":
                 assert g.n_points == Np
                 kind = "triangle" if run.fields["cells"].shape[1] == 3 else "triangle6"

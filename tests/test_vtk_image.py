@@ -7,7 +7,7 @@ from wearcheck import bem, cases
 from wearcheck.cases import WearcheckError, reference
 from wearcheck.comparisons import rundir
 from wearcheck.comparisons.present import vtk_image
-from wearcheck.comparisons.present.vtk import export_run
+from wearcheck.comparisons.present.vtk import export_run, read_units
 
 import pyvista as pv  # noqa: E402
 
@@ -35,20 +35,29 @@ def test_images_read_back(bem_run):
     p0 = reference.scales(case)["p0"]
     for k in range(K):
         img = pv.read(target / f"surface_fields_{k:03d}.vti")
-        assert img.dimensions == (len(x) + 1, len(x) + 1, 1)
+        # one point per pixel centre: Warp By Scalar applies without Cell Data to Point Data
+        assert img.dimensions == (len(x), len(x), 1)
         assert np.allclose(img.spacing[:2], (dx, dx), rtol=1e-12)
-        assert np.allclose(img.origin[:2], (x[0] - dx / 2, x[0] - dx / 2), rtol=1e-12)
+        assert np.allclose(img.origin[:2], (x[0], x[0]), rtol=1e-12)
+        assert img.n_cells == (len(x) - 1) ** 2 and not img.cell_data.keys()
         for key in vtk_image.IMAGE_FIELDS:
-            back = np.asarray(img.cell_data[key]).reshape(len(x), len(x), order="F")
+            back = np.asarray(img.point_data[key]).reshape(len(x), len(x), order="F")
             assert np.array_equal(back, res.fields[key][k])
-        # the cell centres are the pixel centres: the pressure's centre of load
-        # sits on the tip (x = y = 0) for this axisymmetric case
-        centres = img.cell_centers().points
-        p = np.asarray(img.cell_data["pressure"])
+        # the points are the pixel centres: the pressure's centre of load sits on the
+        # tip (x = y = 0) for this axisymmetric case
+        p = np.asarray(img.point_data["pressure"])
         if p.sum() > 0:
-            assert np.allclose(centres.T[:2] @ p / p.sum(), 0.0, atol=1e-3 * dx)
-        assert np.allclose(img.cell_data["p_over_p0"], p / p0)
+            assert np.allclose(img.points.T[:2] @ p / p.sum(), 0.0, atol=1e-3 * dx)
+        assert np.allclose(img.point_data["p_over_p0"], p / p0)
         assert float(img.field_data["s"][0]) == res.stage_s[k]
+        assert float(img.field_data["TimeValue"][0]) == res.stage_s[k]
+        units = read_units(img.field_data["units"])
+        assert units == dict(profile="m", wear_depth="m", pressure="Pa", gap="m", p_over_p0="")
+        # the warp factor draws the relief at half the grid's width: within the 1-2-5
+        # rounding (a factor 2.5 at most) of that
+        warp = float(img.field_data["warp_scale"][0])
+        relief = np.ptp(res.fields["profile"]) * warp / (x[-1] - x[0])
+        assert 0.5 / 2.5 <= relief <= 0.5
     # the ring-averaged series of the axisymmetric exporter come along
     for name in ("profile", "pressure", "surface"):
         assert (target / f"{name}.pvd").is_file()

@@ -20,7 +20,7 @@ from typing import Callable, Iterable, Mapping
 import numpy as np
 
 from wearcheck import cases
-from wearcheck.cases import Case, CaseError, RunResult, reference
+from wearcheck.cases import ArgumentError, Case, CaseError, RunResult, reference
 from wearcheck.comparisons import registry, rundir
 
 __all__ = ["load_case", "shipped_cases", "solvers", "solve", "Result", "read_run", "compare",
@@ -101,18 +101,61 @@ class Result:
                 f"steps={steps}, stages={len(self.stages['s'])}, F/F0 at the end={end:.4g}, "
                 f"solve_seconds={self.solve_seconds:.3g}{where})")
 
+    def _repr_html_(self) -> str:
+        """Scales, stages reached and the final values, as tables in Jupyter."""
+        import html
+        sc, h = self.scales, self.history
+        units = dict(a0="m", d0="m", F0="N", p0="Pa", E_star="Pa", G_star="Pa",
+                     s_hat_per_m="1/m")
+
+        def table(caption, rows):
+            body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r)
+                           + "</tr>" for r in rows)
+            return (f"<table><caption style='text-align:left'>{caption}</caption>{body}"
+                    "</table>")
+
+        from wearcheck.comparisons.present import frames
+        hu = frames.dictionary(self)["history_csv"]
+        end = [(k, f"{float(np.asarray(v)[-1]):.6g}", hu.get(k, {}).get("unit", ""))
+               for k, v in h.items() if np.size(v)]
+        parts = [f"<details open><summary><b>Result</b> {html.escape(self.solver)}, "
+                 f"{html.escape(Path(self.case.source).name)}</summary>",
+                 table("scales of the unworn contact",
+                       [(k, f"{v:.6g}", units.get(k, "")) for k, v in sc.items()]),
+                 table(f"{len(self.stages['s'])} of {len(self.case.stages.s_hat)} stages "
+                       "reached", [("ŝ", ", ".join(f"{v:.3g}" for v in self.stages["s_hat"]))]),
+                 table(f"at the end ({len(h['s']) - 1} steps, "
+                       f"{self.solve_seconds:.3g} s)", end)]
+        if self.warnings:
+            parts.append("<p>" + "<br>".join(html.escape(str(w)) for w in self.warnings)
+                         + "</p>")
+        if self.path:
+            parts.append(f"<p>run directory: <code>{html.escape(str(self.path))}</code></p>")
+        return "".join(parts) + "</details>"
+
     @property
     def scales(self) -> dict:
         """E*, G*, a0, d0, F0, p0 of the unworn contact and ŝ per metre of sliding."""
         return reference.scales(self.case)
 
     def history_frame(self):
-        """The history as a pandas DataFrame (needs pandas)."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("history_frame() needs pandas: pip install pandas") from None
-        return pd.DataFrame({k: np.asarray(v) for k, v in self.history.items()})
+        """The history as a pandas DataFrame indexed by the sliding distance s [m];
+        ``attrs`` holds each column's unit and meaning, the solver and the scales
+        (needs pandas: ``pip install "wearcheck[xarray]"``)."""
+        from wearcheck.comparisons.present import frames
+        return frames.history_frame(self)
+
+    def to_xarray(self):
+        """History and stages as an xarray Dataset with units, meanings and provenance
+        as attributes (needs xarray: ``pip install "wearcheck[xarray]"``)."""
+        from wearcheck.comparisons.present import frames
+        return frames.to_xarray(self)
+
+    def to_netcdf(self, path: str | Path) -> Path:
+        """Write :meth:`to_xarray` as a netCDF file (atomically; never over a file that
+        is not a wearcheck netCDF file)."""
+        from wearcheck.comparisons.present import frames
+        return frames.write_netcdf(self, path)
 
     def write(self, out: str | Path) -> Path:
         """Write the run directory ``out`` atomically (as ``wearcheck run`` does)."""
@@ -171,7 +214,7 @@ def solve(case: str | Path | Case, solver: str = "mdr", *,
     missing = list(case.stages.s_hat)[len(run.stage_s):]
     if missing:
         text = ("the run ended before the stages at ŝ = " + ", ".join(f"{s:g}" for s in missing)
-                + f" ({_end_reason(case)}); they are not in result.stages")
+                + f" ({case.end_condition}); they are not in result.stages")
         notes.append(text)
         warnings.warn(text, stacklevel=2)
     stages = dict(s=np.asarray(run.stage_s, float),
@@ -181,15 +224,6 @@ def solve(case: str | Path | Case, solver: str = "mdr", *,
     return Result(case=case, solver=solver, history=dict(run.history), stages=stages,
                   fields=run.fields, info=dict(run.info), solve_seconds=run.solve_seconds,
                   warnings=notes, _run=run)
-
-
-def _end_reason(case) -> str:
-    sl = case.sliding
-    if sl.until == "force_fraction":
-        return f"it stops once F < {sl.force_fraction:g} F0"
-    if sl.until == "distance":
-        return f"it stops at s = {sl.distance:g} m"
-    return f"it stops at its {sl.until}"
 
 
 def read_run(path: str | Path) -> Result:
@@ -238,8 +272,8 @@ def refine(case: str | Path | Case, out: str | Path, solver: str = "mdr", *,
     case = load_case(case)
     levels = None if levels is None else [_plain(v) for v in _listed(levels, "levels")]
     steps = None if steps is None else [_plain(v) for v in _listed(steps, "steps")]
-    return _refine(case, (), solver, out, levels=levels, steps=steps, tolerance=tolerance,
-                   scheduler=scheduler, workers=workers, quiet=quiet, case=case)
+    return _refine(case, solver, out, levels=levels, steps=steps, tolerance=tolerance,
+                   scheduler=scheduler, workers=workers, quiet=quiet)
 
 
 def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path,
@@ -247,44 +281,23 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
           quiet: bool = True) -> list[dict]:
     """One run per combination of values on Dask: ``vary={"wear.mu": [0.2, 0.3]}``.
 
-    Returns the rows of ``sweep.csv`` (final ŝ, F/F0, wear depth, status per run).
+    Parameters
+    ----------
+    vary : case keys and their values, as :meth:`Case.derive` takes them (several
+        keys: every combination); a list key takes a list of lists. Or the
+        command line's text, ``"wear.mu=0.2,0.3"`` or a list of such (as ``--vary``).
+
+    Returns the rows of ``sweep.csv`` (the varied values, final ŝ, F/F0, wear
+    depth, status per run).
     """
     from wearcheck.comparisons.studies.sweep import sweep as _sweep
     case = load_case(case)
-    registry.get(solver)
     if isinstance(vary, str):
         vary = [vary]
-    if not isinstance(vary, Mapping):
-        # "wear.mu=0.2,0.3" as on the command line (--vary), or a list of such
-        from wearcheck.comparisons.studies.sweep import parse_vary
-        try:
-            vary = dict(parse_vary(text) for text in vary)
-        except TypeError:
-            raise CaseError(f"vary = {vary!r}: give a mapping such as {{\"wear.mu\": [0.2, "
-                            "0.3]}, or \"section.key=v1,v2\" strings") from None
-        vary = {k: [_parsed(k, v) for v in vals] for k, vals in vary.items()}
-    if not vary:
-        raise CaseError("vary is empty: name at least one key and its values, e.g. "
-                        "{\"wear.mu\": [0.2, 0.3]}")
-    values = {}
-    for key, vals in vary.items():
-        if isinstance(vals, (str, bytes)) or np.ndim(vals) == 0:
-            vals = [vals]  # one value, not a sequence of characters
-        values[key] = [_plain(v) for v in vals]
-        if not values[key]:
-            raise CaseError(f"vary '{key}': no values")
-        # a value its key can never take fails before any run, in the study's own
-        # check (as --vary: a value is judged with the other keys' values)
-    texts = [f"{key}=" + ",".join(_toml_value(v) for v in vals) for key, vals in values.items()]
-    rows = _sweep(case, (), texts, solver, out, scheduler=scheduler, workers=workers,
-                  quiet=quiet, case=case)
-    for row in rows:  # the values as given, not as text
-        for key, vals in values.items():
-            text = row.get(key)
-            match = [v for v in vals if _toml_value(v) == text]
-            if match:
-                row[key] = match[0]
-    return rows
+    if isinstance(vary, (list, tuple)) and vary and all(isinstance(v, str) for v in vary):
+        # "wear.mu=0.2,0.3" as on the command line (--vary), typed here once
+        vary = dict(cases.case.parse_vary(text) for text in vary)
+    return _sweep(case, vary, solver, out, scheduler=scheduler, workers=workers, quiet=quiet)
 
 
 def _listed(values, name: str) -> list:
@@ -294,15 +307,9 @@ def _listed(values, name: str) -> list:
             return [float(v) if any(c in v for c in ".eE") else int(v)
                     for v in values.split(",") if v.strip()]
         except ValueError:
-            raise CaseError(f"{name} = {values!r}: give numbers, e.g. [50, 100] or "
-                            "\"50,100\"") from None
+            raise ArgumentError(name, 'give numbers, e.g. [50, 100] or "50,100"',
+                                value=values) from None
     return list(np.ravel(values))
-
-
-def _parsed(key: str, text: str):
-    """A --vary value as TOML reads it, a bare word as itself (as --set does)."""
-    from wearcheck.cases.case import parse_override
-    return parse_override(f"{key}={text}")[2]
 
 
 def _plain(v):
@@ -313,16 +320,6 @@ def _plain(v):
         return v.tolist()
     return v
 
-
-def _toml_value(v) -> str:
-    import json
-    if isinstance(v, str):
-        return json.dumps(v)  # a TOML basic string
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
-    return repr(float(v)) if isinstance(v, float) else str(v)
 
 
 def export_vtk(run_dir: str | Path, revolve: int = 0) -> Path:

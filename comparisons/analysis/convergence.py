@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize
 
-from wearcheck.cases import CaseError
+from wearcheck.cases import ArgumentError, CaseError
 from wearcheck.comparisons import registry
 
 #: the error measures of a level, in the order tables show them
@@ -40,10 +40,11 @@ class Level:
         return name + (f"-step-{self.step_hat:g}" if self.step_hat is not None else "")
 
     @property
-    def overrides(self) -> tuple[str, ...]:
-        out = (f"{self.key}={self.resolution}",)
+    def changes(self) -> dict:
+        """The keys this level changes in the case, ``{"mdr.elements": 400}``."""
+        out = {self.key: self.resolution}
         if self.step_hat is not None:
-            out += (f"sliding.step_hat={self.step_hat!r}",)
+            out["sliding.step_hat"] = self.step_hat
         return out
 
 
@@ -63,17 +64,20 @@ def levels(solver: str, resolutions=None, steps=None) -> list[Level]:
     elif len(res) == 1:
         res = res * len(st)
     elif len(st) != len(res):
-        raise CaseError(f"--levels has {len(res)} values and --steps {len(st)}: give one step, "
-                        "one level, or as many steps as levels (they pair up)")
+        raise ArgumentError("steps", f"{len(st)} steps for {len(res)} {{levels}}: give one "
+                            "step, one level, or as many steps as levels (they pair up)",
+                            value=list(steps), also=("levels",))
     bad = [n for n in res if isinstance(n, bool) or not float(n).is_integer()]
     if bad:
-        raise CaseError(f"levels: {bad[0]!r} is not a whole number of {entry.resolution_key}")
+        raise ArgumentError("levels", f"{bad[0]!r} is not a whole number of "
+                            f"{entry.resolution_key}", value=list(res))
     out = [Level(solver, int(n), None if s is None else float(s)) for n, s in zip(res, st)]
     if len(out) < 2:
-        raise CaseError(f"levels: a refinement study needs at least two levels, got "
-                        f"{[lv.resolution for lv in out]} (three for an observed order)")
+        raise ArgumentError("levels", "a refinement study needs at least two levels (three "
+                            "for an observed order)", value=[lv.resolution for lv in out])
     if len({lv.name for lv in out}) != len(out):
-        raise CaseError("the levels repeat: " + ", ".join(lv.name for lv in out))
+        raise ArgumentError("levels", "the levels repeat: "
+                            + ", ".join(lv.name for lv in out), value=list(res))
     varied = refined_parameter(out)
     return sorted(out, key=lambda lv: -refinement_h(lv, varied))
 

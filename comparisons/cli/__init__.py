@@ -22,7 +22,7 @@ import signal
 import sys
 import warnings
 
-from wearcheck.cases import WearcheckError
+from wearcheck.cases import ArgumentError, WearcheckError
 
 #: exit codes beyond those of the WearcheckError classes
 EXIT_IO, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_TERMINATED = 4, 70, 130, 143
@@ -126,7 +126,9 @@ def main(argv=None) -> int:
             os.environ.setdefault("PYTHONWARNINGS", "ignore")  # Dask worker processes
             return int(args._main(args) or 0)
     except WearcheckError as exc:
-        print(f"{name}: error: {_one_line(exc)}", file=sys.stderr)
+        # a study's argument is named by its flag here, by its Python name in Python
+        said = exc.on_command_line() if isinstance(exc, ArgumentError) else exc
+        print(f"{name}: error: {_one_line(said)}", file=sys.stderr)
         return exc.exit_code
     except Terminated:
         print(f"{name}: terminated; nothing incomplete was written", file=sys.stderr)

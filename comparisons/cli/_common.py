@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 from wearcheck import cases
+from wearcheck.cases.case import parse_vary
 
 
 def add_case_arguments(parser) -> None:
@@ -30,6 +31,28 @@ def load_case(args) -> cases.Case:
         for text in case.warnings:
             print(f"note: {text}", file=sys.stderr)
     return case
+
+
+def varied(args) -> dict[str, list]:
+    """The ``--vary`` flags, typed once: ``{"section.key": [values]}`` as ``--set`` reads
+    them (a relative ``indenter.file`` relative to the case file, as there).
+
+    A key varied twice, or both set and varied, is refused.
+    """
+    out = {}
+    for text in args.vary:
+        name, values = parse_vary(text)
+        if name in out:
+            raise cases.CaseError(f"--vary names the key {name} twice")
+        if name == "indenter.file":
+            values = [str(Path(args.case).absolute().parent / v)
+                      if isinstance(v, str) and not Path(v).is_absolute() else v
+                      for v in values]
+        out[name] = values
+    both = set(out) & {o.partition("=")[0].strip() for o in args.overrides}
+    if both:
+        raise cases.CaseError(f"key {sorted(both)[0]} is both in --set and --vary")
+    return out
 
 
 def study_exit(rows) -> int:

@@ -13,9 +13,8 @@ from pathlib import Path
 
 from wearcheck.comparisons.studies.distributed import fmt
 from wearcheck.comparisons.studies.fretting_map import fretting_map
-from wearcheck.comparisons.studies.sweep import parse_vary
 
-from ._common import add_case_arguments, load_case, study_exit
+from ._common import add_case_arguments, load_case, study_exit, varied
 from .refine import add_cluster_arguments
 
 
@@ -32,12 +31,12 @@ def add_parser(sub):
 
 
 def main(args) -> int:
-    load_case(args)
+    case = load_case(args)
+    vary = varied(args)
     out = args.out or Path("runs") / f"{args.case.stem}-fretting-map"
-    varied = [parse_vary(v) for v in args.vary]
     try:
-        rows = fretting_map(args.case, args.overrides, varied, out, scheduler=args.scheduler,
-                            workers=args.workers, quiet=args.quiet)
+        rows = fretting_map(case, vary, out, scheduler=args.scheduler, workers=args.workers,
+                            quiet=args.quiet)
     except KeyboardInterrupt:
         print(f"wearcheck fretting-map: interrupted; the runs finished are in {out}",
               file=sys.stderr)

@@ -78,10 +78,9 @@ def main(args) -> int:
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-refine"
     try:
-        summary = refine(args.case, args.overrides, args.solver, out, levels=args.levels,
-                         steps=args.steps, tolerance=args.tolerance, stage=args.stage,
-                         scheduler=args.scheduler, workers=args.workers, quiet=args.quiet,
-                         case=case)
+        summary = refine(case, args.solver, out, levels=args.levels, steps=args.steps,
+                         tolerance=args.tolerance, stage=args.stage,
+                         scheduler=args.scheduler, workers=args.workers, quiet=args.quiet)
     except KeyboardInterrupt as exc:
         from . import Terminated
         written = getattr(exc, "summary_written", False)

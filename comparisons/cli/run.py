@@ -59,9 +59,8 @@ def main(args) -> int:
     missing = [] if case.fretting is not None else list(case.stages.s_hat)[len(result.stage_s):]
     if missing and not args.quiet:
         # as the Python API warns: a stage the user asked for is not in stages.npz
-        from wearcheck.api import _end_reason
         print("note: the run ended before the stages at ŝ = "
-              + ", ".join(f"{s:g}" for s in missing) + f" ({_end_reason(case)}); "
+              + ", ".join(f"{s:g}" for s in missing) + f" ({case.end_condition}); "
               "stages.npz does not hold them", file=sys.stderr)
     if not args.quiet:
         print(f"{args.solver}: {len(result.history['s']) - 1} steps, "

@@ -14,9 +14,9 @@ from pathlib import Path
 from wearcheck.comparisons.studies.distributed import fmt
 from wearcheck.comparisons import registry
 
-from wearcheck.comparisons.studies.sweep import parse_vary, sweep
+from wearcheck.comparisons.studies.sweep import sweep
 
-from ._common import add_case_arguments, load_case, study_exit
+from ._common import add_case_arguments, load_case, study_exit, varied
 from .refine import add_cluster_arguments
 
 
@@ -36,20 +36,20 @@ def add_parser(sub):
 
 def main(args) -> int:
     case = load_case(args)
+    vary = varied(args)
     out = args.out or Path("runs") / f"{args.case.stem}-sweep"
     try:
-        rows = sweep(args.case, args.overrides, args.vary, args.solver, out,
-                     scheduler=args.scheduler, workers=args.workers, quiet=args.quiet, case=case)
+        rows = sweep(case, vary, args.solver, out, scheduler=args.scheduler,
+                     workers=args.workers, quiet=args.quiet)
     except KeyboardInterrupt as exc:
         from . import Terminated
         print(f"wearcheck sweep: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}"
               f"; the runs finished are in {out}, no sweep.csv was written", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
-    names = [n for n, _ in (parse_vary(v) for v in args.vary)]
     print(f"{'run':<40} {'wall s':>8} {'final ŝ':>8} {'final F/F0':>10}  status")
     for r in rows:
         print(f"{r['run']:<40} {fmt(r['wall_seconds'], '.3g'):>8} "
               f"{fmt(r['final_s_hat'], '.4g'):>8} {fmt(r['final_F_over_F0'], '.4g'):>10}  "
               f"{r['status']}")
-    print(f"-> {Path(out) / 'sweep.csv'} ({', '.join(names)})")
+    print(f"-> {Path(out) / 'sweep.csv'} ({', '.join(vary)})")
     return study_exit(rows)

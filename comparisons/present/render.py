@@ -30,8 +30,8 @@ import numpy as np
 
 from wearcheck.cases import WearcheckError
 from wearcheck.comparisons.rundir import Run, atomic_directory
-from wearcheck.comparisons.present.vtk import (SURFACE_SEGMENTS, VTK_QUADRATIC_TRIANGLE, VTK_TRIANGLE, check_fields, grid,
-                  orient_triangles, revolve_curve, section_data, unworn_profile)
+from wearcheck.comparisons.present.vtk import (SURFACE_SEGMENTS, VTK_QUADRATIC_TRIANGLE,
+                  VTK_TRIANGLE, check_fields, grid, nice_factor, orient_triangles, revolve_curve, section_data, unworn_profile)
 
 
 class RenderError(WearcheckError):
@@ -59,13 +59,6 @@ def _plotter():
     plotter = pv.Plotter(off_screen=True, window_size=list(WINDOW_SIZE))
     plotter.set_background("white")
     return plotter
-
-
-def nice_factor(x: float) -> float:
-    """The largest of 1, 2, 5 times a power of ten not above x (x > 0)."""
-    e = np.floor(np.log10(x))
-    m = x / 10.0**e
-    return float((5.0 if m >= 5 else 2.0 if m >= 2 else 1.0) * 10.0**e)
 
 
 def zoom_window(points, contact_nodes, a0):

@@ -3,7 +3,11 @@
 ``export_run(run_dir, revolve=0)`` writes ``RUN_DIR/vtk/`` atomically. Every
 series is a ``NAME.pvd`` collection of ``NAME_KKK.vtu`` files, one per stored
 stage K, whose time values are the sliding distances s [m]; each VTU also
-holds the field data ``s``, ``s_hat``, ``stage`` and ``TimeValue`` (= s).
+holds the field data ``s``, ``s_hat``, ``stage``, ``TimeValue`` (= s), ``units``
+(the point arrays' units as UTF-8 JSON text in bytes, ``{"pressure": "Pa", ...}``:
+VTK string arrays would stop meshio reading the file) and ``warp_scale`` (the factor
+that draws the worn relief at about half the surface's radius: heights are
+microns over radii of a tenth of a millimetre).
 
 Coordinates: the r–z section lies in the x–y plane (x = r, y = z, the axis of
 symmetry is the y axis, ParaView's default "up"); a revolved point at angle θ
@@ -324,9 +328,47 @@ def unworn_profile(run: Run, r):
     return height_xy(ind, x, y, run.case.table).mean(axis=-1)
 
 
+#: units of the point arrays the series write ("" dimensionless)
+UNITS = dict(f="m", wear_depth="m", pressure="Pa", p_over_p0="", r="m", shear_traction="Pa",
+             displacement="m", sigma_rr="Pa", sigma_zz="Pa", sigma_tt="Pa", sigma_rz="Pa",
+             von_mises="Pa", stress="Pa", contact_pressure="Pa", contact_node="",
+             profile="m", gap="m")
+
+
+def nice_factor(x: float) -> float:
+    """The largest of 1, 2, 5 times a power of ten not above x (x > 0)."""
+    e = np.floor(np.log10(x))
+    m = x / 10.0**e
+    return float((5.0 if m >= 5 else 2.0 if m >= 2 else 1.0) * 10.0**e)
+
+
+def warp_scale(r, f) -> float:
+    """A round factor that draws heights ``f`` (K, M) over radii ``r`` at about half
+    the radius span (1 when the surface has no relief)."""
+    span = float(np.ptp(np.asarray(f, float)))
+    extent = float(np.ptp(np.asarray(r, float)))
+    return nice_factor(0.5 * extent / span) if span > 0 and extent > 0 else 1.0
+
+
+def units_of(names) -> np.ndarray:
+    """The units of the arrays ``names`` (``UNITS``; "?" for one it does not know) as
+    UTF-8 bytes of a JSON object, the field data ``units``: read it back with
+    ``json.loads(bytes(array))``."""
+    import json
+    text = json.dumps({n: UNITS.get(n, "?") for n in names}, ensure_ascii=False)
+    return np.frombuffer(text.encode("utf-8"), dtype=np.uint8).copy()
+
+
+def read_units(array) -> dict:
+    """The ``units`` field data of a file written here, as a dict."""
+    import json
+    return json.loads(bytes(np.asarray(array, dtype=np.uint8).ravel()).decode("utf-8"))
+
+
 def stage_field_data(run: Run, k):
     s = float(run.stages["s"][k])
-    return dict(s=[s], s_hat=[float(run.stages["s_hat"][k])], stage=[k], TimeValue=[s])
+    return dict(s=[s], s_hat=[float(run.stages["s_hat"][k])], stage=[k], TimeValue=[s],
+                warp_scale=[warp_scale(run.stages["r"], run.stages["f"])])
 
 
 # -- writing ---------------------------------------------------------------
@@ -344,6 +386,7 @@ def _save(mesh, path, point_data, field_data):
         mesh.point_data[name] = values
     for name, values in field_data.items():
         mesh.field_data[name] = np.asarray(values)
+    mesh.field_data["units"] = units_of(point_data)
     mesh.save(path)
 
 

@@ -2,11 +2,14 @@
 
 ``write_image_series(directory, fields, stage_s, ...)`` writes
 ``NAME_KKK.vti`` for every stored stage K and ``NAME.pvd`` over them (time
-values: the sliding distances s [m]). Each image is the BEM's pixel grid:
-one VTK cell per pixel (the pressure is uniform on a pixel), origin and
-spacing in metres, x along the first array axis; cell data ``profile``,
+values: the sliding distances s [m]). Each image is the BEM's pixel grid as
+points at the pixel centres (so that Warp By Scalar and Contour apply at once,
+without Cell Data to Point Data; the pressure is the pixel's mean), origin and
+spacing in metres, x along the first array axis; point data ``profile``,
 ``wear_depth``, ``pressure``, ``gap`` [m, m, Pa, m] (and ``p_over_p0`` when
-p0 is given); field data ``s``, ``stage`` (and ``s_hat``).
+p0 is given); field data ``s``, ``stage``, ``TimeValue`` (= s), ``units`` (the point
+arrays' units, JSON in UTF-8 bytes: ``vtk.read_units``), ``warp_scale`` (Warp By Scalar's factor that
+draws the relief at about half the grid's width), and ``s_hat``.
 
 ``write_bem_fields(directory, run, revolve=0)`` is the BEM's registry
 ``export_vtk``: ``wearcheck run --solver bem --vtk`` (and ``wearcheck
@@ -22,7 +25,7 @@ import numpy as np
 
 from wearcheck.cases import WearcheckError
 
-from wearcheck.comparisons.present.vtk import pvd_text
+from wearcheck.comparisons.present.vtk import pvd_text, units_of, warp_scale
 from wearcheck.comparisons.rundir import Run
 
 #: the per-stage surface fields of a BEM run (``RunResult.fields``)
@@ -65,19 +68,23 @@ def write_image_series(directory, fields, stage_s, *, s_hat_per_m: float | None 
     x = np.asarray(fields["x"], dtype=float)
     y = np.asarray(fields["y"], dtype=float)
     dx, dy = x[1] - x[0], y[1] - y[0]
-    # one cell per pixel: the points are the pixel corners
-    image = pv.ImageData(dimensions=(len(x) + 1, len(y) + 1, 1), spacing=(dx, dy, 1.0),
-                         origin=(x[0] - dx / 2, y[0] - dy / 2, 0.0))
+    # one point per pixel, at its centre
+    image = pv.ImageData(dimensions=(len(x), len(y), 1), spacing=(dx, dy, 1.0),
+                         origin=(x[0], y[0], 0.0))
+    warp = warp_scale(x, np.asarray(fields["profile"], float))
     entries = []
     for k, s in enumerate(stage_s):
         image.clear_data()
         for key in IMAGE_FIELDS:
-            # VTK orders cells with x fastest: Fortran order of the (x, y) array
-            image.cell_data[key] = np.asarray(fields[key][k], dtype=float).ravel(order="F")
+            # VTK orders points with x fastest: Fortran order of the (x, y) array
+            image.point_data[key] = np.asarray(fields[key][k], dtype=float).ravel(order="F")
         if p0 is not None:
-            image.cell_data["p_over_p0"] = image.cell_data["pressure"] / p0
+            image.point_data["p_over_p0"] = image.point_data["pressure"] / p0
         image.field_data["s"] = np.array([s])
+        image.field_data["TimeValue"] = np.array([s])
         image.field_data["stage"] = np.array([k])
+        image.field_data["warp_scale"] = np.array([warp])
+        image.field_data["units"] = units_of(image.point_data.keys())
         if s_hat_per_m is not None:
             image.field_data["s_hat"] = np.array([s * s_hat_per_m])
         file = f"{name}_{k:03d}.vti"

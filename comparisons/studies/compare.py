@@ -42,7 +42,8 @@ def _progress(label, quiet):
 def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tuple[str, ...]]:
     """The reference and the solvers of a comparison (reference first).
 
-    ``solvers`` None: every registered solver that supports the case. A named
+    ``solvers`` None: every registered solver that supports the case, but for
+    opt-in ones (``Solver.default`` False), which run when named. A named
     solver that does not support it is refused with its reason.
     """
     if solvers:
@@ -52,7 +53,7 @@ def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tupl
             if reason is not None:
                 raise cases.CaseError(f"solver '{name}' cannot run this case: {reason}")
     else:
-        chosen = registry.supporting(case)
+        chosen = tuple(n for n in registry.supporting(case) if registry.get(n).default)
     ref = reference_solver or (DEFAULT_REFERENCE if DEFAULT_REFERENCE in chosen else chosen[0]
                                if chosen else DEFAULT_REFERENCE)
     registry.get(ref)
@@ -63,8 +64,7 @@ def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tupl
                               f"({', '.join(chosen) or 'none'})"
                               + (f"; it cannot run this case: {reason}" if reason else ""))
     if len(chosen) < 2:
-        why = "; ".join(f"{n}: {registry.get(n).supports(case) or 'not selected'}"
-                        for n in registry.names() if n not in chosen)
+        why = "; ".join(f"{n}: {reason}" for n, reason in skipped_solvers(case, chosen).items())
         raise cases.CaseError("a comparison needs two solvers that support the case; only "
                               f"{', '.join(chosen) or 'none'} can ({why})")
     return ref, (ref,) + tuple(n for n in chosen if n != ref)
@@ -225,11 +225,20 @@ def analyse(case, results, reference_solver=None) -> dict:
 
 
 def skipped_solvers(case, chosen) -> dict:
-    """The registered solvers a comparison leaves out, each with its reason."""
+    """The registered solvers a comparison leaves out, each with its reason: why it cannot
+    run the case (or here), that it is opt-in (``Solver.default`` False: named to run), or
+    that it was not among the solvers asked for."""
     out = {}
     for name in registry.names():
-        if name not in chosen:
-            out[name] = registry.get(name).supports(case) or "not among the solvers asked for"
+        if name in chosen:
+            continue
+        entry = registry.get(name)
+        reason = entry.supports(case)
+        if reason is None:
+            reason = ("not among the solvers asked for" if entry.default else
+                      "opt-in (an external program): name it to compare it, e.g. --solvers "
+                      + ",".join(list(chosen) + [name]))
+        out[name] = reason
     return out
 
 

@@ -1,11 +1,11 @@
 """Run many variants of one case on Dask, write each as a run directory.
 
 The runner behind ``wearcheck refine`` and ``wearcheck sweep``. Each task
-builds its case from the parsed case file plus ``section.key=value``
-overrides, solves it, and returns the result with its wall time and peak
-memory; the client writes each run directory atomically as results arrive. A
-task that fails (a rejected case, a solver error, a crashed worker) comes back
-as an error outcome; the others go on.
+builds its case from the study's :class:`~wearcheck.cases.Case` and the task's
+typed changes (``case.derive({"mdr.elements": 400})``), solves it, and returns
+the result with its wall time and peak memory; the client writes each run
+directory atomically as results arrive. A task that fails (a rejected case, a
+solver error, a crashed worker) comes back as an error outcome; the others go on.
 
 By default the tasks run on an embedded ``LocalCluster`` bound to 127.0.0.1
 without a dashboard: one single-threaded worker process per core. Processes,
@@ -31,11 +31,10 @@ import time
 import traceback
 import uuid
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from wearcheck import cases
-from wearcheck.cases.case import read_raw
 from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.comparisons.studies import scheduler as scheduler_mod
 from wearcheck.comparisons.rundir import jsonable, write_run
@@ -62,26 +61,29 @@ def _answer_timeout() -> float:
 
 
 def check_workers(scheduler: str | None, workers) -> None:
-    """--workers must be a positive count (at most WORKERS_PER_CORE per core), and
+    """``workers`` must be a positive count (at most WORKERS_PER_CORE per core), and
     only for the embedded cluster."""
     if scheduler and workers:
-        raise cases.CaseError("--workers sizes the embedded cluster; an existing one "
-                              "(--scheduler) has the workers it has")
+        raise cases.ArgumentError("workers", "sizes the embedded cluster; an existing one "
+                                  "({scheduler}) has the workers it has", value=workers,
+                                  also=("scheduler",))
     if workers is None:
         return
     most = WORKERS_PER_CORE * (os.cpu_count() or 1)
     if isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= most:
-        raise cases.CaseError(f"--workers {workers}: must be a whole number from 1 to {most} "
-                              f"({WORKERS_PER_CORE} per core on this machine)")
+        raise cases.ArgumentError("workers", f"must be a whole number from 1 to {most} "
+                                  f"({WORKERS_PER_CORE} per core on this machine)",
+                                  value=workers)
 
 
 @dataclass(frozen=True)
 class Task:
-    """One run: its directory name, solver and overrides on top of the base case."""
+    """One run: its directory name, solver and the keys it changes in the study's case
+    (``{"mdr.elements": 400}``, typed, as :meth:`Case.derive` takes them)."""
 
     name: str
     solver: str
-    overrides: tuple[str, ...] = ()
+    changes: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -156,9 +158,10 @@ def _progress_sender(topic: str | None, name: str):
     return progress
 
 
-def execute(raw: dict, source: str, overrides: tuple[str, ...], solver: str, name: str,
+def execute(base: cases.Case, changes: dict, solver: str, name: str,
             topic: str | None = None, solve=None) -> dict:
-    """Build the case, solve it; never raises. Runs inside a worker.
+    """Build the case (``base`` with ``changes``), solve it; never raises. Runs inside a
+    worker.
 
     ``solve(case, solver, progress)`` defaults to ``comparisons.solvers.solve``.
     """
@@ -178,7 +181,7 @@ def execute(raw: dict, source: str, overrides: tuple[str, ...], solver: str, nam
     t0, c0 = time.perf_counter(), time.process_time()
     with _PeakRSS() as rss:
         try:
-            case = cases.from_dict(raw, source=source, overrides=list(overrides))
+            case = base.derive(changes) if changes else base
             from wearcheck.comparisons.resources import check_memory
             check_memory(case, solver)  # this worker's memory, before allocating
             result = solve(case, solver, _progress_sender(topic, name))
@@ -362,7 +365,7 @@ def _unclaim(out: Path, remove_directory: bool) -> None:
         pass
 
 
-def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Task], out: str | Path, *,
+def run_cases(case: cases.Case, tasks: list[Task], out: str | Path, *,
               scheduler: str | None = None, workers: int | None = None, quiet: bool = False,
               solve=None, extra_meta: dict | None = None,
               study_files=("meta.json",)) -> list[Outcome]:
@@ -371,19 +374,14 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
     ``study_files``: the files the study will write into ``out`` itself,
     checked (with the runs' directories) before the cluster starts.
 
-    ``source`` is a case file or a :class:`cases.Case`; ``base_overrides`` apply
-    to every task before its own. Returns the outcomes
+    Each task's case is ``case`` with the task's changes, built in its worker
+    (the case travels pickled, typed: no text on the way). Returns the outcomes
     in the order of ``tasks``; each run directory is written (atomically, by
     ``rundir.write_run``) as soon as its result arrives, so an interrupted study
     keeps the levels already done.
     """
     from distributed import KilledWorker, as_completed
 
-    if isinstance(source, cases.Case):  # a case built or derived in Python
-        raw, source = cases.to_dict(source), source.source
-    else:
-        source = str(Path(source).absolute())
-        raw = read_raw(Path(source))  # as cases.load reads it (a BOM, errors)
     check_workers(scheduler, workers)
     if scheduler:
         scheduler_mod.check_address(scheduler)  # before the study directory is made
@@ -422,8 +420,8 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
                 return
             while pending and running.count() < slots:
                 t = pending.pop(0)
-                fut = client.submit(execute, raw, source, tuple(base_overrides) + t.overrides,
-                                    t.solver, t.name, topic, solve, pure=False,
+                fut = client.submit(execute, case, t.changes, t.solver, t.name, topic, solve,
+                                    pure=False,
                                     key=f"{t.name}-{uuid.uuid4().hex[:8]}")
                 futures[fut] = t
                 running.add(fut)
@@ -470,7 +468,7 @@ def run_cases(source: "str | Path | cases.Case", base_overrides, tasks: list[Tas
                 outcome = Outcome(task=t, ok=False, message=watchdog.reason or text)
             fut.release()
             if outcome.ok:
-                meta = dict(task=t.name, overrides=list(t.overrides),
+                meta = dict(task=t.name, changes=dict(t.changes),
                             wall_seconds=outcome.wall_seconds,
                             cpu_seconds=outcome.cpu_seconds, peak_rss_mb=outcome.peak_rss_mb,
                             worker=outcome.worker)
@@ -521,8 +519,9 @@ def study_meta(out) -> dict:
     return meta if isinstance(meta, dict) else {}
 
 
-def record_study(out: Path, study: str, case, overrides, prov) -> None:
-    """Add this study's provenance to DIR/meta.json (kept for the other studies).
+def record_study(out: Path, study: str, case, prov, arguments: dict | None = None) -> None:
+    """Add this study's provenance, resolved case and ``arguments`` (what it varied, as
+    given) to DIR/meta.json (kept for the other studies).
 
     A study of the same name recorded before (a re-run, or a sweep that adds
     values) stays, under ``earlier`` in the new entry, latest first.
@@ -532,7 +531,7 @@ def record_study(out: Path, study: str, case, overrides, prov) -> None:
         meta = study_meta(out)
         studies = meta.setdefault("studies", {})
         entry = dict(prov, case_file=str(getattr(case, "source", "")),
-                     overrides=list(overrides), resolved_case=cases.to_toml(case))
+                     arguments=arguments or {}, resolved_case=cases.to_toml(case))
         previous = studies.get(study)
         if isinstance(previous, dict):
             earlier = previous.pop("earlier", [])

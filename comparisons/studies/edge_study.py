@@ -30,7 +30,8 @@ def resolution_of(case, key: str):
 
 
 def edge_levels(case, results, sc) -> dict:
-    """Per solver, the (label, overrides) of the extra runs of the edge study."""
+    """Per solver, the (label, changes) of the extra runs of the edge study: the keys each
+    changes in the case, typed (``{"mdr.elements": 400}``)."""
     out = {}
     for name in results:
         key = registry.get(name).resolution_key
@@ -38,12 +39,12 @@ def edge_levels(case, results, sc) -> dict:
             continue
         n = resolution_of(case, key)
         levels = [(f"grid x{g:g} ({key}={max(2, round(g * n))})",
-                   [f"{key}={max(2, round(g * n))}"]) for g in EDGE_GRID_FACTORS]
+                   {key: max(2, round(g * n))}) for g in EDGE_GRID_FACTORS]
         h = step_hat_used(results[name], sc["s_hat_per_m"])
         if math.isfinite(h):
             hs = EDGE_STEP_FACTOR * h
             levels.append((f"step x{EDGE_STEP_FACTOR:g} (sliding.step_hat={hs:.4g})",
-                           [f"sliding.step_hat={hs!r}"]))
+                           {"sliding.step_hat": hs}))
         out[name] = levels
     return out
 
@@ -56,26 +57,25 @@ def edge_study(case, results, *, solve=None, quiet=True) -> dict:
     """
     solve = solve or compare.solve_case
     sc = reference.scales(case)
-    toml = cases.to_toml(case)
     out = dict(solvers={}, runs={})
     for name, levels in edge_levels(case, results, sc).items():
-        lv = [dict(label="case", overrides=[], spacing=grid_spacing(results[name], sc["a0"]),
+        lv = [dict(label="case", changes={}, spacing=grid_spacing(results[name], sc["a0"]),
                    step_hat=step_hat_used(results[name], sc["s_hat_per_m"]),
                    seconds=float(results[name].solve_seconds),
                    peaks=peaks_of(results[name], sc))]
         failed = []
-        for label, overrides in levels:
-            c = cases.from_dict(_raw(toml), source=case.source, overrides=overrides)
+        for label, changes in levels:
+            c = case.derive(changes)
             bar = _progress(f"edge {name} {label}", quiet)
             try:
                 res = solve(c, name, progress=bar)
             except cases.SolverError as exc:
-                failed.append(dict(label=label, overrides=overrides, error=str(exc)))
+                failed.append(dict(label=label, changes=changes, error=str(exc)))
                 continue
             finally:
                 bar.close()
             out["runs"][f"{name}-{_slug(label)}"] = (name, c, res)
-            lv.append(dict(label=label, overrides=overrides,
+            lv.append(dict(label=label, changes=changes,
                            spacing=grid_spacing(res, sc["a0"]),
                            step_hat=step_hat_used(res, sc["s_hat_per_m"]),
                            seconds=float(res.solve_seconds), peaks=peaks_of(res, sc)))
@@ -84,11 +84,6 @@ def edge_study(case, results, *, solve=None, quiet=True) -> dict:
                                     failed=failed, stages=edge_peak.assess(lv))
     out["summary"] = summarise_edge_study(out)
     return out
-
-
-def _raw(toml_text):
-    import tomllib
-    return tomllib.loads(toml_text)
 
 
 def _slug(text):

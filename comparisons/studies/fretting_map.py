@@ -13,9 +13,7 @@ worn volume per cycle and the energy dissipated in the last cycle;
 
 from __future__ import annotations
 
-import itertools
 import math
-import re
 from pathlib import Path
 
 from wearcheck import cases
@@ -23,26 +21,12 @@ from wearcheck.cases import reference
 
 from wearcheck.comparisons.outputs import write_study_file, write_study_text
 from wearcheck.comparisons.rundir import provenance
-from wearcheck.comparisons.studies.distributed import Task, fmt, record_study, run_cases
-from wearcheck.comparisons.studies.sweep import check_varied
+from wearcheck.comparisons.studies.distributed import record_study, run_cases
+from wearcheck.comparisons.studies.sweep import check_varied, csv_cell, tasks_for, varied_values
 
 COLUMNS = ("run", "status", "regime", "amplitude_over_u_star", "u_star", "normal_force",
            "stick_radius_over_a0", "tangential_force_amplitude", "wear_volume_per_cycle",
            "energy_last_cycle", "wall_seconds")
-
-
-def _dir_part(text: str) -> str:
-    return re.sub(r"[^A-Za-z0-9._+-]+", "_", text).strip("_") or "_"
-
-
-def tasks_for(varied: list[tuple[str, list[str]]]) -> list[Task]:
-    """One MDR task per combination of the varied values."""
-    names = [n for n, _ in varied]
-    out = []
-    for combo in itertools.product(*(vals for _, vals in varied)):
-        name = "-".join(["fretting"] + [f"{n}-{_dir_part(v)}" for n, v in zip(names, combo)])
-        out.append(Task(name, "mdr", tuple(f"{n}={v}" for n, v in zip(names, combo))))
-    return out
 
 
 def summarise(outcome) -> dict:
@@ -66,42 +50,43 @@ def summarise(outcome) -> dict:
     return row
 
 
-def fretting_map(case_path, overrides, varied, out, *, scheduler=None, workers=None,
+def fretting_map(case: cases.Case, vary, out, *, scheduler=None, workers=None,
                  quiet=False, solve=None) -> list[dict]:
-    """Run the map into ``out``; write fretting_map.csv and fretting_map.png; return the rows."""
-    case = cases.load(case_path, overrides)
+    """Run the map of ``case`` into ``out``; write fretting_map.csv and fretting_map.png;
+    return the rows.
+
+    ``vary``: one or two case keys and their values, ``{"fretting.amplitude": [1e-7,
+    1e-6], "loading.force": [1.0, 2.0]}`` (Python values, as ``Case.derive`` takes them).
+    """
     if case.fretting is None:
-        raise cases.CaseError(f"case '{case_path}' has no [fretting] section; the running-"
+        raise cases.CaseError(f"case '{case.source}' has no [fretting] section; the running-"
                               "condition map varies a fretting case")
-    if not 1 <= len(varied) <= 2:
-        raise cases.CaseError(f"fretting-map takes one or two --vary keys, got {len(varied)}")
-    names = check_varied(varied, overrides, case)
-    tasks = tasks_for(varied)
+    values = varied_values(vary)
+    if not 1 <= len(values) <= 2:
+        raise cases.ArgumentError("vary", f"the map takes one or two keys, got {len(values)}",
+                                  value=list(values))
+    check_varied(case, values)
+    names = list(values)
+    tasks = tasks_for("fretting", "mdr", values)
     prov = provenance()
     out = Path(out)
-    outcomes = run_cases(case_path, overrides, tasks, out, scheduler=scheduler, workers=workers,
+    outcomes = run_cases(case, tasks, out, scheduler=scheduler, workers=workers,
                          quiet=quiet, solve=solve, extra_meta=dict(study="fretting-map"),
                          study_files=("meta.json", "fretting_map.csv", "fretting_map.png"))
     rows = []
     for t, o in zip(tasks, outcomes):
         row = summarise(o)
-        row.update({n: ov.partition("=")[2] for n, ov in zip(names, t.overrides)})
+        row.update(t.changes)
         rows.append(row)
-    record_study(out, "fretting-map", case, overrides, prov)
+    record_study(out, "fretting-map", case, prov, dict(vary=values))
     head = [f"# wearcheck fretting-map: {', '.join(names)}",
             f"# command: {prov['command']}",
             "# regime: partial slip when a stick zone survives the last cycle; "
             "u_star = 3 mu F0 / (4 G* a0) of the unworn contact; wear_volume_per_cycle = "
             "final worn volume / cycles [m^3]; energy_last_cycle [J]",
             ",".join(list(names) + list(COLUMNS))]
-    body = [",".join(_cell(r[k]) for k in list(names) + list(COLUMNS)) for r in rows]
+    body = [",".join(csv_cell(r[k]) for k in list(names) + list(COLUMNS)) for r in rows]
     write_study_text(out, "fretting_map.csv", "\n".join(head + body) + "\n")
     from wearcheck.comparisons.present.fretting_map_figure import write_figure
     write_study_file(out, "fretting_map.png", lambda tmp: write_figure(rows, names, tmp))
     return rows
-
-
-def _cell(v):
-    if isinstance(v, str):
-        return '"' + v.replace('"', "'") + '"'
-    return fmt(v, ".10g")

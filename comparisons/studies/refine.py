@@ -25,41 +25,50 @@ from wearcheck.comparisons.present.study_figures import FIGURES
 from wearcheck.comparisons.rundir import jsonable, provenance
 
 
-def refine(case_path, overrides, solver, out, *, levels=None, steps=None, tolerance=0.01,
-           stage=None, scheduler=None, workers=None, quiet=False, solve=None, case=None) -> dict:
-    """Run a refinement study into ``out``; return its summary (as in the JSON).
+def refine(case: cases.Case, solver: str, out, *, levels=None, steps=None, tolerance=0.01,
+           stage=None, scheduler=None, workers=None, quiet=False, solve=None) -> dict:
+    """Run a refinement study of ``case`` into ``out``; return its summary (as in the JSON).
 
-    ``solve`` replaces the solver (tests inject one with a known order).
+    ``levels``: resolutions (the solver's resolution key; default its registry
+    levels); ``steps``: ``sliding.step_hat`` per level (one: all); ``stage``: the
+    stage ŝ of the profile figure and Richardson's estimate. ``solve`` replaces
+    the solver (tests inject one with a known order).
     """
-    case = case or cases.load(case_path, overrides)
-    if not tolerance > 0:
-        raise cases.CaseError(f"--tolerance {tolerance}: must be > 0")
+    if isinstance(tolerance, bool) or not isinstance(tolerance, (int, float)) \
+            or not tolerance > 0:
+        raise cases.ArgumentError("tolerance", "must be a number > 0", value=tolerance)
     if stage is not None and stage not in case.stages.s_hat:
-        raise cases.CaseError(f"--stage {stage}: not a stage of the case; stages.s_hat = "
-                              f"{list(case.stages.s_hat)}")
+        raise cases.ArgumentError("stage", "not a stage of the case; stages.s_hat = "
+                                  f"{list(case.stages.s_hat)}", value=stage)
     lvls = rf.levels(solver, levels, steps)
     for lv in lvls:  # a level the case cannot take is refused before any run starts
-        case.derive(list(lv.overrides))
-    refuse_unsupported(case, solver, [lv.overrides for lv in lvls], every=True)
+        try:
+            case.derive(lv.changes)
+        except cases.CaseError as exc:
+            named = "steps" if "sliding.step_hat" in str(exc) else "levels"
+            raise cases.ArgumentError(named, str(exc)) from None
+    refuse_unsupported(case, solver, [lv.changes for lv in lvls], every=True)
     varied = rf.refined_parameter(lvls)
-    tasks = [Task(lv.name, solver, lv.overrides) for lv in lvls]
+    tasks = [Task(lv.name, solver, lv.changes) for lv in lvls]
     out = Path(out)
     prov = provenance()
     # finest (longest) levels first, so that the short ones fill in around them
-    outcomes = run_cases(case_path, overrides, tasks[::-1], out, scheduler=scheduler,
+    outcomes = run_cases(case, tasks[::-1], out, scheduler=scheduler,
                          workers=workers, quiet=quiet, solve=solve,
                          extra_meta=dict(study=f"refine-{solver}"),
                          study_files=("meta.json", f"refinement-{solver}.json",
                                       f"refinement-{solver}.csv", "refinement.csv",
                                       *FIGURES))[::-1]
     summary = summarize(case, solver, lvls, outcomes, varied, tolerance, stage)
-    summary.update(case=str(case_path), overrides=list(overrides), provenance=prov)
+    summary.update(case=str(case.source), provenance=prov)
     written = False
     try:
         # one study at a time: refinement.csv and the figures combine every
         # study in the directory, meta.json records each
         with study_lock(out):
-            record_study(out, f"refine-{solver}", case, overrides, prov)
+            record_study(out, f"refine-{solver}", case, prov,
+                         dict(solver=solver, levels=levels, steps=steps, tolerance=tolerance,
+                              stage=stage))
             write_study_text(out, f"refinement-{solver}.json",
                              json.dumps(jsonable(summary), indent=2) + "\n")
             written = True

@@ -24,8 +24,8 @@ def sphere_case(case, ratio):
     """The case's body pressed (unworn, no sliding) to the depth whose half-space a0/R is ratio."""
     ind = case.indenter
     if ind.profile not in ("sphere", "paraboloid"):
-        raise cases.CaseError(f"--sphere-sweep needs indenter.profile = \"sphere\" or "
-                              f"\"paraboloid\", got \"{ind.profile}\"")
+        raise cases.ArgumentError("sphere_sweep", "needs indenter.profile = \"sphere\" or "
+                                  f"\"paraboloid\", got \"{ind.profile}\"")
     R, a = ind.radius, ratio * ind.radius
     depth = a * math.atanh(a / R) if ind.profile == "sphere" else a * a / R
     return case.replace(

@@ -1,9 +1,12 @@
 """Parameter sweeps on Dask (``wearcheck sweep``): one run per value of case keys.
 
-One run per value (the cartesian product of several ``--vary``), each in its
-own run directory in DIR, on the same Dask runner as ``wearcheck refine``;
-``sweep.csv`` summarises them. Values are written as for ``--set``; a value
-the case rejects, or a run that fails, is a row with its error.
+One run per combination of the values of ``vary`` (``{"wear.k": [1e-5, 1e-4]}``;
+several keys: their cartesian product), each in its own run directory in
+``out``, on the same Dask runner as ``wearcheck refine``; ``sweep.csv``
+summarises them. The values are Python values, as :meth:`Case.derive` takes
+them (the command line types its ``--vary`` text once, with
+``cases.case.parse_vary``); a value the case rejects in its combination, or a
+run that fails, is a row with its error.
 """
 
 from __future__ import annotations
@@ -11,90 +14,126 @@ from __future__ import annotations
 import itertools
 import math
 import re
+from collections.abc import Iterable, Mapping
 from pathlib import Path
 
+import numpy as np
+
 from wearcheck import cases
-from wearcheck.cases.case import parse_override
+from wearcheck.cases import ArgumentError
 from wearcheck.cases.reference import scales as case_scales
-from wearcheck.cases.schema import section_fields
+from wearcheck.cases.schema import format_value, key_problem
 from wearcheck.comparisons.studies.distributed import Task, fmt, record_study, run_cases
 from wearcheck.comparisons.outputs import study_lock, write_study_text
 from wearcheck.comparisons.rundir import provenance
 
 
-def split_values(text: str) -> list[str]:
-    """Split at commas outside brackets and quotes: ``[0, 1],[2]`` is two values."""
-    values, depth, quote, cur = [], 0, None, ""
-    for ch in text:
-        if quote:
-            quote = None if ch == quote else quote
-        elif ch in "\"'":
-            quote = ch
-        elif ch == "[":
-            depth += 1
-        elif ch == "]":
-            depth -= 1
-        elif ch == "," and depth == 0:
-            values.append(cur.strip())
-            cur = ""
-            continue
-        cur += ch
-    values.append(cur.strip())
-    return values
+def plain(value):
+    """numpy scalars and arrays as Python numbers and lists; tuples as lists."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, tuple):
+        return [plain(v) for v in value]
+    return value
 
 
-def check_varied(varied, overrides, case=None) -> list[str]:
-    """The varied key names; a key varied twice, or both set and varied, is refused.
+def varied_values(vary) -> dict[str, list]:
+    """``vary`` as ``{"section.key": [values]}`` of plain Python values.
 
-    With ``case``, each value is also tried on it alone: a value its key can
-    never take (a word for a number, a negative count) is refused here, before
-    the cluster starts, rather than as a failed run per combination. An error
-    about another key is left to the runs (the value may be fine in its
-    combination).
+    A key takes a sequence of values, or one value (a string is one value); a
+    list key (``stages.s_hat``) takes a list of lists. Refused naming ``vary``.
     """
-    names = [n for n, _ in varied]
-    if len(set(names)) != len(names):
-        raise cases.CaseError("--vary names a key twice: " + ", ".join(names))
-    both = set(names) & {o.partition("=")[0].strip() for o in overrides}
-    if both:
-        raise cases.CaseError(f"key {sorted(both)[0]} is both in --set and --vary")
-    if case is not None:
-        # a value is refused when every combination holding it fails on its own key
-        # (loading.force=1 alone fails on a depth-controlled case, but not beside
-        # --vary loading.control=force); the product is validation only, ms each
-        refused = {}
-        fine = set()
-        for combo in itertools.product(*([(n, v) for v in vals] for n, vals in varied)):
-            try:
-                case.derive([f"{n}={v}" for n, v in combo])
-                fine.update(combo)
-            except cases.CaseError as exc:
-                for n, v in combo:
-                    if f"key '{n}'" in str(exc):
-                        refused.setdefault((n, v), exc)
-                    else:
-                        fine.add((n, v))
-        for (name, v), exc in refused.items():
-            if (name, v) not in fine:
-                raise cases.CaseError(f"--vary {name}: {exc}")
-    return names
+    example = '{"wear.mu": [0.2, 0.3]}'
+    if not isinstance(vary, Mapping):
+        raise ArgumentError("vary", f"give a mapping of case keys to values, e.g. {example}",
+                            value=vary)
+    if not vary:
+        raise ArgumentError("vary", f"name at least one key and its values, e.g. {example}",
+                            value=dict(vary))
+    out = {}
+    for key, values in vary.items():
+        problem = key_problem(key)
+        if problem:
+            raise ArgumentError("vary", problem, key=key)
+        if isinstance(values, np.ndarray):
+            values = values.tolist() if values.ndim else [values.item()]
+        elif isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
+            values = [values]  # one value, not a sequence of characters
+        out[key] = [plain(v) for v in values]
+        if not out[key]:
+            raise ArgumentError("vary", "no values", key=key)
+    return out
+
+
+def value_text(value) -> str:
+    """A varied value as run directory names and ``sweep.csv`` show it."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(value_text(v) for v in value) + "]"
+    return format_value(value)
+
+
+def dir_part(text: str) -> str:
+    """``text`` as a piece of a directory name."""
+    return re.sub(r"[^A-Za-z0-9._+-]+", "_", text).strip("_") or "_"
+
+
+def check_varied(case, values: dict[str, list]) -> None:
+    """Refuse, before the cluster starts, a value its key can never take.
+
+    Each value is tried in every combination with the others' (validation only,
+    ms each): it is refused when every combination holding it fails on its own
+    key (``loading.force=1`` alone fails on a depth-controlled case, but not
+    beside ``loading.control = "force"``). An error about another key is left to
+    the runs (the value may be fine in its combination).
+    """
+    names = list(values)
+    refused, fine = {}, set()
+    for combo in itertools.product(*(range(len(values[n])) for n in names)):
+        picked = list(zip(names, combo))
+        try:
+            case.derive({n: values[n][i] for n, i in picked})
+            fine.update(picked)
+        except cases.CaseError as exc:
+            for n, i in picked:
+                if f"key '{n}'" in str(exc):
+                    refused.setdefault((n, i), exc)
+                else:
+                    fine.add((n, i))
+    for (name, i), exc in refused.items():
+        if (name, i) not in fine:
+            raise ArgumentError("vary", str(exc), key=name)
+
+
+def task_changes(changes: dict) -> dict:
+    """A task's changes as any worker reads them: a relative ``indenter.file`` made
+    absolute here, where :meth:`Case.derive` would read it (a worker's working
+    directory may differ)."""
+    out = dict(changes)
+    file = out.get("indenter.file")
+    if isinstance(file, str) and not Path(file).is_absolute():
+        out["indenter.file"] = str(Path.cwd() / file)
+    return out
 
 
 def refuse_unsupported(case, solver: str, runs, every: bool = False) -> None:
     """Refuse, before the cluster starts, a study whose solver cannot run its cases.
 
-    ``runs`` are the override lists of the study's runs. Refused when none of
-    them is supported (a sweep over several profiles may hold some the solver
-    cannot run: those become error rows) or, with ``every``, when any is not
-    (a refinement varies only the resolution, which never makes a case
+    ``runs`` are the changes of the study's runs. Refused when none of them is
+    supported (a sweep over several profiles may hold some the solver cannot
+    run: those become error rows) or, with ``every``, when any is not (a
+    refinement varies only the resolution, which never makes a case
     supported). A combination the case rejects is left to its row.
     """
     from wearcheck.comparisons import registry
     entry = registry.get(solver)
     reasons = []
-    for overrides in runs:
+    for changes in runs:
         try:
-            reason = entry.supports(case.derive(list(overrides)))
+            reason = entry.supports(case.derive(changes))
         except cases.CaseError:
             continue
         if reason is None and not every:
@@ -107,55 +146,56 @@ def refuse_unsupported(case, solver: str, runs, every: bool = False) -> None:
         raise cases.CaseError(f"solver '{solver}' cannot run this case: {reasons[0]}")
 
 
-def parse_vary(text: str) -> tuple[str, list[str]]:
-    """``section.key=v1,v2`` -> (``section.key``, [``v1``, ``v2``]), checked like ``--set``."""
-    if "=" not in text:
-        raise cases.CaseError(f"--vary '{text}': expected section.key=v1,v2,...")
-    name, _, rest = text.partition("=")
-    name = name.strip()
-    values = split_values(rest)
-    if not all(values):
-        raise cases.CaseError(f"--vary '{text}': an empty value")
-    for v in values:
-        section, key, _ = parse_override(f"{name}={v}")
-    if key not in {n for n, _ in section_fields(section)}:
-        from wearcheck.cases.schema import did_you_mean
-        names = [n for n, _ in section_fields(section)]
-        raise cases.CaseError(f"--vary '{text}': unknown key '{name}'{did_you_mean(key, names)}"
-                              f"; allowed in [{section}]: "
-                              + ", ".join(n for n, _ in section_fields(section)))
-    return name, values
+def tasks_for(prefix: str, solver: str, values: dict[str, list]) -> list[Task]:
+    """One task per combination of the varied values, named by them."""
+    names = list(values)
+    tasks = []
+    for combo in itertools.product(*values.values()):
+        name = "-".join([prefix] + [f"{n}-{dir_part(value_text(v))}"
+                                    for n, v in zip(names, combo)])
+        tasks.append(Task(name, solver, task_changes(dict(zip(names, combo)))))
+    if len({t.name for t in tasks}) != len(tasks):
+        tasks = [Task(f"{t.name}-{i}", t.solver, t.changes) for i, t in enumerate(tasks)]
+    return tasks
 
 
-def _dir_part(text: str) -> str:
-    return re.sub(r"[^A-Za-z0-9._+-]+", "_", text).strip("_") or "_"
+def csv_cell(value) -> str:
+    """A cell of a study's table: text and varied values quoted, numbers to 10 digits."""
+    if isinstance(value, (str, list, tuple, bool)):
+        return '"' + value_text(value).replace('"', "'") + '"'
+    return fmt(value, ".10g")
 
 
-def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=None,
-          quiet=False, solve=None, case=None) -> list[dict]:
-    """Run every combination of the varied values into ``out``; return sweep.csv's rows."""
-    case = case or cases.load(case_path, overrides)
+def sweep(case: cases.Case, vary: Mapping[str, Iterable], solver: str, out, *,
+          scheduler=None, workers=None, quiet=False, solve=None) -> list[dict]:
+    """Run every combination of the varied values into ``out``; return sweep.csv's rows.
+
+    Parameters
+    ----------
+    case : the base case; each run is ``case.derive`` of its combination.
+    vary : ``{"section.key": [values]}``, Python values as ``Case.derive`` takes them.
+    solver : a registered solver's name.
+    out : the sweep directory.
+
+    The rows hold the varied values (typed; a relative ``indenter.file`` made
+    absolute), the status, times and the end of each run in its own scales.
+    """
     from wearcheck.comparisons import registry
     registry.get(solver)  # an unknown solver is refused before the cluster starts
-    varied = [parse_vary(v) for v in vary]
-    names = check_varied(varied, overrides, case)
-    tasks = []
-    for combo in itertools.product(*(vals for _, vals in varied)):
-        run = "-".join([solver] + [f"{n}-{_dir_part(v)}" for n, v in zip(names, combo)])
-        tasks.append(Task(run, solver, tuple(f"{n}={v}" for n, v in zip(names, combo))))
-    refuse_unsupported(case, solver, [t.overrides for t in tasks])
-    if len({t.name for t in tasks}) != len(tasks):
-        tasks = [Task(f"{t.name}-{i}", t.solver, t.overrides) for i, t in enumerate(tasks)]
+    values = varied_values(vary)
+    check_varied(case, values)
+    names = list(values)
+    tasks = tasks_for(solver, solver, values)
+    refuse_unsupported(case, solver, [t.changes for t in tasks])
     prov = provenance()
     out = Path(out)
     earlier_rows(out, solver, case)      # refused now, before the cluster, if it must be
-    outcomes = run_cases(case_path, overrides, tasks, out, scheduler=scheduler, workers=workers,
+    outcomes = run_cases(case, tasks, out, scheduler=scheduler, workers=workers,
                          quiet=quiet, solve=solve, extra_meta=dict(study=f"sweep-{solver}"),
                          study_files=("meta.json", "sweep.csv"))
     rows = []
     for t, o in zip(tasks, outcomes):
-        row = dict(run=t.name)
-        row.update({n: o.partition("=")[2] for n, o in zip(names, t.overrides)})
+        row = dict(run=t.name, **t.changes)
         row.update(status=o.status, wall_seconds=o.wall_seconds, cpu_seconds=o.cpu_seconds,
                    solve_seconds=o.result.solve_seconds if o.ok else math.nan,
                    peak_rss_mb=o.peak_rss_mb)
@@ -173,7 +213,7 @@ def sweep(case_path, overrides, vary, solver, out, *, scheduler=None, workers=No
     with study_lock(out):
         # read again: a sweep into the directory may have ended since this one began
         earlier = earlier_rows(out, solver, case)
-        record_study(out, f"sweep-{solver}", case, overrides, prov)
+        record_study(out, f"sweep-{solver}", case, prov, dict(solver=solver, vary=values))
         write_study_text(out, "sweep.csv", table_text(earlier, rows, solver, case, prov))
     return rows
 
@@ -202,14 +242,14 @@ def earlier_rows(out: Path, solver: str, case) -> list[dict]:
         if not name.startswith("sweep-") or not isinstance(entry, dict):
             continue
         if name != f"sweep-{solver}":
-            raise cases.CaseError(f"study '{out}' holds a sweep by solver '{name[6:]}' "
-                                  f"(sweep.csv); a sweep by '{solver}' would mix with it in "
-                                  "one table: choose another --out")
+            raise ArgumentError("out", f"holds a sweep by solver '{name[6:]}' (sweep.csv); a "
+                                f"sweep by '{solver}' would mix with it in one table: choose "
+                                "another directory", value=str(out))
         why = base_difference(entry.get("resolved_case", ""), case)
         if why:
-            raise cases.CaseError(f"study '{out}' holds a sweep of another base case "
-                                  f"({why}); its sweep.csv would mix two studies: choose "
-                                  "another --out, or the same case file and --set")
+            raise ArgumentError("out", f"holds a sweep of another base case ({why}); its "
+                                "sweep.csv would mix two studies: choose another directory, "
+                                "or the same base case", value=str(out))
     path = Path(out) / "sweep.csv"
     if not path.is_file():
         return []
@@ -225,27 +265,32 @@ def table_text(earlier: list[dict], rows: list[dict], solver: str, case, prov) -
     import tomllib
     base = tomllib.loads(cases.to_toml(case))
 
-    def base_value(key: str) -> str:
+    def base_cell(key: str) -> str:
         section, _, name = key.partition(".")
         value = base.get(section, {}).get(name)
-        return "" if value is None else str(value).lower() if isinstance(value, bool) \
-            else str(value)
+        return '""' if value is None else csv_cell(value)
+
+    def old_cell(key: str, text: str) -> str:
+        """An earlier row's cell, as it was written: quoted unless a number."""
+        if key not in ("run", "status"):
+            try:
+                float(text)
+                return text
+            except ValueError:
+                pass
+        return _quoted(text)
 
     fixed = [k for k in rows[0] if k != "run" and "." not in k]
     keys = list(dict.fromkeys([k for r in earlier + rows for k in r if "." in k]))
     columns = ["run", *keys, *fixed]
-    texts = {"run", "status", *keys}       # written quoted; numbers as they are
 
     def line(r: dict, old: bool) -> str:
         cells = []
         for k in columns:
-            v = r.get(k)
-            if v is None and k in keys:
-                v = base_value(k)
-            if k in texts:
-                cells.append(_quoted("" if v is None else v))
-            else:        # an earlier row's cell as it was written, this sweep's formatted
-                cells.append(("" if v is None else v) if old else fmt(v, ".10g"))
+            if k not in r or (old and k in keys and r[k] in (None, "")):
+                cells.append(base_cell(k) if k in keys else '""')
+            else:
+                cells.append(old_cell(k, r[k] or "") if old else csv_cell(r[k]))
         return ",".join(cells)
 
     done = {r["run"] for r in rows}

@@ -3,6 +3,7 @@
 Writes into ``docs/_generated/`` (not kept in git), included by the pages:
 
 - ``case-keys.md``: every case key with unit, default and meaning (``cases/schema.py``);
+- ``case-rules.md``: every rule between keys, and who checks it (``cases/rules.py``);
 - ``layout-NAME.md``: the tables of what a run or a comparison writes
   (``comparisons/layout.py``);
 - ``cli.md``: ``wearcheck --help`` and every subcommand's help, from the argument parser.
@@ -46,9 +47,10 @@ def cli_reference() -> str:
 
 def generated_pages() -> dict[str, str]:
     """File name in ``_generated/`` -> Markdown."""
-    from wearcheck.cases import key_reference
+    from wearcheck.cases import key_reference, rules
     from wearcheck.comparisons import layout
-    pages = {"case-keys.md": key_reference() + "\n", "cli.md": cli_reference()}
+    pages = {"case-keys.md": key_reference() + "\n", "case-rules.md": rules.reference() + "\n",
+             "cli.md": cli_reference()}
     for name, table in layout.doc_tables().items():
         pages[f"layout-{name}.md"] = table + "\n"
     return pages
