@@ -1056,6 +1056,8 @@ def study_directory(path, runs=(), files=()) -> Path:
     inside, each atomically.
     """
     path = check_output(path, "study")
+    for run in runs:      # before anything is made: a new study directory too
+        _check_name_length(str(path / run), path / run)
     path.mkdir(parents=True, exist_ok=True)
     marker = read_marker(path)
     if marker is None:
@@ -1072,7 +1074,6 @@ def study_directory(path, runs=(), files=()) -> Path:
         if (path / name).exists() or (path / name).is_symlink():
             _check_study_file(path, name, recorded, marker)
     for run in runs:
-        _check_name_length(str(path / run), path / run)
         why = refusal(path / run, "run") or (
             _pinned(path / run) if (path / run).is_dir() else None)
         if why:

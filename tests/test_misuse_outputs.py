@@ -68,12 +68,22 @@ def test_an_over_long_out_path_is_refused_before_solving(tmp_path, capsys, no_so
     assert list(tmp_path.iterdir()) == []
 
 
-def test_sweep_runs_with_over_long_names_are_refused_before_the_cluster(tmp_path, capsys):
-    value = "0." + "1" * 240
-    code = cli_main(["sweep", HERTZ, "--vary", f"wear.mu={value}", "--out",
+def test_sweep_runs_with_over_long_names_are_refused_before_the_cluster(tmp_path, capsys,
+                                                                       monkeypatch):
+    """A run named by a long varied value (a list of 70 stages): refused before the
+    cluster starts and before the study directory is made (it was refused only when
+    the first run was written, after its solve, and left the new study's marker)."""
+    from wearcheck.comparisons.studies import distributed
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("the cluster started")
+    monkeypatch.setattr(distributed, "_Client", no_cluster)
+    stages = "[" + ", ".join(f"{i / 100:g}" for i in range(70)) + "]"
+    code = cli_main(["sweep", HERTZ, "--vary", f"stages.s_hat={stages}", "--out",
                      str(tmp_path / "s"), "--quiet"])
     assert code == 2
     assert "at most 237 bytes" in _one_error_line(capsys.readouterr().err)
+    assert list(tmp_path.iterdir()) == []
 
 
 def _chattr(flag: str, path: Path) -> None:

@@ -201,12 +201,13 @@ def test_a_scheduler_lost_mid_study_ends_it_with_error_rows(tmp_path, scheduler,
     run becomes an error row within the worker timeout (plus one answer timeout)."""
     address, sched = scheduler()
     monkeypatch.setenv("WEARCHECK_WORKER_TIMEOUT", str(LIMIT))
-    tasks = [Task(f"r{i}", "mdr", ("mdr.elements=40",)) for i in range(3)]
+    tasks = [Task(f"r{i}", "mdr", {"mdr.elements": 40}) for i in range(3)]
     t0 = time.perf_counter()
     pid = sched.pid
     # a closure: distributed pickles it by value (cloudpickle), as the scheduler's
     # process cannot import this test module
-    outcomes = run_cases(HERTZ, [], tasks, tmp_path / "s", scheduler=address, quiet=True,
+    outcomes = run_cases(cases.load(HERTZ), tasks, tmp_path / "s", scheduler=address,
+                         quiet=True,
                          solve=lambda case, solver, progress=None:
                          _solve_that_loses_the_scheduler(pid, how, case, solver, progress))
     wall = time.perf_counter() - t0
@@ -228,7 +229,8 @@ def test_the_default_limits_hold_without_the_environment_variable(tmp_path, monk
     silent = listener()
     t0 = time.perf_counter()
     with pytest.raises(scheduler_mod.SchedulerError, match="did not answer within 10 s"):
-        run_cases(HERTZ, [], [Task("r", "mdr")], tmp_path / "s", scheduler=silent.address,
+        run_cases(cases.load(HERTZ), [Task("r", "mdr")], tmp_path / "s",
+                  scheduler=silent.address,
                   quiet=True)
     wall = time.perf_counter() - t0
     assert scheduler_mod.ANSWER_TIMEOUT <= wall < 30.0
