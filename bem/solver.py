@@ -11,7 +11,7 @@ from scipy import optimize
 from wearcheck.cases import (CaseError, RunResult, dundurs_beta, profiles, programme, reference,
                              validity)
 
-from . import wear
+from . import moving, track, wear
 from .operator import HalfSpace
 from .tangential import ShearToNormal
 
@@ -152,6 +152,8 @@ def supports(case) -> str | None:
     counterface, in gross slip, with any pressure exponent of the wear law;
     not fretting (partial slip).
     """
+    if case.counterface.wears:       # both bodies wearing: bem.track, bem.moving
+        return (moving if case.bem.track_model == "moving" else track).supports(case)
     if getattr(case, "fretting", None) is not None:
         return ("the BEM's wear run is gross slip only: its partial-slip solver "
                 "(bem.tangential) solves a fretting cycle on a given profile without wear "
@@ -162,6 +164,8 @@ def supports(case) -> str | None:
 
 def solve(case, progress=None) -> RunResult:
     """Run the BEM wear simulation of ``case`` (see :mod:`bem`)."""
+    if case.counterface.wears:
+        return (moving if case.bem.track_model == "moving" else track).solve(case, progress)
     reason = supports(case)
     if reason is not None:
         raise CaseError(reason)
@@ -255,6 +259,7 @@ def solve(case, progress=None) -> RunResult:
     counters = out["counters"]
     counters.pop("F_start")
     info.update(counters, operator_applications=op.applications,
+                single_precision_applications=op.single_applications,
                 max_complementarity_residual=float(np.max(hist["complementarity_residual"])))
     if progress is not None:
         progress(1.0, "done")

@@ -19,6 +19,7 @@ from .schema import (BEMSettings, CCXSettings, did_you_mean, OPTIONAL_SECTIONS, 
                      MDRSettings, Sliding, Stages, Wear, format_value, build_section,
                      key_problem,
                      section_fields, toml_string)
+from . import both_bodies
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,10 @@ class Case:
     table_file: dict | None = field(default=None, compare=False, repr=False)
     #: non-fatal remarks on the case (e.g. elastic similarity violated)
     warnings: tuple[str, ...] = ()
+    #: dotted keys the loader derived from their alternative (``wear.k`` from
+    #: ``wear.specific_rate`` or back, ``stages.s_hat`` from ``stages.s`` or
+    #: ``stages.cycles``): the resolved case names them as comments, not as keys
+    derived: tuple[str, ...] = field(default=(), compare=False)
 
     def __repr__(self) -> str:
         """One line per section: the keys given (defaults filled in), with units."""
@@ -83,8 +88,10 @@ class Case:
 
     @property
     def wear_rate(self) -> float:
-        """k_wear μ / σ0 [1/Pa]: wear depth per unit pressure and sliding distance."""
-        return self.wear.k * self.wear.mu / self.wear.hardness
+        """K = k_wear μ / σ0 [1/Pa = m³/(N·m)]: wear depth per unit pressure and sliding
+        distance (``wear.specific_rate``, given or derived)."""
+        w = self.wear
+        return w.specific_rate if w.specific_rate is not None else w.k * w.mu / w.hardness
 
     @property
     def end_distance(self) -> float | None:
@@ -93,7 +100,7 @@ class Case:
         if sl.until == "distance":
             return sl.distance
         if sl.until == "cycles":
-            return 2.0 * sl.stroke * sl.cycles
+            return self.cycle_length * sl.cycles
         return None
 
     @property
@@ -110,8 +117,20 @@ class Case:
 
     @property
     def cycles_per_metre(self) -> float | None:
-        """Cycles per metre of sliding, 1/(2·stroke); None without a stroke."""
-        return None if self.sliding.stroke is None else 0.5 / self.sliding.stroke
+        """Cycles per metre of sliding, 1/(2·stroke) (1/(2π·track_radius) for a
+        unidirectional track); None without either."""
+        return None if self.cycle_length is None else 1.0 / self.cycle_length
+
+    @property
+    def cycle_length(self) -> float | None:
+        """Sliding distance of one cycle [m]: 2·stroke, or one revolution 2π·track_radius
+        (sliding.motion = "unidirectional"); None without either."""
+        return both_bodies.cycle_length(self.sliding)
+
+    @property
+    def counterface_wear_rate(self) -> float | None:
+        """K_flat [m³/(N·m) = 1/Pa] of a counterface that wears, else None."""
+        return both_bodies.counterface_wear_rate(self.counterface, self.wear)
 
     def replace(self, **sections) -> "Case":
         """A copy with whole sections replaced, validated like a case file.
@@ -125,8 +144,25 @@ class Case:
                             "; allowed: " + ", ".join(SECTIONS))
         raw = to_dict(self)
         for name, obj in sections.items():
-            raw[name] = _section_dict(obj)
+            raw[name] = self._given(name, obj)
         return from_dict(raw, source=self.source)
+
+    def _given(self, section: str, obj) -> dict:
+        """A replacing section as a file would give it: of keys given one way or another
+        (``wear.k`` or ``wear.specific_rate``), those changed from this case win, else
+        the one this case was given; the derived ones are dropped."""
+        raw = _section_dict(obj)
+        current = getattr(self, section, None)
+        for group in rules.one_of_groups(section):
+            present = [n for n in group if n in raw]
+            if len(present) < 2 or current is None:
+                continue
+            changed = [n for n in present if getattr(obj, n) != getattr(current, n, None)]
+            keep = changed or [n for n in present if f"{section}.{n}" not in self.derived]
+            for n in present:
+                if n not in keep:
+                    raw.pop(n)
+        return raw
 
     def derive(self, changes=None, /, **keys) -> "Case":
         """A copy with some keys changed, validated like a case file.
@@ -328,14 +364,36 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     built = {name: build_section(name, raw.get(name, {})) for name in SECTIONS
              if name not in OPTIONAL_SECTIONS or name in raw}
     rules.check(raw, built)
-    case = rules.check_loader_only(Case(**built, source=str(source)))
-    if case.stages.cycles is not None:
+    built["wear"], derived = _derive_wear(built["wear"])
+    case = rules.check_loader_only(Case(**built, source=str(source), derived=derived))
+    st = case.stages
+    if st.cycles is not None or st.s is not None:
         # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
         from . import reference
         per_m = reference.scales(case)["s_hat_per_m"]
-        s_hat = tuple(c * 2.0 * case.sliding.stroke * per_m for c in case.stages.cycles)
-        case = replace(case, stages=replace(case.stages, s_hat=s_hat))
-    return replace(case, warnings=_warnings(case))
+        s = st.s if st.s is not None else [c * case.cycle_length for c in st.cycles]
+        case = replace(case, stages=replace(st, s_hat=tuple(x * per_m for x in s)))
+        derived += ("stages.s_hat",)
+    return replace(case, warnings=_warnings(case), derived=derived)
+
+
+def _derive_wear(w: Wear) -> tuple[Wear, tuple[str, ...]]:
+    """Both wear coefficients from the one given (the rule table requires exactly one):
+    K = k μ/σ0 (V = K F s for n = 1)."""
+    if w.specific_rate is None:
+        name, value, other = "wear.k", w.k, "wear.specific_rate"
+        w = replace(w, specific_rate=w.k * w.mu / w.hardness)
+        derived = w.specific_rate
+    else:
+        name, value, other = "wear.specific_rate", w.specific_rate, "wear.k"
+        w = replace(w, k=w.specific_rate * w.hardness / w.mu)
+        derived = w.k
+    if not (math.isfinite(derived) and derived > 0):
+        raise CaseError(f"key '{name}' = {format_value(value)}: the derived '{other}' comes "
+                        f"out {derived!r} (k = K·σ0/μ, wear.mu = {w.mu!r}, wear.hardness = "
+                        f"{w.hardness!r} Pa), not a positive finite number; check the "
+                        "magnitudes (K in m^3/(N m), σ0 in Pa)")
+    return w, (other,)
 
 
 def _warnings(case: Case) -> tuple[str, ...]:
@@ -382,14 +440,19 @@ def to_toml(case: Case) -> str:
             value = getattr(obj, name)
             if value is None:
                 continue
-            if section == "stages" and name == "s_hat" and case.stages.cycles is not None:
-                continue  # derived from stages.cycles (giving both is an error)
+            if section == "stages" and name == "s_hat" and "stages.s_hat" in case.derived:
+                continue  # derived from stages.s or stages.cycles (giving both is an error)
             if isinstance(value, tuple):
                 text = "[" + ", ".join(repr(v) for v in value) + "]"
             else:
                 text = format_value(value)
             unit = f.metadata["unit"]
-            lines.append(f"{name} = {text}" + (f"  # {unit}" if unit and unit != "1" else ""))
+            line = f"{name} = {text}" + (f"  # {unit}" if unit and unit != "1" else "")
+            if f"{section}.{name}" in case.derived:
+                # recorded, as a comment: giving both is an error
+                how = "K = k μ/σ0" if name == "specific_rate" else "k = K σ0/μ"
+                line = f"# {line.replace('  # ', ' ')}, derived: {how}"
+            lines.append(line)
     return "\n".join(lines) + "\n"
 
 
@@ -429,7 +492,10 @@ def _shown(case: Case):
             if value is None:
                 continue
             unit = f.metadata.get("unit", "") if f.metadata else ""
-            rows.append((f.name, _shown_value(value), "" if unit == "1" else unit, f))
+            text = _shown_value(value)
+            if f"{name}.{f.name}" in case.derived:   # (e.g. k from specific_rate)
+                text += " (derived)"
+            rows.append((f.name, text, "" if unit == "1" else unit, f))
         out.append((name, rows))
     return out
 
@@ -459,6 +525,7 @@ def to_dict(case: Case) -> dict:
     if case.fretting is not None:  # a fretting run has no [sliding] or [stages]
         out.pop("sliding", None)
         out.pop("stages", None)
-    elif case.stages.cycles is not None:  # s_hat is derived from the cycles
-        out["stages"].pop("s_hat", None)
+    for name in case.derived:  # e.g. s_hat derived from the cycles
+        section, key = name.split(".")
+        out.get(section, {}).pop(key, None)
     return out

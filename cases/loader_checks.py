@@ -188,8 +188,9 @@ def unworn_contact(case) -> None:
     if ok and not _usable(sc["s_hat_per_m"]):
         # the contact is fine: the wear keys put the sliding scale out of range
         w = case.wear
-        raise CaseError(f"keys 'wear.k' = {w.k!r}, 'wear.mu' = {w.mu!r}, 'wear.hardness' = "
-                        f"{w.hardness!r}: the sliding scale k μ E*/(σ0 a0) comes out "
+        given = "specific_rate" if "wear.k" in case.derived else "k"
+        raise CaseError(f"keys 'wear.{given}' = {getattr(w, given)!r}, 'wear.mu' = {w.mu!r}, "
+                        f"'wear.hardness' = {w.hardness!r}: the sliding scale k μ E*/(σ0 a0) comes out "
                         f"{sc['s_hat_per_m']!r} per metre (E* = {sc['E_star']:.4g} Pa, a0 = "
                         f"{sc['a0']:.4g} m), not a positive finite number; check their "
                         "magnitudes (σ0 in Pa)")

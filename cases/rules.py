@@ -88,20 +88,56 @@ RULES = (
     Excludes(Is("loading.control", "depth"), "loading.force"),
     Requires(Is("loading.control", "force"), "loading.force"),
     Excludes(Is("loading.control", "force"), "loading.depth"),
+    # both bodies wearing (docs/both-bodies.md): the counterface's wear rate, its track.
+    # (A wearing counterface in a fretting run is refused by [fretting]'s exclusion
+    # of a [sliding] that gives sliding.motion.)
+    Excludes(Is("counterface.wears", False),
+             ("counterface.specific_rate", "counterface.k", "counterface.hardness"),
+             hint="set counterface.wears = true to wear the counterface too, or remove it"),
+    Requires(Is("counterface.wears", True), "sliding.motion",
+             why="the counterface wears along the track the motion traces: \"reciprocating\" "
+                 "or \"unidirectional\""),
+    Requires(Is("sliding.motion", "reciprocating"), "sliding.stroke", why="one way"),
+    Requires(Is("sliding.motion", "unidirectional"), "sliding.track_radius"),
+    Excludes(Is("sliding.motion", "unidirectional"), "sliding.stroke",
+             why="a circular track of sliding.track_radius; a cycle is one revolution"),
+    Excludes(Is("sliding.motion", (None, "reciprocating")), "sliding.track_radius",
+             message="key '{key}' = {value} given but {when}: the radius of a pin-on-disc "
+                     "track; remove it, or set sliding.motion = \"unidirectional\""),
+    OneOf(("counterface.specific_rate", "counterface.k"),
+          hint="give one (K_flat = counterface.k·wear.mu/counterface.hardness)"),
+    Forbids((Is("counterface.wears", True), Absent("counterface.specific_rate"),
+             Absent("counterface.k")),
+            why="a counterface that wears needs its wear rate",
+            hint="give counterface.specific_rate (m^3/(N m)) or counterface.k with "
+                 "counterface.hardness"),
+    Requires(Given("counterface.k"), "counterface.hardness",
+             why="K_flat = k·wear.mu/counterface.hardness"),
+    Forbids((Is("counterface.wears", False), Is("bem.track_model", "moving")),
+            why="bem.track_model applies to a counterface that wears",
+            hint="set counterface.wears = true or remove bem.track_model"),
     # the end of the run
     Requires(Is("sliding.until", "distance"), "sliding.distance"),
     Excludes(Is("sliding.until", "force_fraction"), "sliding.distance"),
     Excludes(Is("sliding.until", "cycles"), "sliding.distance",
              why="the distance is 2·stroke·cycles"),
-    Requires(Is("sliding.until", "cycles"), ("sliding.stroke", "sliding.cycles")),
+    Requires(Is("sliding.until", "cycles"), "sliding.cycles"),
+    # (a disc's cycle is a revolution of its track_radius, below)
+    Requires((Is("sliding.until", "cycles"), Absent("sliding.track_radius")), "sliding.stroke"),
     Excludes.unless(Is("sliding.until", "cycles"), "sliding.cycles"),
     Forbids((Is("sliding.until", "force_fraction"), Is("loading.control", "force"),
              Absent("fretting")),
             why="a force-controlled run cannot end on a falling force (the force does not "
                 "fall)", hint="set sliding.until = \"distance\" or \"cycles\""),
+    # the wear coefficient: the paper's k or the lab's K (the other derived)
+    OneOf(("wear.k", "wear.specific_rate"), required=True,
+          why="k = K·σ0/μ, σ0 = wear.hardness",
+          hint="give the paper's dimensionless k or the lab's specific wear rate K in "
+               "m^3/(N m) (V = K·F·s), the other is derived"),
     # the stages, and what needs a stroke
-    OneOf(("stages.s_hat", "stages.cycles"), hint="give the stages one way only"),
-    Requires(Given("stages.cycles"), "sliding.stroke", why="one cycle slides 2·stroke"),
+    OneOf(("stages.s_hat", "stages.s", "stages.cycles"), hint="give the stages one way only"),
+    Requires((Given("stages.cycles"), Absent("sliding.track_radius")), "sliding.stroke",
+             why="one cycle slides 2·stroke"),
     Requires(Is("wear.tangential_correction", True), "sliding.stroke",
              why="the correction is the sliding each stroke end loses while the tangential "
                  "springs reverse, 2μq/G* per stroke, so it depends on the stroke",
@@ -114,13 +150,14 @@ RULES = (
     LoaderOnly(("indenter.flat_radius", "indenter.radius"),
                "`indenter.flat_radius` < `indenter.radius`", lc.flat_radius_below_radius),
     *(LoaderOnly((key,), f"`{key}` increases strictly", lc.increasing(key))
-      for key in ("stages.s_hat", "stages.cycles", "fretting.stage_cycles")),
+      for key in ("stages.s_hat", "stages.s", "stages.cycles", "fretting.stage_cycles")),
     LoaderOnly(("loading.depth", "indenter.radius"),
                "a sphere's `loading.depth` < `indenter.radius`", lc.sphere_depth),
     LoaderOnly(("loading.force", "indenter.radius"),
                "a sphere's `loading.force` presses it less deep than `indenter.radius`",
                lc.sphere_force),
-    LoaderOnly(("loading.depth", "loading.force", "wear.k", "wear.mu", "wear.hardness"),
+    LoaderOnly(("loading.depth", "loading.force", "wear.k", "wear.specific_rate", "wear.mu",
+                "wear.hardness"),
                "the unworn contact and the sliding scale are finite and positive "
                "(a tabulated profile: the load within the table)", lc.unworn_contact),
     LoaderOnly(("sliding.stroke", "wear.tangential_correction"),

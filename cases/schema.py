@@ -88,6 +88,20 @@ class Counterface:
     youngs_modulus: float | None = key(None, unit="Pa", positive=True, doc="Young's modulus E2")
     poisson_ratio: float | None = key(None, minimum=-1.0, maximum=0.5, open_minimum=True,
                                       doc="Poisson ratio ν2, in (-1, 0.5]")
+    wears: bool = key(False, doc="the counterface wears too, along the track (both bodies "
+                                 "wearing, as in ASTM G133 and G99; BEM only, needs "
+                                 "sliding.motion): give its specific_rate or k (with hardness)")
+    specific_rate: float | None = key(None, unit="m^3/(N m)", positive=True,
+                                      doc="counterface.wears: the counterface's specific wear "
+                                          "rate K_flat, V_flat = K_flat·F·s; give this or "
+                                          "counterface.k")
+    k: float | None = key(None, unit="1", positive=True,
+                          doc="counterface.wears: its dimensionless wear coefficient, "
+                              "K_flat = k·μ/counterface.hardness (μ = wear.mu); give this or "
+                              "counterface.specific_rate")
+    hardness: float | None = key(None, unit="Pa", positive=True,
+                                 doc="counterface.wears: hardness of the counterface (needed "
+                                     "with counterface.k)")
 
 
 @dataclass(frozen=True)
@@ -103,7 +117,15 @@ class Loading:
 
 @dataclass(frozen=True)
 class Wear:
-    k: float = key(unit="1", positive=True, doc="dimensionless wear coefficient k_wear (paper Eq. 1)")
+    k: float | None = key(None, unit="1", positive=True,
+                          doc="dimensionless wear coefficient k_wear (paper Eq. 1), per unit "
+                              "friction work; give this or wear.specific_rate (k = K·σ0/μ), "
+                              "the other is derived")
+    specific_rate: float | None = key(None, unit="m^3/(N m)", positive=True,
+                                      doc="the laboratory's specific wear rate K of the worn "
+                                          "body, V = K·F·s for n = 1; K = k μ/σ0, the "
+                                          "dimensional coefficient of the wear law; give this "
+                                          "or wear.k, the other is derived")
     mu: float = key(unit="1", positive=True, doc="coefficient of friction μ, τ = μ p (paper Eq. 14)")
     hardness: float = key(unit="Pa", positive=True, doc="hardness σ0 of the worn indenter")
     tangential_correction: bool = key(False,
@@ -122,7 +144,9 @@ class Sliding:
     until: str = key("force_fraction", choices=("force_fraction", "distance", "cycles"),
                      doc="stop when the force has fallen below a fraction of its start, "
                          "after a total sliding distance, or after a number of reciprocating "
-                         "cycles (s = 2·stroke·cycles, gross slip)")
+                         "cycles (s = 2·stroke·cycles, gross slip; revolutions of a "
+                         "disc, s = 2π·track_radius·cycles, with sliding.motion = "
+                         "\"unidirectional\")")
     force_fraction: float = key(0.01, minimum=0.0, maximum=1.0, open_minimum=True,
                                 open_maximum=True,
                                 doc="until = force_fraction: stop once F < force_fraction * F(0)")
@@ -133,6 +157,16 @@ class Sliding:
                                doc="reciprocating stroke (one way); one cycle slides 2·stroke. "
                                    "Required by until = cycles and stages.cycles; without it "
                                    "history.csv's column `cycles` is NaN")
+    motion: str | None = key(None, choices=("reciprocating", "unidirectional"),
+                             doc="the test's motion, for a counterface that wears along its "
+                                 "track: reciprocating (ASTM G133, the ball slides to and fro "
+                                 "over sliding.stroke) or unidirectional (ASTM G99 pin-on-disc, "
+                                 "a circular track of sliding.track_radius; a cycle is one "
+                                 "revolution)")
+    track_radius: float | None = key(None, unit="m", positive=True,
+                                     doc="motion = unidirectional: radius of the wear track on "
+                                         "the disc (G99's R); one revolution slides "
+                                         "2π·track_radius")
     cycles: float | None = key(None, minimum=0.0,
                                doc="until = cycles: number of cycles to run (0: the unworn "
                                    "contact only)")
@@ -163,10 +197,15 @@ class Stages:
                                    doc="dimensionless sliding distances ŝ at which profiles "
                                        "and pressures are kept (increasing); stages after "
                                        "the end of the run are not reached")
+    s: tuple[float, ...] | None = key(None, unit="m", minimum=0.0,
+                                      doc="the stages as sliding distances instead (not "
+                                          "together with s_hat or cycles; s_hat is then "
+                                          "derived from them)")
     cycles: tuple[float, ...] | None = key(None, minimum=0.0,
                                            doc="the stages as numbers of cycles instead "
-                                               "(needs sliding.stroke; not together with "
-                                               "s_hat, which is then derived from them)")
+                                               "(needs sliding.stroke, with any "
+                                               "sliding.until; not together with s_hat or s, "
+                                               "s_hat is then derived from them)")
 
 
 @dataclass(frozen=True)
@@ -217,6 +256,13 @@ class BEMSettings:
                          "contact radius: √2·a0 for a paraboloid under depth control (the "
                          "radius where f = d, complete wear), the predicted wear-scar radius "
                          "under force control; the long semi-axis for the ellipsoid")
+    track_model: str = key("long_stroke", choices=("long_stroke", "moving"),
+                           doc="counterface.wears: the long-stroke model (a groove h(y) "
+                               "along the track, steady in the ball's frame; one contact "
+                               "solve per step) or the moving-contact model (the ball "
+                               "travels over a grid fixed to the flat, turnarounds "
+                               "included; one contact solve per pixel of sliding: short "
+                               "runs)")
     tolerance: float = key(1e-6, positive=True, maximum=1e-2,
                            doc="complementarity tolerance of each contact solve: "
                                "max |min(p/p0, gap/d)| over the pixels (1e-6: on the paper "

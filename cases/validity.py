@@ -15,6 +15,9 @@ Every solver calls :func:`check_planned` before its run and a
   contact. Past a slope of :data:`HALF_SPACE_SLOPE` of the unworn surface at
   the edge of the contact or scar (a/R = 0.1 on a paraboloid, 0.0995 on a
   sphere) the run warns once (:class:`RunWarning`) and goes on.
+* **elasticity stretched.** Every solver takes the bodies as elastic. When
+  the unworn contact's peak pressure passes the onset of yield estimated from
+  ``wear.hardness`` (:func:`yield_remark`) the run warns once, the same way.
 """
 
 from __future__ import annotations
@@ -38,6 +41,11 @@ HALF_SPACE_SLOPE = 0.1
 #: a contact or scar counts as past the body's end beyond this relative margin
 #: (a table that ends exactly at the unworn contact radius is still inside)
 END_MARGIN = 1e-9
+#: the onset of yield under a Hertz contact, p0 = 1.60 Y (von Mises, ν = 0.3;
+#: Johnson 1985, §6.2), with the yield stress Y from the indentation hardness H
+#: by Tabor's H ≈ 2.8-3 Y; the factor 3 (the lower Y) warns first
+YIELD_ONSET_P0_OVER_Y = 1.6
+HARDNESS_OVER_YIELD = 3.0
 
 
 @dataclass(frozen=True)
@@ -97,6 +105,24 @@ def _lighter(case) -> str:
     return f"lower loading.{control} or wear.k"
 
 
+def yield_remark(case) -> str | None:
+    """The remark when the unworn contact's peak pressure passes a yield estimate, else None.
+
+    The peak pressure is p0 = 3F0/(2π a0²) (Hertz's maximum; 1.5 times the mean
+    pressure for other profiles), the largest of the run (wear spreads the
+    contact); the estimate the onset of yield of the worn body, 1.6 Y with
+    Y = H/3 from ``wear.hardness`` = H.
+    """
+    p0, H = reference.scales(case)["p0"], case.wear.hardness
+    onset = YIELD_ONSET_P0_OVER_Y * H / HARDNESS_OVER_YIELD
+    if not p0 > onset:
+        return None
+    return (f"the peak pressure of the unworn contact, p0 = {p0:.4g} Pa, passes the onset of "
+            f"yield, p0 ≈ 1.6 Y = {onset:.4g} Pa with Y ≈ H/3 (Tabor, H ≈ 2.8-3 Y) from "
+            f"wear.hardness = {H:.4g} Pa: the worn body yields, which the elastic model leaves "
+            "out; results are approximate")
+
+
 def check_planned(case, fem_sphere: bool = False) -> None:
     """Refuse, before the run, a sphere that the run would wear past its equator.
 
@@ -146,8 +172,10 @@ class BodyWatch:
     (the solver's node or pixel spacing: its contact radius is read between
     nodes, the BEM's from the area in contact), and issues one
     :class:`RunWarning` per run when the unworn surface's slope at the outer of
-    the two passes :data:`HALF_SPACE_SLOPE`; ``watch.remarks`` holds its text
-    for the run's ``info["warnings"]`` (:func:`remark`).
+    the two passes :data:`HALF_SPACE_SLOPE`, and one at the first step when the
+    peak pressure passes the yield estimate (:func:`yield_remark`);
+    ``watch.remarks`` holds their texts for the run's ``info["warnings"]``
+    (:func:`remark`).
     """
 
     def __init__(self, case, fem_sphere: bool = False, spacing: float = 0.0):
@@ -156,6 +184,8 @@ class BodyWatch:
         self.spacing = float(spacing)
         self.inside = None          # (s, cycle) of the last recorded step inside the body
         self.remarks: list[str] = []
+        self.stretched = False      # the half-space remark issued
+        self.started = False        # the yield estimate checked
 
     def _at(self, s: float, cycle: float | None) -> str:
         # (the scales only here: a table case's cost a quadrature)
@@ -169,6 +199,11 @@ class BodyWatch:
                  cycle: float | None = None) -> None:
         radii = {name: r for name, r in (("contact", contact_radius), ("scar", scar_radius))
                  if r is not None and math.isfinite(r)}
+        if not self.started:
+            self.started = True
+            plastic = yield_remark(self.case)
+            if plastic:
+                remark(self.remarks, plastic)
         if not radii:
             return
         what = max(radii, key=radii.get)     # (the contact where the two are equal)
@@ -177,11 +212,12 @@ class BodyWatch:
         if end is not None and edge > end.radius * (1.0 + END_MARGIN) + self.spacing:
             self._stop(s, cycle, what, edge)
         self.inside = (s, cycle)
-        if self.remarks:
+        if self.stretched:
             return
         ind = self.case.indenter
         slope = float(profiles.slope(ind, np.array([edge]), self.case.table)[0])
         if slope > HALF_SPACE_SLOPE:
+            self.stretched = True
             start = "the unworn contact" if s == 0.0 else f"from {self._at(s, cycle)} on, the {what}"
             remark(self.remarks,
                    f"half-space theory is stretched: {start} reaches r = {edge:.4g} m, where the "

@@ -45,7 +45,7 @@ except ImportError:       # not on Windows
 
 #: written into every directory wearcheck creates: what may be replaced, and by what
 OUTPUT_MARKER = ".wearcheck-output"
-KINDS = ("run", "comparison", "study", "vtk", "render", "mesh")
+KINDS = ("run", "comparison", "study", "vtk", "render", "mesh", "fit")
 #: the text marker of wearcheck before the marker said its kind (runs and comparisons)
 _LEGACY_MARKER_TEXT = "written by wearcheck"
 

@@ -9,15 +9,16 @@ K = 1e-15 m³/(N·m) (1e-6 mm³/(N·m)). This tutorial writes the case file,
 runs it with the MDR and reads off what the lab measures: the scar diameter
 and the worn volume, beside the lab's formulas.
 
-**The one conversion.** wearcheck's wear law is the paper's, dw/ds = (k μ/σ0)·p:
-``wear.k`` is a dimensionless coefficient per unit *friction work*, so the worn
-volume is V = k μ F s/σ0. A lab's specific wear rate is per unit *normal load*,
-V = K F s. Hence
+**The lab's K in the case file.** A lab's specific wear rate is per unit
+*normal load*, V = K F s; the paper's wear law dw/ds = (k μ/σ0)·p takes a
+dimensionless ``wear.k`` per unit *friction work*, V = k μ F s/σ0. The case
+file takes either: ``wear.specific_rate = K`` as the lab reports it, and
+wearcheck derives
 
     k = K σ0 / μ
 
-with σ0 = ``wear.hardness`` of the worn ball. Typing K into ``wear.k`` gives
-wear off by a factor μ/σ0 (about 1e-10 here): convert first.
+with σ0 = ``wear.hardness`` of the worn ball (typing K into ``wear.k`` would
+give wear off by a factor μ/σ0, about 1e-10 here).
 
 **Pin-on-disc.** Only the sliding distance matters in gross slip, so a
 unidirectional track of radius r_track is written as a "stroke" of
@@ -44,9 +45,8 @@ mu = 0.6                  # measured, steady state
 sigma0 = 7e9              # Pa, hardness of the ball (hardened bearing steel, about 700 HV)
 K = 1e-15                 # m³/(N·m), the lab's specific wear rate of the ball
 
-k = K * sigma0 / mu       # the conversion: V = K F s = (k μ/σ0) F s
 s_total = 2 * stroke * cycles
-print(f"k = K σ0/μ = {k:.4g}; sliding distance s = 2·stroke·cycles = {s_total:.0f} m")
+print(f"sliding distance s = 2·stroke·cycles = {s_total:.0f} m")
 
 # %%
 # The case file
@@ -72,7 +72,7 @@ control = "force"
 force = {F}               # N
 
 [wear]
-k = {k:.6g}               # = K·σ0/μ with K = {K} m³/(N·m)
+specific_rate = {K}       # m³/(N·m), the lab's K (wearcheck derives k = K·σ0/μ)
 mu = {mu}
 hardness = {sigma0}       # Pa
 
@@ -89,6 +89,7 @@ elements = 400
 """
 Path("ball_6mm.toml").write_text(case_text, encoding="utf-8")
 case = wearcheck.load_case("ball_6mm.toml")   # checked like any case file
+print(f"k = K σ0/μ = {case.wear.k:.4g} (derived; the resolved case.toml records it)")
 
 # %%
 # Run it

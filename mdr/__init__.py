@@ -25,7 +25,7 @@ A case with a [fretting] section is a partial-slip run: :mod:`mdr.fretting`
 jumping).
 """
 
-from .solver import solve
+from wearcheck.registry import lazy_attributes
 
 __all__ = ["solve", "supports"]
 
@@ -33,5 +33,13 @@ __all__ = ["solve", "supports"]
 def supports(case) -> str | None:
     """None: the MDR runs every axisymmetric case the schema accepts (fretting too),
     and the ellipsoid approximately (as the paraboloid of radius √(R1 R2), its
-    result marked by the reason in ``info["approximate"]``)."""
+    result marked by the reason in ``info["approximate"]``); not a counterface that wears."""
+    if case.counterface.wears:
+        return ("counterface.wears = true: the MDR wears the indenter only (a wear track "
+                "on the counterface is not axisymmetric); use the BEM")
     return None
+
+
+# solve and the submodules are imported on first use: the registry imports
+# this package for its registration.py, which must not pull in the numerics
+__getattr__ = lazy_attributes(__name__, {"solve": ".solver"})

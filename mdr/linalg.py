@@ -17,7 +17,7 @@ import ctypes
 import threading
 
 import numpy as np
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 from scipy.linalg import lu_factor, solve_triangular
 from scipy.linalg.blas import dtpsv
 
@@ -27,6 +27,11 @@ from wearcheck.cases import SolverError
 _blas_lock = threading.Lock()
 _blas_users = 0
 _blas_limiter = None
+#: the process's thread pools, found once: finding them reads every loaded
+#: library's path (threadpoolctl's threadpool_limits does it per call), a
+#: share of a small run's time (docs/performance.md, "The paper case as users
+#: run it"); the BLAS libraries are loaded with numpy and scipy.linalg, before
+_blas_controller = None
 
 
 @contextlib.contextmanager
@@ -35,15 +40,18 @@ def single_threaded_blas():
 
     The solver's dense algebra is small (factorisations of at most ~2000²,
     triangular solves, matrix-vector products); threaded OpenBLAS spins
-    against other processes on a shared machine and was measured ten times
-    slower under load. Re-entrant and thread-safe: the first user in sets the
+    against other processes on a shared machine, far slower under load
+    (docs/performance.md, "Measurements behind the code"). Re-entrant and
+    thread-safe: the first user in sets the
     limit, the last out restores the previous counts, so concurrent solves
     never restore each other's limit mid-run.
     """
-    global _blas_users, _blas_limiter
+    global _blas_users, _blas_limiter, _blas_controller
     with _blas_lock:
         if _blas_users == 0:
-            _blas_limiter = threadpool_limits(limits=1, user_api="blas")
+            if _blas_controller is None:
+                _blas_controller = ThreadpoolController()
+            _blas_limiter = _blas_controller.limit(limits=1, user_api="blas")
         _blas_users += 1
     try:
         yield
@@ -105,6 +113,7 @@ def _dtrsv():
 
 
 _DTRSV = _dtrsv()
+_ONE = ctypes.c_int(1)
 
 
 def _dtrsm():
@@ -204,6 +213,9 @@ class NestedLU:
         if not np.all(np.isfinite(lu[n:m, :m])) or not np.all(np.isfinite(lu[:n, n:m])):
             raise SolverError("implicit wear step: the contact matrix factorisation failed")
         self.lu, self.n = lu, m
+        # the factors' address and leading dimension for BLAS, read once per
+        # growth (ndarray.ctypes is slow for a per-solve call; docs/performance.md)
+        self._address, self._lda = lu.ctypes.data, ctypes.c_int(lu.shape[0])
         if _DTRSV is None:
             r, c = np.tril_indices(m)           # ordered by r, then c
             # column-major packed upper storage of U and of Lᵀ: column j holds rows 0..j
@@ -218,12 +230,11 @@ class NestedLU:
         if _DTRSV is not None:
             x = np.array(b, dtype=float)     # a fresh contiguous copy, solved in place
             if n:
-                size, lda, one = ctypes.c_int(n), ctypes.c_int(self.lu.shape[0]), ctypes.c_int(1)
-                a, xp = self.lu.ctypes.data, x.ctypes.data
-                _DTRSV(b"L", b"N", b"U", ctypes.byref(size), a, ctypes.byref(lda), xp,
-                       ctypes.byref(one))
-                _DTRSV(b"U", b"N", b"N", ctypes.byref(size), a, ctypes.byref(lda), xp,
-                       ctypes.byref(one))
+                size, lda, one = ctypes.byref(ctypes.c_int(n)), ctypes.byref(self._lda), \
+                    ctypes.byref(_ONE)
+                a, xp = self._address, x.ctypes.data
+                _DTRSV(b"L", b"N", b"U", size, a, lda, xp, one)
+                _DTRSV(b"U", b"N", b"N", size, a, lda, xp, one)
             return x
         k = n * (n + 1) // 2
         y = dtpsv(n, self.Lt[:k], b, lower=0, trans=1, diag=1)
@@ -258,8 +269,9 @@ INNER_CYCLES = 3
 #: if a list, every solve ended by a trusted pass appends (|r|/|b|, its Arnoldi
 #: residual |r_arnoldi|/|r|, the true residual |b - A x|/|r| by a float64
 #: product, the passes, the last pass's iterations), r the residual that pass
-#: started from: a measurement hook for benchmarks and tests, off in runs (the
-#: product costs 1.5 s of 15 at N = 102400)
+#: started from: a measurement hook for benchmarks and tests, off in runs (its
+#: float64 product costs a tenth of a large run; docs/performance.md,
+#: "Measurements behind the code")
 REFINE_AUDIT = None
 
 

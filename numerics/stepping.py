@@ -14,7 +14,6 @@ Distances are in metres; ``Plan.per_m`` (ŝ per metre) sets the ladder.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -225,6 +224,23 @@ def _ladder_below(h: float, per_m: float) -> float:
     return 2.0 ** math.floor(math.log2(0.5 * h * per_m)) / per_m
 
 
+def _rounded_step(h: float, regular: float, per_m: float, ladder: bool) -> float:
+    """A step onto a stage, ``h``, as the regular step or (``ladder``) the ladder
+    step 2^k ŝ that it is but for the rounding of s.
+
+    s sums the steps in metres, so a stage at a multiple of a ladder step (the
+    paper case's) is reached only to round-off; taken as the step it is, the
+    solve uses that step's kept factorisation (a step off the ladder is
+    solved by GMRES, preconditioned by the nearest one), and s still lands
+    on the stage exactly.
+    """
+    steps = (regular, 2.0 ** round(math.log2(h * per_m)) / per_m) if ladder else (regular,)
+    for step in steps:
+        if abs(h - step) <= 1e-9 * step:
+            return step
+    return h
+
+
 def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
     """Step ``problem`` from ``state`` (the unworn contact at s = 0) as ``plan`` says.
 
@@ -237,6 +253,7 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
     scheme = plan.scheme
     adaptive, bdf2 = scheme == "adaptive", scheme == "bdf2"
     continuous = adaptive and plan.control == "continuous"
+    ladder = adaptive and not continuous
     h = plan.step
     tol = plan.tolerance
     per_m = plan.per_m
@@ -294,12 +311,12 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
         hstep = h_cur if adaptive else h
         # land exactly on the next stage or the end, never a sliver of a step after it
         if target - s <= hstep * (1 + 1e-9):
-            hn, s_new = target - s, target
+            hn, s_new = _rounded_step(target - s, hstep, per_m, ladder), target
         elif (adaptive or bdf2) and target - s < 2.0 * hstep:
             # two equal steps onto the stage rather than a regular step and a
             # sliver: a sliver after a long step leaves a pressure maximum on the
             # outermost node in contact (adaptive), and BDF2's step ratios stay in [1/2, 2]
-            hn = 0.5 * (target - s)
+            hn = _rounded_step(0.5 * (target - s), hstep, per_m, ladder)
             s_new = s + hn
         else:
             hn, s_new = hstep, s + hstep
@@ -319,9 +336,11 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
                 base = y if corr is None else y + corr
                 sub = Substep("full", regular, s, hn, state)
                 full = problem.implicit(state, base, hn, 1.0, sub)
-                sub = dataclasses.replace(sub, kind="half", full=full)
+                # (built directly: dataclasses.replace, twice a step, was a
+                # visible share of a small run; docs/performance.md)
+                sub = Substep("half", regular, s, hn, state, full=full)
                 half = problem.implicit(state, base, 0.5 * hn, 1.0, sub)
-                sub = dataclasses.replace(sub, kind="second", half=half)
+                sub = Substep("second", regular, s, hn, state, full=full, half=half)
                 two = problem.implicit(half, problem.profile(half), 0.5 * hn, 1.0, sub)
                 err = estimate(two, full)
                 if err > tol and hn > 1e-12 * max(s, hn):

@@ -82,10 +82,18 @@ POOL = {
     "counterface.rigid": [True, False],
     "counterface.youngs_modulus": [70e9],
     "counterface.poisson_ratio": [0.2],
+    "counterface.wears": [True, False],
+    "counterface.specific_rate": [1e-15],
+    "counterface.k": [1e-4],
+    "counterface.hardness": [2e9],
+    "sliding.motion": ["reciprocating", "unidirectional"],
+    "sliding.track_radius": [0.01],
+    "bem.track_model": ["long_stroke", "moving"],
     "loading.control": ["depth", "force"],
     "loading.depth": [1e-6, 0.02, 1e-300],
     "loading.force": [1.0, 1e12],
     "wear.k": [1e-4, 1e-300],
+    "wear.specific_rate": [1e-15, 1e-300],
     "wear.tangential_correction": [True, False],
     "sliding.until": ["force_fraction", "distance", "cycles"],
     "sliding.distance": [1e-3, 0.0],
@@ -93,6 +101,7 @@ POOL = {
     "sliding.cycles": [10.0],
     "sliding.force_fraction": [0.01, 0.5],
     "stages.s_hat": [[0.0, 1.0], [0.0], [1.0, 0.5]],
+    "stages.s": [[0.0, 1e-3], [1e-3, 0.0]],
     "stages.cycles": [[0.0, 5.0], [5.0, 1.0]],
     "fretting.amplitude": [1e-8],
     "fretting.force_amplitude": [0.01, 100.0],
@@ -112,6 +121,7 @@ BREAK_LOADER_ONLY = {
     "flat_radius_below_radius": {"indenter.profile": "truncated_paraboloid",
                                  "indenter.radius": 0.01, "indenter.flat_radius": 0.02},
     "increasing('stages.s_hat')": {"stages.s_hat": [1.0, 0.5]},
+    "increasing('stages.s')": {"stages.s": [1e-3, 0.0]},
     "increasing('stages.cycles')": {"sliding.stroke": 1e-3, "stages.cycles": [5.0, 1.0]},
     "increasing('fretting.stage_cycles')": {"fretting.amplitude": 1e-8, "fretting.cycles": 10,
                                             "fretting.stage_cycles": [0, 5, 2]},
@@ -400,9 +410,10 @@ def test_overrides_drop_what_the_old_hand_written_list_dropped(section, key, val
 
 
 def test_keys_given_one_way_or_another_replace_each_other():
-    assert rules.partners("stages", "s_hat") == ("cycles",)
-    assert rules.partners("stages", "cycles") == ("s_hat",)
+    assert rules.partners("stages", "s_hat") == ("s", "cycles")
+    assert rules.partners("stages", "cycles") == ("s_hat", "s")
     assert rules.partners("fretting", "amplitude") == ("force_amplitude",)
+    assert rules.partners("wear", "specific_rate") == ("k",)
     assert rules.partners("wear", "mu") == ()
     # derive() replaces as --set does (before the table only the fretting amplitudes did:
     # case.derive(stages__cycles=...) was refused as "both given")

@@ -57,11 +57,14 @@ def test_effective_moduli_against_paper_eqs_5_6():
 def test_elastic_similarity_warning_quantifies_mismatch():
     # two identical materials are elastically similar: no warning
     same = with_("counterface", rigid=False, youngs_modulus=210e9, poisson_ratio=0.3)
-    assert cases.from_dict(same).warnings == ()
+    # (BASE's p0 passes the yield estimate from wear.hardness: a remark of its own)
+    def similarity(case):
+        return [w for w in case.warnings if "Dundurs" in w]
+    assert similarity(cases.from_dict(same)) == []
     # steel on a rigid plane: beta = (1-2ν)/(2(1-ν)) = 0.4/1.4
     case = cases.from_dict(BASE)
-    assert len(case.warnings) == 1
-    assert f"{0.4 / 1.4:.4f}" in case.warnings[0]
+    assert len(similarity(case)) == 1
+    assert f"{0.4 / 1.4:.4f}" in similarity(case)[0]
 
 
 def test_override_changes_and_is_validated():
@@ -92,7 +95,8 @@ def test_resolved_case_round_trips(tmp_path):
     (with_("loading", dept=1e-6), r"unknown key 'loading\.dept'"),
     ({**BASE, "lodaing": {}}, r"unknown section \[lodaing\]"),
     ({k: v for k, v in BASE.items() if k != "wear"}, r"missing section \[wear\]"),
-    (with_("wear", k=None) | {"wear": {"mu": 0.3, "hardness": 2e9}}, r"missing key 'wear\.k'"),
+    (with_("wear", k=None) | {"wear": {"mu": 0.3, "hardness": 2e9}},
+     r"\[wear\] needs exactly one of 'wear\.k' and 'wear\.specific_rate'"),
     (with_("loading", depth="deep"), r"loading\.depth.*\"deep\".*number"),
     (with_("mdr", elements=800.5), r"mdr\.elements.*800\.5.*integer"),
     (with_("wear", tangential_correction=1), r"wear\.tangential_correction.*true or false"),

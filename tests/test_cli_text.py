@@ -46,7 +46,7 @@ def test_hertz_case_has_the_note():
     # similar: Dundurs' beta = (1 - 2ν) / (2 (1 - ν)) = 0.2857 for ν = 0.3
     case = cases.load(cases.shipped("hertz"))
     assert cases.dundurs_beta(case.indenter, case.counterface) == pytest.approx(0.4 / 1.4)
-    assert len(case.warnings) == 1
+    assert sum(_note_count(w) for w in case.warnings) == 1
 
 
 @pytest.mark.parametrize("argv", [

@@ -39,7 +39,7 @@ def test_describe_skips_editor_directives(tmp_path):
     assert cases.describe(f) == ""
 
 
-@pytest.mark.parametrize("text", ["paper", "paper.toml", "pap", "p"])
+@pytest.mark.parametrize("text", ["paper", "paper.toml", "pap", "pa"])
 def test_names_and_unambiguous_starts_resolve(text, monkeypatch, tmp_path):
     monkeypatch.chdir(tmp_path)  # nothing called paper here
     assert cases.resolve(text) == CASES_DIR / "paper.toml"

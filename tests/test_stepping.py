@@ -218,3 +218,30 @@ def test_regrid_moves_the_carried_arrays():
     out = stepping.run(problem, np.zeros(3), plan, lambda *a: None)
     assert problem.calls == ["raised", ["correction", "previous"]]
     assert out.steps > 0
+
+
+def test_stage_landings_that_are_ladder_steps_are_solved_as_ladder_steps():
+    # ŝ per metre 3.7: s sums the steps in metres, so a stage at a multiple of
+    # a ladder step is reached only to round-off. A step onto it that is a
+    # ladder step 2^k/per_m but for that round-off must be solved as exactly
+    # that step (a direct solver keeps one factorisation per ladder step and
+    # solves any other step iteratively); steps off the ladder (two equal
+    # steps onto a stage instead of a sliver) stay what they are. Every stage
+    # is recorded at its own distance
+    per_m = 3.7
+    stages = tuple(x / per_m for x in (0.0, 0.5, 1.5, 3.0, 5.0))
+    problem = Springs()
+    seen = []
+    plan = stepping.Plan(scheme="adaptive", step=math.inf, end=stages[-1], per_m=per_m,
+                         stages=stages, tolerance=1e-4,
+                         force_scale=float(problem.pressure(np.zeros(3)).sum()),
+                         depth_scale=d)
+    stepping.run(problem, np.zeros(3), plan, lambda st, s, n: seen.append((s, n)))
+    ladder = np.array([2.0 ** k / per_m for k in range(-12, 4)])
+    solved = np.array(sorted({h for _, h, _, _ in problem.solves}))
+    nearest = ladder[np.argmin(np.abs(np.log(solved[:, None] / ladder[None, :])), axis=1)]
+    on = solved == nearest
+    assert on.sum() >= 5
+    # off the ladder: by far more than round-off
+    assert np.all(np.abs(solved[~on] / nearest[~on] - 1.0) > 1e-6), solved[~on] * per_m
+    assert [s for s, n in seen if n] == list(stages)

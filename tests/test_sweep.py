@@ -337,3 +337,20 @@ def test_the_command_line_reads_a_varied_table_file_as_set_does(tmp_path, monkey
     monkeypatch.chdir(tmp_path)
     assert task_changes({"indenter.file": "a.csv", "wear.k": 1e-5}) == {
         "indenter.file": str(tmp_path / "a.csv"), "wear.k": 1e-5}
+
+
+def test_sweep_json_rows_are_the_runs(cluster, tmp_path, capsys):
+    # the rows on stdout: one per value, as sweep.csv has them, and Archard's
+    # self-similarity (ŝ ∝ k s, docs/theory.md §5) makes k·s at the end one number
+    out = tmp_path / "k"
+    from wearcheck.comparisons.cli import main
+    code = main(["sweep", "paper", "--vary", "wear.k=1e-5,1e-4", "--solver", "mdr",
+                     "--out", str(out), "--set", "mdr.elements=50",
+                     "--set", "sliding.force_fraction=0.3", "--scheduler", cluster, "--quiet",
+                     "--json"])
+    assert code == 0
+    rows = json.loads(capsys.readouterr().out)    # stdout: the JSON only
+    assert [r["wear.k"] for r in rows] == [1e-5, 1e-4]
+    ks = [r["wear.k"] * r["final_s"] for r in rows]
+    assert ks[1] == pytest.approx(ks[0], rel=1e-8)
+    assert all(r["status"] == "ok" for r in rows)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+import math
 import sys
 from pathlib import Path
 
@@ -61,3 +63,30 @@ def study_exit(rows) -> int:
     if failed:
         print(f"{len(failed)} of {len(rows)} runs failed", file=sys.stderr)
     return 1 if failed else 0
+
+
+def add_json_argument(parser, what: str) -> None:
+    """``--json``: ``what`` on stdout as JSON, for scripts, instead of the table."""
+    parser.add_argument("--json", action="store_true",
+                        help=f"print {what} on stdout as JSON instead of the table")
+
+
+def jsonable(value):
+    """``value`` with numpy numbers as Python ones, a non-finite number as null
+    (strict JSON has no NaN) and paths as text."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if hasattr(value, "tolist"):           # a numpy array or number
+        return jsonable(value.tolist())
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, Path):
+        return str(value)
+    return value
+
+
+def print_json(value) -> None:
+    """``value`` (:func:`jsonable`) as one line of JSON on stdout."""
+    print(json.dumps(jsonable(value)))

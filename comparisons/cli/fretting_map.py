@@ -14,7 +14,8 @@ from pathlib import Path
 from wearcheck.comparisons.studies.distributed import fmt
 from wearcheck.comparisons.studies.fretting_map import fretting_map
 
-from ._common import add_case_arguments, load_case, study_exit, varied
+from ._common import (add_case_arguments, add_json_argument, load_case, print_json, study_exit,
+                      varied)
 from .refine import add_cluster_arguments
 
 
@@ -27,6 +28,7 @@ def add_parser(sub):
     p.add_argument("--out", type=Path, default=None, metavar="DIR",
                    help="map directory (default: runs/<case name>-fretting-map)")
     add_cluster_arguments(p)
+    add_json_argument(p, "the runs' rows (as in fretting_map.csv)")
     return p
 
 
@@ -41,9 +43,12 @@ def main(args) -> int:
         print(f"wearcheck fretting-map: interrupted; the runs finished are in {out}",
               file=sys.stderr)
         return 130
-    print(f"{'run':<56} {'regime':<13} {'u0/u*':>7} {'V/cycle m^3':>12}  status")
-    for r in rows:
-        print(f"{r['run']:<56} {r['regime']:<13} {fmt(r['amplitude_over_u_star'], '.3g'):>7} "
-              f"{fmt(r['wear_volume_per_cycle'], '.4g'):>12}  {r['status']}")
-    print(f"-> {Path(out) / 'fretting_map.csv'}, {Path(out) / 'fretting_map.png'}")
+    if args.json:
+        print_json(rows)
+    else:
+        print(f"{'run':<56} {'regime':<13} {'u0/u*':>7} {'V/cycle m^3':>12}  status")
+        for r in rows:
+            print(f"{r['run']:<56} {r['regime']:<13} {fmt(r['amplitude_over_u_star'], '.3g'):>7} "
+                  f"{fmt(r['wear_volume_per_cycle'], '.4g'):>12}  {r['status']}")
+        print(f"-> {Path(out) / 'fretting_map.csv'}, {Path(out) / 'fretting_map.png'}")
     return study_exit(rows)

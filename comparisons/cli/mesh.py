@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import sys
-from ._common import add_case_arguments, load_case
+from ._common import add_case_arguments, add_json_argument, load_case, print_json
 
 
 def add_parser(sub):
@@ -13,6 +13,7 @@ def add_parser(sub):
     # a str, not a Path: Path drops a trailing "/", which says the user meant a directory
     p.add_argument("--out", default=None, metavar="FILE.msh",
                    help="also copy the gmsh .msh file here")
+    add_json_argument(p, "the mesh's counts and sizes")
     return p
 
 
@@ -41,12 +42,20 @@ def main(args) -> int:
     if args.out is not None:
         write_file(args.out, mesh.path, "mesh")
     a0 = reference.scales(case)["a0"]
-    print(f"mesh: {len(mesh.points)} vertices, {len(mesh.triangles)} triangles; "
-          f"order {order}: {nodes} nodes, {2 * nodes} DOFs; {contact_nodes} contact nodes on "
-          f"0 <= r <= {params.contact_radius:.4g} m ({params.contact_radius / a0:.3g} a0, "
-          f"spacing {params.contact_radius / (edges * order):.3g} m)")
-    print(f"file: {args.out if args.out is not None else mesh.path}"
-          + ("" if mesh.generate_seconds else " (from the cache)"))
+    file = args.out if args.out is not None else mesh.path
+    if args.json:
+        print_json(dict(vertices=len(mesh.points), triangles=len(mesh.triangles), order=order,
+                        nodes=nodes, dofs=2 * nodes, contact_nodes=contact_nodes,
+                        contact_radius=params.contact_radius,
+                        contact_radius_over_a0=params.contact_radius / a0,
+                        spacing=params.contact_radius / (edges * order), file=file,
+                        cached=not mesh.generate_seconds))
+    else:
+        print(f"mesh: {len(mesh.points)} vertices, {len(mesh.triangles)} triangles; "
+              f"order {order}: {nodes} nodes, {2 * nodes} DOFs; {contact_nodes} contact nodes "
+              f"on 0 <= r <= {params.contact_radius:.4g} m ({params.contact_radius / a0:.3g} "
+              f"a0, spacing {params.contact_radius / (edges * order):.3g} m)")
+        print(f"file: {file}" + ("" if mesh.generate_seconds else " (from the cache)"))
     if not args.quiet and mesh.generate_seconds:
         print(f"gmsh: {mesh.generate_seconds:.3g} s", file=sys.stderr)
     return 0

@@ -18,7 +18,7 @@ from pathlib import Path
 from wearcheck.comparisons import registry
 from wearcheck.comparisons.studies.refine import refine, table
 
-from ._common import add_case_arguments, load_case
+from ._common import add_case_arguments, add_json_argument, load_case, print_json
 
 
 def add_parser(sub):
@@ -44,6 +44,7 @@ def add_parser(sub):
                    help="stage ŝ for the profile figure and Richardson's estimate "
                         "(default: the last stage every level reached)")
     add_cluster_arguments(p)
+    add_json_argument(p, "the study's summary (as in refinement-SOLVER.json)")
     return p
 
 
@@ -89,5 +90,8 @@ def main(args) -> int:
               + ("the summary was written, the figures may be missing" if written
                  else "no summary was written"), file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
-    print(table(summary))
+    if args.json:
+        print_json(summary)
+    else:
+        print(table(summary))
     return 0 if all(lv["status"] == "ok" for lv in summary["levels"]) else 1

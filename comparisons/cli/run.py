@@ -12,7 +12,7 @@ from wearcheck.comparisons.resources import _estimator, check_export, check_memo
 from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.comparisons.rundir import atomic_directory, write_run_files
 from wearcheck.comparisons import registry
-from ._common import add_case_arguments, load_case
+from ._common import add_case_arguments, load_case, print_json
 
 
 def add_parser(sub):
@@ -27,6 +27,9 @@ def add_parser(sub):
     p.add_argument("--revolve", type=int, default=0, metavar="N_SEGMENTS",
                    help="also revolve the FEM fields into a 3D solid of N >= 3 segments "
                         "(implies --vtk)")
+    p.add_argument("--json", action="store_true",
+                   help="print a summary (steps, stages, solve time, the last history row "
+                        "with units, the scales) on stdout as JSON")  # (no table to replace)
     return p
 
 
@@ -62,8 +65,27 @@ def main(args) -> int:
         print("note: the run ended before the stages at ŝ = "
               + ", ".join(f"{s:g}" for s in missing) + f" ({case.end_condition}); "
               "stages.npz does not hold them", file=sys.stderr)
+    if args.json:
+        print_json(dict(case=args.case, **summary(case, result, args.solver, out)))
     if not args.quiet:
         print(f"{args.solver}: {len(result.history['s']) - 1} steps, "
               f"{len(result.stage_s)} stages, solve {result.solve_seconds:.3g} s -> {out}",
               file=sys.stderr)
     return 0
+
+
+def summary(case, result, solver: str, out: Path) -> dict:
+    """What ``--json`` prints: the run's counts, the last history row (units
+    from the run's data dictionary) and the scales."""
+    from wearcheck.cases import reference
+    from wearcheck.comparisons import layout
+
+    entry = registry.get(solver) if solver in registry.names() else None
+    units = layout.run_dictionary(entry, list(result.history))["history_csv"]
+    return dict(solver=solver, out=out,
+                steps=len(result.history["s"]) - 1, stages_reached=len(result.stage_s),
+                solve_seconds=result.solve_seconds,
+                last={k: float(v[-1]) for k, v in result.history.items() if len(v)},
+                units={k: units[k]["unit"] for k in result.history if k in units},
+                scales={k: v for k, v in reference.scales(case).items()
+                        if isinstance(v, (int, float))})

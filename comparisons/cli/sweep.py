@@ -16,7 +16,8 @@ from wearcheck.comparisons import registry
 
 from wearcheck.comparisons.studies.sweep import sweep
 
-from ._common import add_case_arguments, load_case, study_exit, varied
+from ._common import (add_case_arguments, add_json_argument, load_case, print_json, study_exit,
+                      varied)
 from .refine import add_cluster_arguments
 
 
@@ -31,6 +32,7 @@ def add_parser(sub):
     p.add_argument("--out", type=Path, default=None, metavar="DIR",
                    help="sweep directory (default: runs/<case name>-sweep)")
     add_cluster_arguments(p)
+    add_json_argument(p, "the runs' rows (as in sweep.csv)")
     return p
 
 
@@ -46,10 +48,13 @@ def main(args) -> int:
         print(f"wearcheck sweep: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}"
               f"; the runs finished are in {out}, no sweep.csv was written", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
-    print(f"{'run':<40} {'wall s':>8} {'final ŝ':>8} {'final F/F0':>10}  status")
-    for r in rows:
-        print(f"{r['run']:<40} {fmt(r['wall_seconds'], '.3g'):>8} "
-              f"{fmt(r['final_s_hat'], '.4g'):>8} {fmt(r['final_F_over_F0'], '.4g'):>10}  "
-              f"{r['status']}")
-    print(f"-> {Path(out) / 'sweep.csv'} ({', '.join(vary)})")
+    if args.json:
+        print_json(rows)
+    else:
+        print(f"{'run':<40} {'wall s':>8} {'final ŝ':>8} {'final F/F0':>10}  status")
+        for r in rows:
+            print(f"{r['run']:<40} {fmt(r['wall_seconds'], '.3g'):>8} "
+                  f"{fmt(r['final_s_hat'], '.4g'):>8} {fmt(r['final_F_over_F0'], '.4g'):>10}  "
+                  f"{r['status']}")
+        print(f"-> {Path(out) / 'sweep.csv'} ({', '.join(vary)})")
     return study_exit(rows)

@@ -73,9 +73,11 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
         blocks.append(R.para(f"Note: {w}"))
     for n, text in m.get("approximate", {}).items():
         blocks.append(R.para(f"Approximate: {title(n)} — {text}"))
-    for n, texts in m.get("run_warnings", {}).items():
-        blocks += [R.para(f"Note: {title(n)} — {t}") for t in texts
-                   if t != m.get("approximate", {}).get(n)]
+    approximate = m.get("approximate", {})
+    for names, t in _shared_remarks(m.get("run_warnings", {})):
+        names = [n for n in names if t != approximate.get(n)]
+        if names:
+            blocks.append(R.para(f"Note: {', '.join(map(title, names))} — {t}"))
     if m.get("reference_note"):
         blocks.append(R.para(f"Reference: {m['reference_note']}."))
     blocks += _checks_blocks(m)
@@ -386,6 +388,16 @@ def _sphere_blocks(sw) -> list:
                                         "a0/R.")] if sw.get("figure") else [])
 
 
+def _shared_remarks(run_warnings: dict) -> list[tuple[list[str], str]]:
+    """Each solver's remarks, a text that several solvers made (a remark on the case's
+    unworn contact, e.g. the yield estimate) once with their names, in first-seen order."""
+    said: dict[str, list[str]] = {}
+    for name, texts in run_warnings.items():
+        for text in texts:
+            said.setdefault(text, []).append(name)
+    return [(names, text) for text, names in said.items()]
+
+
 def print_summary(m, out, stream=None) -> None:
     """A few lines for the terminal: one per compared solver and stage (default: stderr),
     the solvers skipped and why, and on a FAIL the setting most likely to fix it.
@@ -397,9 +409,8 @@ def print_summary(m, out, stream=None) -> None:
     ref = title(m["reference"])
     for name, why in (m.get("skipped") or {}).items():
         print(f"skipped {title(name)}: {why}", file=stream)
-    for name, texts in m.get("run_warnings", {}).items():
-        for text in texts:
-            print(f"note: {title(name)}: {text}", file=stream)
+    for names, text in _shared_remarks(m.get("run_warnings", {})):
+        print(f"note: {', '.join(map(title, names))}: {text}", file=stream)
     for name, pair in m["pairs"].items():
         print(f"{title(name)} against {ref} (differences relative to each stage's own scale):",
               file=stream)

@@ -1,0 +1,52 @@
+"""Start-up of the command line against the import of numpy and scipy (issue 26 §3).
+
+    python benchmarks/bench_startup.py [--rounds 9]
+
+Times, in fresh processes alternated round by round, the floor
+``python -c "import numpy, scipy.sparse, scipy.linalg"`` (what any wearcheck
+command must load), the bare interpreter, ``import wearcheck``, ``wearcheck
+--help`` and ``wearcheck run hertz --solver mdr`` (a solve of a few ms: the
+rest is start-up and writing the run directory), and prints their wall and
+CPU seconds and their ratios to the floor. Targets: ``--help`` within 1× and
+``run hertz`` within 2× of the floor. Every process is this interpreter (the
+console script ``wearcheck`` beside it when installed).
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+import harness
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rounds", type=int, default=9)
+    args = ap.parse_args()
+    py, wc = sys.executable, harness.wearcheck_command()
+    out = Path(tempfile.mkdtemp(prefix="bench-startup-"))
+    commands = [
+        ("floor", [py, "-c", "import numpy, scipy.sparse, scipy.linalg"], None),
+        ("python -c pass", [py, "-c", "pass"], None),
+        ("import wearcheck", [py, "-c", "import wearcheck"], None),
+        ("wearcheck --help", [*wc, "--help"], None),
+        ("wearcheck run hertz --solver mdr", [*wc, "run", "hertz", "--solver", "mdr",
+                                              "--quiet", "--out", str(out / "hertz")], None),
+    ]
+    print(f"# bench_startup: {harness.load()} (before)\n")
+    try:
+        timed = harness.alternate(commands, args.rounds)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+    print(harness.table(timed, commands[0][0]))
+    print(f"\nfloor: python -c \"import numpy, scipy.sparse, scipy.linalg\". {args.rounds} "
+          f"rounds after one warm-up round; {harness.load()} (after). Targets: wearcheck "
+          "--help <= 1x, run hertz <= 2x the floor.")
+
+
+if __name__ == "__main__":
+    main()
