@@ -61,7 +61,8 @@ class TrackOperator:
     ``B`` sums a pixel column along x (the first axis) and spreads the sum
     over it: the groove under a column deepens by the pressure's integral
     along the sliding direction. Offers what :func:`bem.contact.solve` uses of
-    an operator (``spacing``, call, ``preconditioner``, ``add_point_loads``).
+    an operator (``spacing``, call, ``single``, ``preconditioner``,
+    ``add_point_loads``).
     """
 
     def __init__(self, op: HalfSpace, sigma_flat: float):
@@ -70,6 +71,14 @@ class TrackOperator:
 
     def __call__(self, p: np.ndarray) -> np.ndarray:
         u = self.op(p)
+        if self.sigma_flat:
+            u += self.sigma_flat * np.sum(p, axis=0)[None, :]
+        return u
+
+    def single(self, p: np.ndarray) -> np.ndarray:
+        """G p + σ_flat·B p with G p in single precision (:meth:`HalfSpace.single`), for
+        the search directions of :func:`bem.contact.solve`; B p (column sums) in double."""
+        u = self.op.single(p)
         if self.sigma_flat:
             u += self.sigma_flat * np.sum(p, axis=0)[None, :]
         return u
