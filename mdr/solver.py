@@ -443,8 +443,8 @@ def check_archard_balance(case, history: dict) -> float | None:
             f"key '{key}' = {value!r}: the worn volume at the end, {V:.4g} m³, is "
             f"{V / (K * F * s):.3g} of Archard's K·F·s = {K * F * s:.4g} m³ (K = {K:.4g} 1/Pa): "
             f"the wear of each step, K·p·Δs, is lost in the round-off of the profile heights "
-            f"(float64, 1e-16 of them); a wear rate this small wears V = K·F·s by Archard's "
-            f"law alone, or run a larger {key} and scale the wear by the ratio")
+            f"(float64, 1e-16 of them); a wear rate this small leaves the profile unworn to float64's "
+            f"resolution: its volume is V = K·F·s by Archard's law alone")
     return error
 
 
