@@ -5,28 +5,15 @@ This is the one definition. ``rundir`` writes and reads by it, every
 ``meta.json`` carries the part that applies to its run (``data_dictionary``),
 ``metrics.json`` carries the comparison's, and the output tables of the
 documentation (``docs/outputs.md``) are generated from it at every docs build
-(:func:`doc_tables`). A solver documents its own extra history
-columns and ``fields.npz`` arrays in its registry entry.
+(:func:`doc_tables`). The history columns every solver writes are declared
+once, in ``cases.result.HISTORY``; a solver declares its own extra history
+columns and ``fields.npz`` arrays in its package's registration
+(``mdr/registration.py``, ...).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-from wearcheck.cases.result import HISTORY_COLUMNS
-
-
-@dataclass(frozen=True)
-class Item:
-    """One file, column, array or field: its name, unit ("" when dimensionless) and meaning."""
-
-    name: str
-    unit: str
-    meaning: str
-
-    def as_dict(self) -> dict:
-        return dict(unit=self.unit, meaning=self.meaning)
-
+from wearcheck.cases.result import HISTORY, Item  # noqa: F401  (HISTORY: part of the layout)
 
 #: files of a run directory (``wearcheck run``, and each solver's folder of a comparison)
 RUN_FILES = (
@@ -54,16 +41,9 @@ RUN_FILES = (
                                      "stage, ImageData counterface_wear_KKK.vti"),
 )
 
-#: history.csv columns every solver writes, in this order
-HISTORY = (
-    Item("s", "m", "sliding distance"),
-    Item("force", "N", "normal force F"),
-    Item("depth", "m", "indentation depth d (approach of the unworn profile's tip)"),
-    Item("contact_radius", "m", "contact radius a (BEM: radius of the circle of equal area)"),
-    Item("wear_center", "m", "wear depth at r = 0"),
-    Item("wear_volume", "m^3", "worn volume"),
-)
-assert tuple(i.name for i in HISTORY) == HISTORY_COLUMNS  # cases.result names them for solvers
+#: history.csv columns every solver writes, in this order: ``HISTORY``, declared
+#: once in ``cases.result`` (solvers name them there); each solver's extra columns
+#: are declared by its registration (``mdr/registration.py``, ...)
 
 #: stages.npz arrays
 STAGES = (
@@ -237,7 +217,7 @@ def _table(items) -> dict:
     return {i.name: i.as_dict() for i in items}
 
 
-UNDECLARED = "not declared by the solver's registry entry"
+UNDECLARED = "not declared by the solver's registration"
 
 
 def run_dictionary(solver=None, history_names=(), field_names=(), stage_names=(),

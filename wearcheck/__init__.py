@@ -19,9 +19,23 @@ Public names: :func:`load_case`, :func:`shipped_cases`, :func:`solvers`,
 (``wearcheck.mdr``, ``wearcheck.comparisons``, ...) is internal.
 """
 
-from wearcheck.cases import Case, CaseError, RunResult, SolverError, WearcheckError
-from wearcheck import registry
-from wearcheck.api import (Result, compare, export_vtk, fit, load_case, read_run, refine,
+import os as _os
+
+# A checkout that is not installed (a clone, a notebook started at its root):
+# pyproject's package-dir installs cases/ as wearcheck.cases, mdr/ as wearcheck.mdr
+# and so on, so the repository root joins this package's search path and the same
+# names resolve to the same folders. Only beside the checkout's pyproject.toml: an
+# installed wearcheck's parent is site-packages, which must never join it.
+_root = _os.path.dirname(_os.path.dirname(_os.path.abspath(__file__)))
+if _os.path.isfile(_os.path.join(_root, "pyproject.toml")) \
+        and _os.path.isfile(_os.path.join(_root, "cases", "__init__.py")) \
+        and _root not in __path__:
+    __path__.append(_root)
+del _root
+
+from wearcheck.cases import Case, CaseError, RunResult, SolverError, WearcheckError  # noqa: E402
+from wearcheck import registry  # noqa: E402
+from wearcheck.api import (Result, compare, export_vtk, fit, load_case, read_run, refine,  # noqa: E402
                            shipped_cases, solve, solvers, sweep)
 
 try:

@@ -131,9 +131,9 @@ def _unlisted() -> list[str]:
 
 def _load(command: str):
     # imported when the command runs, not with the parser: importing every
-    # subcommand's module took `wearcheck --help` 1.2-1.4 s against 0.65 s for
-    # numpy, scipy.sparse and scipy.linalg (the studies load scipy.optimize,
-    # asyncio; docs/performance.md, "Start-up")
+    # subcommand's module made `wearcheck --help` slower than loading numpy and
+    # scipy (the studies load scipy.optimize, asyncio; docs/performance.md,
+    # "Start-up")
     return importlib.import_module(module_name(command))
 
 
