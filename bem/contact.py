@@ -77,7 +77,8 @@ class Contact:
 
 def complementarity_residual(p, gap, p_scale, g_scale) -> float:
     """max |min(p/p_scale, gap/g_scale)|: zero iff p >= 0, gap >= 0, p·gap = 0."""
-    return float(np.max(np.abs(np.minimum(p / p_scale, gap / g_scale))))
+    m = np.minimum(p, gap * (p_scale / g_scale))
+    return float(max(m.max(), -m.min())) / p_scale
 
 
 def initial_pressure(h, depth=None, force=None):
@@ -309,6 +310,13 @@ def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=
         """The wear compliance applied to v: σ v, or σ (v + M v)/2."""
         return sigma * (0.5 * (v + mirror_x(v)) if stroke_mean else v)
 
+    # Each CG iteration's elementwise work is a few dozen passes over the
+    # box; those below are skipped or fused where the result is the same:
+    # no wear compliance for σ = 0, h - d once under depth control, the
+    # inner products and the restriction to the free pixels in one pass each
+    has_compliance = stroke_mean or per_pixel or sigma != 0.0
+    h_minus_d = h - depth if depth is not None else None
+
     t = np.zeros_like(p)
     gz_old = 1.0
     free_old = None
@@ -329,7 +337,7 @@ def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=
         if force is not None:
             # the approach: the mean of h + u over the contact (zero gap there)
             d = float(np.mean((h + u)[on]))
-        gap = h - d + u
+        gap = u + h_minus_d if force is None else h - d + u
         res = complementarity_residual(p, gap, p_scale, g_scale)
         if res < tol:
             if res + 2.0 * drift / g_scale < tol:
@@ -358,7 +366,7 @@ def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=
             g[free] -= np.mean(g[free])
         if precond is not None:
             z = precond(g)
-            z[~free] = 0.0
+            np.multiply(z, free, out=z)
             if force is not None:
                 z[free] -= np.mean(z[free])
         else:
@@ -368,20 +376,23 @@ def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=
         if free_old is None or not np.array_equal(free, free_old):
             t = z.copy()
         else:
-            t = z + (gz / gz_old) * t
+            t *= gz / gz_old
+            t += z
         free_old, gz_old = free, gz
-        r = (op.single(t) if single else op(t)) + compliance(t)
+        r = op.single(t) if single else op(t)
+        if has_compliance:
+            r += compliance(t)
         rt = float(np.sum(r * t))
         if not rt > 0.0:
             raise SolverError("contact solve: the search direction has no positive curvature "
                               f"(residual {res:.3g}); the operator is not positive definite")
         tau = gz / rt
-        p = p - tau * t
+        p -= tau * t
         u -= tau * r
         if single:
             drift += SINGLE_ERROR * abs(tau) * float(np.max(np.abs(r)))
         # the projection onto p >= 0: its (few) pixels enter u by direct sum
-        clipped = np.nonzero(p < 0.0)
+        clipped = np.nonzero(p < 0.0) if p.min() < 0.0 else ((),)
         if len(clipped[0]) > MAX_DIRECT:
             np.maximum(p, 0.0, out=p)
             u = None
