@@ -13,7 +13,9 @@ forms. The Python API in a few lines::
 
 Public names: :func:`load_case`, :func:`shipped_cases`, :func:`solvers`,
 :func:`solve`, :class:`Result`, :func:`read_run`, :func:`compare`,
-:func:`refine`, :func:`sweep`, :func:`fit`, :func:`export_vtk`, :class:`Case`,
+:func:`refine`, :func:`sweep`, :func:`fit`, :func:`export_vtk`, :func:`reference` (a
+certified reference solution), :func:`verify` (results produced elsewhere against it),
+:class:`Case`,
 :class:`CaseError`, :class:`SolverError`, and the solver registry
 :mod:`wearcheck.registry` (``register``, ``Solver``). Everything else
 (``wearcheck.mdr``, ``wearcheck.comparisons``, ...) is internal.
@@ -35,8 +37,8 @@ del _root
 
 from wearcheck.cases import Case, CaseError, RunResult, SolverError, WearcheckError  # noqa: E402
 from wearcheck import registry  # noqa: E402
-from wearcheck.api import (Result, compare, export_vtk, fit, load_case, read_run, refine,  # noqa: E402
-                           shipped_cases, solve, solvers, sweep)
+from wearcheck.api import (Result, compare, export_vtk, fit, load_case, read_run,  # noqa: E402
+                           reference, refine, shipped_cases, solve, solvers, sweep, verify)
 
 try:
     from importlib.metadata import PackageNotFoundError, version
@@ -46,4 +48,4 @@ except PackageNotFoundError:  # running from a checkout that was not installed
 
 __all__ = ["Case", "CaseError", "SolverError", "WearcheckError", "RunResult", "Result",
            "load_case", "shipped_cases", "solvers", "solve", "read_run", "compare", "refine",
-           "sweep", "fit", "export_vtk", "registry", "__version__"]
+           "sweep", "fit", "export_vtk", "reference", "verify", "registry", "__version__"]

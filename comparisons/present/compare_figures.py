@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wearcheck.cases import reference
+from wearcheck.cases import WearcheckError, reference
 from wearcheck.comparisons import registry
 from wearcheck.comparisons.analysis import metrics
 from wearcheck.comparisons.present import figures
@@ -126,6 +126,8 @@ def try_render(run_dirs) -> dict:
             break
         try:
             fn(d)
+        except WearcheckError as exc:  # said in one line, the partial directory's path not
+            notes.append(str(exc).replace(f"'{d}'", Path(d).name))
         except Exception as exc:  # noqa: BLE001 - rendering must not fail the comparison
             notes.append(f"rendering {Path(d).name} failed: {type(exc).__name__}: {exc}")
     return dict(notes=notes)
