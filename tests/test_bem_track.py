@@ -103,7 +103,7 @@ def test_no_counterface_wear_is_the_ball_only_bem():
     # around the contact, started from its carried displacement, the track
     # model's on the whole box), so the histories agree to the contact
     # solve's tolerance (model.tol, 1e-6 complementarity), not to rounding;
-    # (measured 1e-9 of the force at 32²); a wrong wear step moves them by orders more
+    # (measured up to 2e-8 of the force at 32²); a wrong wear step moves them by orders more
     case = paper_case(grid=32, s_hat=2.0, ratio=1.0, scheme="implicit", step_hat=0.2)
     sc = reference.scales(case)
     model, x = track.setup(case, sc)
