@@ -49,17 +49,12 @@ import numpy as np
 
 from wearcheck.cases import CaseError, RunResult, SolverError, profiles, reference
 from wearcheck.cases.result import scar_radius
+from wearcheck.numerics import cycle_jumping
 
 from . import contact, linalg, tangential, transforms
 
 #: most simulated cycles a run may take (runaway guard)
 MAX_SIMULATED_CYCLES = 200_000
-#: safety factor on the predicted jump length
-JUMP_SAFETY = 0.8
-#: largest growth of the jump length from one jump to the next
-JUMP_GROWTH = 2.0
-#: wear per cycle (relative to the depth) below which its changes do not limit a jump
-WEAR_FLOOR = 1e-12
 #: wear (relative to the depth) after which the normal contact is solved again
 #: within a cycle; below it the pressure lags by that fraction of p0
 NORMAL_RESOLVE = 1e-7
@@ -267,23 +262,90 @@ HISTORY_KEYS = ("cycles", "s", "force", "depth", "contact_radius", "wear_center"
                 "max_pressure")
 
 
+@dataclass
+class Point:
+    """The run between two cycles: the contact's state and the run's totals."""
+
+    st: State
+    totals: dict                    # cycles, s, energy, energy_1d
+
+
+class Cycles(cycle_jumping.Problem):
+    """The fretting run as :mod:`numerics.cycle_jumping` sees it: a cycle is
+    simulated increment by increment, the integrated variable is the profile f.
+
+    ∂W/∂f is symmetric to 0.2-0.5 % (Frobenius; the shipped case after 10³-3·10⁵
+    cycles), as the contact's stiffness is: a node coming into contact enters the
+    Jacobian by its column alone.
+    """
+
+    symmetric = True
+
+    def __init__(self, model: Model, counters: dict, loop_cycles=()):
+        self.model = model
+        self.path = cycle_path(model)
+        self.counters = counters
+        self.loop_cycles = set(loop_cycles)
+
+    def cycle(self, point, n, probe=False):
+        model = self.model
+        st = point.st.copy()
+        acc = run_path(model, st, self.path, loop=not probe and n in self.loop_cycles)
+        self.counters["total_increments"] += model.increments
+        _check_resolution(model, acc, self.counters)
+        totals = dict(point.totals, cycles=n)
+        for key, name in (("s", "slide"), ("energy", "energy"), ("energy_1d", "energy_1d")):
+            totals[key] += acc[name]
+        return cycle_jumping.Cycle(state=Point(st, totals), rate=acc["wear"], record=acc)
+
+    def advance(self, point, increment, cycles, cycle):
+        model = self.model
+        st = point.st.copy()
+        st.f = st.f + increment
+        totals = dict(point.totals)
+        if cycles:
+            acc = cycle.record
+            totals["cycles"] += cycles
+            totals["s"] += cycles * acc["slide"]
+            # the energy the jumped cycles dissipated is their worn volume over k/σ0
+            # (paper Eq. 1 integrated): V = (k/σ0) W holds at every cycle, jumps included
+            energy = (transforms.volume(increment, model.dt) / model.k_over_hardness
+                      if model.k_over_hardness > 0 else cycles * acc["energy"])
+            totals["energy"] += energy
+            totals["energy_1d"] += (energy * acc["energy_1d"] / acc["energy"]
+                                    if acc["energy"] > 0 else cycles * acc["energy_1d"])
+        if not np.all(np.isfinite(st.f)):
+            raise SolverError("cycle jumping produced non-finite values; lower "
+                              "fretting.jump_tolerance")
+        _settle_springs(model, st)
+        return Point(st, totals)
+
+    def variable(self, point):
+        return point.st.f
+
+    def scale(self, point):
+        return point.st.normal["depth"]
+
+
 def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> dict:
     """The fretting run from the unworn state; numerics without case handling.
 
-    Returns history (arrays, one entry per simulated cycle and the initial
-    ramp as cycle 0), stages (cycles, s, f, p, tau), loops (Q(u) of the
-    simulated cycles at the stage cycles) and counters.
+    Returns history (arrays, one entry per simulated cycle kept and the
+    initial ramp as cycle 0), stages (cycles, s, f, p, tau), loops (Q(u) of
+    the simulated cycles at the stage cycles), counters and the cycle
+    jumping's report (``jumping``, :meth:`numerics.cycle_jumping.Outcome.info`).
     """
     st = initial_state(model)
     hist = {k: [] for k in HISTORY_KEYS}
     stages = dict(cycles=[], s=[], f=[], p=[], tau=[])
     loops = dict(cycles=[], u=[], Q=[])
-    stage_set = sorted(set(int(c) for c in stage_cycles if c <= cycles))
-    totals = dict(cycles=0, s=0.0, energy=0.0, energy_1d=0.0)
-    counters = dict(simulated_cycles=0, total_increments=0, jumps=0, rejected_jumps=0,
-                    largest_jump=1, largest_wear_per_increment=0.0, increment_wear_number=0.0)
+    stage_list = sorted(set(int(c) for c in stage_cycles if c <= cycles))
+    stage_set = list(stage_list)
+    counters = dict(total_increments=0, largest_wear_per_increment=0.0,
+                    increment_wear_number=0.0)
 
-    def record(acc, ramp=False):
+    def record(point, acc, ramp=False):
+        st, totals = point.st, point.totals
         n = st.normal
         if hist["cycles"]:
             _check_monotone(model, hist, n, totals["cycles"])
@@ -303,6 +365,8 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
         hist["dissipated_energy_1d"].append(totals["energy_1d"])
         hist["energy_per_cycle"].append(acc["energy"])
         hist["max_pressure"].append(float(np.max(n["p"])))
+        while stage_set and stage_set[0] < totals["cycles"]:
+            stage_set.pop(0)
         if stage_set and stage_set[0] == totals["cycles"]:
             stage_set.pop(0)
             stages["cycles"].append(totals["cycles"])
@@ -315,80 +379,24 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
                 loops["u"].append(acc["loop_u"])
                 loops["Q"].append(acc["loop_Q"])
 
-    def add(acc, times=1.0):
-        totals["s"] += times * acc["slide"]
-        totals["energy"] += times * acc["energy"]
-        totals["energy_1d"] += times * acc["energy_1d"]
-
     acc = run_path(model, st, ramp_path(model))
     counters["total_increments"] += model.increments // 4
     _check_resolution(model, acc, counters)
     _check_slip_resolved(model, st, acc)
-    add(acc)
-    record(acc, ramp=True)
-    path = cycle_path(model)
-    W_prev = None
-    jump = 1                       # cycles covered by the last step (1: no extrapolation)
-    saved = None                   # (state, totals, W, sums) after the last accepted cycle
-    last_report = -1.0
-    while totals["cycles"] < cycles:
-        want_loop = bool(stage_set) and stage_set[0] == totals["cycles"] + 1
-        acc = run_path(model, st, path, loop=want_loop)
-        counters["simulated_cycles"] += 1
-        counters["total_increments"] += model.increments
-        _check_resolution(model, acc, counters)
-        if counters["simulated_cycles"] > MAX_SIMULATED_CYCLES:
-            raise SolverError(f"the fretting run simulated more than {MAX_SIMULATED_CYCLES} "
-                              "cycles; raise fretting.jump_tolerance or lower fretting.cycles")
-        W = acc["wear"]
-        ratio = 0.0
-        if W_prev is not None and tol > 0:
-            # a floor for the limiting state, where the wear per cycle vanishes
-            scale = max(np.max(np.abs(W_prev)), WEAR_FLOOR * st.normal["depth"])
-            change = np.max(np.abs(W - W_prev))
-            ratio = change / (2.0 * tol * scale) if scale > 0 else (0.0 if change == 0
-                                                                     else math.inf)
-        if jump > 1 and ratio > 1.0:
-            # the last jump changed the wear per cycle too much: undo it, retry shorter
-            counters["rejected_jumps"] += 1
-            st = saved[0].copy()
-            totals.clear()
-            totals.update(saved[1])
-            jump = max(1, int((jump - 1) * JUMP_SAFETY / ratio) + 1)
-            if jump > 1:
-                _extrapolate(model, st, totals, saved[2], saved[3], jump)
-            continue
-        totals["cycles"] += 1
-        add(acc)
-        record(acc)
-        # size the next jump from the change measured across the last one
-        if tol <= 0:
-            nxt = 1
-        elif W_prev is None:
-            nxt = 2
-        elif ratio == 0.0:
-            nxt = int(JUMP_GROWTH * jump)
-        else:
-            nxt = int(min(JUMP_GROWTH * jump, JUMP_SAFETY * jump / ratio))
-        # land on the next stage and on the end: a simulated cycle must end there
-        limit = (stage_set[0] if stage_set else cycles) - totals["cycles"]
-        limit = min(limit, cycles - totals["cycles"])
-        jump = max(1, min(nxt, limit))
-        W_prev = W
-        sums = {k: acc[k] for k in ("slide", "energy", "energy_1d")}
-        saved = (st.copy(), dict(totals), W, sums)
-        if jump > 1:
-            counters["jumps"] += 1
-            counters["largest_jump"] = max(counters["largest_jump"], jump)
-            _extrapolate(model, st, totals, W, sums, jump)
-        if progress is not None:
-            frac = totals["cycles"] / cycles
-            if frac - last_report >= 0.01:
-                last_report = frac
-                progress(min(frac, 1.0), f"cycle {totals['cycles']}")
+    start = Point(st, dict(cycles=0, s=acc["slide"], energy=acc["energy"],
+                           energy_1d=acc["energy_1d"]))
+    record(start, acc, ramp=True)
+    problem = Cycles(model, counters, loop_cycles=stage_list)
+    plan = cycle_jumping.Plan(cycles=cycles, tolerance=tol, landings=tuple(stage_list),
+                              max_simulated=MAX_SIMULATED_CYCLES,
+                              tolerance_key="fretting.jump_tolerance")
+    out = cycle_jumping.run(problem, start, plan,
+                            lambda cyc, n: record(cyc.state, cyc.record), progress)
+    counters.update(simulated_cycles=out.simulated, jumps=out.jumps,
+                    rejected_jumps=out.rejected_jumps, largest_jump=max(out.largest_jump, 1))
     return dict(history={k: np.asarray(v, dtype=float) for k, v in hist.items()},
                 stages={k: np.asarray(v) for k, v in stages.items()},
-                loops=loops, counters=counters)
+                loops=loops, counters=counters, jumping=out.info())
 
 
 def _check_resolution(model, acc, counters):
@@ -469,38 +477,22 @@ def _check_monotone(model, hist, normal, cycle):
             "mdr.elements")
 
 
-def _extrapolate(model, st, totals, W, sums, jump):
-    """Advance over jump - 1 further cycles at the wear per cycle W (forward Euler)."""
-    n = jump - 1
-    st.f = st.f + n * W
-    totals["cycles"] += n
-    totals["s"] += n * sums["slide"]
-    totals["energy"] += n * sums["energy"]
-    totals["energy_1d"] += n * sums["energy_1d"]
-    if not np.all(np.isfinite(st.f)):
-        raise SolverError("cycle jumping produced non-finite values; lower "
-                          "fretting.jump_tolerance")
+def _settle_springs(model, st):
+    """Solve the normal contact of a jumped profile and put the springs on its limits."""
     solve_normal(model, st)
     # The jumped cycles' wear lowered the limits L in the slip annulus, and each
     # of those cycles ended with its sliding springs at its own lowered limit.
     # The slip by which they followed the limits down, its wear, dissipation and
-    # friction work, is part of every simulated cycle, so W and the sums above
-    # already hold it n times: the springs are put on the new limits without
-    # wear, and the next cycle starts where the cycle-by-cycle run's would.
-    # Left at the old limits (as before), the next cycle slid less by the limits'
-    # fall over the jump, and the next jump extrapolated that low W: at k·n = 2,
-    # u0 = 0.2u*, tol = 0.05 its energy per cycle was low by up to 6.5e-3 (now
-    # 5.7e-4) and the worn volume by 3.8e-3 (now 1.1e-3); once the fall exceeds
-    # two increments' travel the first increment wore it a second time instead
-    # (docs/fretting.md, §4; benchmarks/bench_fretting_jumps.py).
+    # friction work, is part of every simulated cycle, so the jump's increment
+    # holds it already: the springs are put on the new limits without wear, and
+    # the next cycle starts where the cycle-by-cycle run's would. Left at the
+    # old limits, the next cycle slid less by the limits' fall (docs/fretting.md, §4).
     Q_end = st.Q
     st.v = np.clip(st.v, -st.L, st.L)
     if model.amplitude is None:
         # tangential force control: every simulated cycle ends at Q*, its
         # springs reloaded onto the lowered limits by a little more travel of
-        # the indenter; clipped alone, the next cycle started below Q* (energy
-        # per cycle low by 2.3e-3 at Q* = 0.8 μF, depth control, N = 200,
-        # k·n = 2, tol = 0.05; 0.9e-3 reloaded)
+        # the indenter; clipped alone, the next cycle started below Q*
         du = tangential.displacement_for_force(st.v, st.L, Q_end, model.G_star, model.weights)
         st.v, _ = tangential.step(st.v, st.L, du)
         st.u += du
@@ -570,7 +562,7 @@ def _solve(case, progress=None) -> RunResult:
     info = dict(solver="mdr", mode="fretting", N=case.mdr.elements, domain=float(model.x[-1]),
                 grid="uniform in r^2", increments=fr.increments,
                 jump_tolerance=fr.jump_tolerance, stage_cycles=stg["cycles"].tolist(),
-                gross_slip_displacement_unworn=u_star,
+                gross_slip_displacement_unworn=u_star, cycle_jumping=out["jumping"],
                 increment_wear_number_limit=WEAR_NUMBER_LIMIT, **out["counters"])
     loops = out["loops"]
     fields = None

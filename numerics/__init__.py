@@ -1,0 +1,1 @@
+"""Numerics shared by the solvers (installed as ``wearcheck.numerics``)."""
