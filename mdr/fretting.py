@@ -145,7 +145,8 @@ def solve_normal(model: Model, st: State) -> None:
     pp = np.zeros(N1)
     pp[:K] = transforms.pressure(q, model.dt)
     st.normal = dict(depth=float(depth), q=qq, p=pp, force=float(model.weights[:K] @ q),
-                     contact_radius=contact.contact_radius(g, depth, model.t, m), m=m)
+                     contact_radius=contact.contact_radius(g, depth, model.t, m), m=m,
+                     gap=float(g[m + 1] - depth))
     st.L = tangential.limit(qq, model.mu, model.G_star)
     st.unsolved = 0.0
 
@@ -323,6 +324,24 @@ class Cycles(cycle_jumping.Problem):
     def variable(self, point):
         return point.st.f
 
+    def events(self, cycle):
+        """Where the wear per cycle has kinks: the first node outside the contact
+        coming in (its gap g − d) and the last one in it leaving (d − g), the
+        innermost slipping node coming to stick (U − L) and the outermost
+        sticking one starting to slip (L − U); relative to d and U."""
+        st, acc = cycle.state.st, cycle.record
+        n = st.normal
+        m, d = n["m"], n["depth"]
+        out = {("enter", m + 1): n["gap"] / d,
+               ("leave", m): n["q"][m] / (self.model.E_star * d)}
+        U = acc["u_amp"]
+        slipped = acc["slipped"] | (st.L <= 0.0)
+        if U > 0 and not slipped[0] and slipped.any():
+            k = int(np.argmax(slipped))
+            out[("stick", k)] = (U - st.L[k]) / U
+            out[("slip", k - 1)] = (st.L[k - 1] - U) / U
+        return out
+
     def scale(self, point):
         return point.st.normal["depth"]
 
@@ -392,8 +411,8 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
                               tolerance_key="fretting.jump_tolerance")
     out = cycle_jumping.run(problem, start, plan,
                             lambda cyc, n: record(cyc.state, cyc.record), progress)
-    counters.update(simulated_cycles=out.simulated, jumps=out.jumps,
-                    rejected_jumps=out.rejected_jumps, largest_jump=max(out.largest_jump, 1))
+    counters.update(simulated_cycles=out.simulated, jumps=out.steps,
+                    rejected_jumps=out.rejected_steps, largest_jump=max(out.largest_step, 1))
     return dict(history={k: np.asarray(v, dtype=float) for k, v in hist.items()},
                 stages={k: np.asarray(v) for k, v in stages.items()},
                 loops=loops, counters=counters, jumping=out.info())

@@ -1,81 +1,76 @@
 """Error-controlled cycle jumping: a cycle-averaged rate integrated in the cycle count.
 
 A cyclic process (fretting: one tangential cycle of a contact) changes a slowly
-varying variable y (the worn profile) by W(y) per cycle, and over many cycles
-y follows the ODE dy/dN = W(y) in the cycle count N. The integrator simulates a
-cycle (W at the current state), then jumps over h cycles by the linearly
-implicit (Rosenbrock–)Euler step
+varying variable y (the worn profile) by F(y) per cycle, and over many cycles y
+follows the ODE dy/dN = F(y) in the cycle count N. The rate is known only by
+simulating a cycle. It is stiff: its Jacobian has a spectral radius ρ of
+1e-2 per cycle in fretting (a worn node unloads and wears less, a grid-scale
+mode damped within ~100 cycles) against the slow change of the profile over
+10⁴–10⁶ cycles, so forward-Euler jumps are stable only while hρ < 2.
 
-    y ← y + (I − hJ)⁻¹ h W,
+The integrator takes steps of h cycles by the explicit Runge–Kutta–Chebyshev
+method RKC2 (van der Houwen & Sommeijer 1980; Sommeijer, Shampine & Verwer,
+J. Comput. Appl. Math. 88, 1998): s stages, each a simulated cycle from an
+intermediate profile, stable for hρ <= 0.65 s², second order, damping every
+mode whose eigenvalue is on the negative real axis — fretting's Jacobian is
+symmetric to 0.5 %, so its spectrum is. The cost of a step grows as √(hρ)
+and needs no Jacobian, only ρ, which a few cycles of nonlinear power
+iteration estimate. Where the rate decays towards a limit, the whole change
+2h·max|F| of a step eventually fits the error allowed, and a forward-Euler
+step does (stable or not: its increment is that small).
 
-J ≈ ∂W/∂y estimated from simulated cycles: one-sided differences, one cycle
-per entry of y whose rate is not negligible. The step is stable at any length
-where the rate decays — the wear rate's stiff grid-scale modes, and its
-approach to a limit where W → 0, which kept forward-Euler jumps short — and
-there it tends to the limit itself (h → ∞: a Newton step on W = 0).
-
-The next simulated cycle checks the jump. Its local error is estimated as
-(I − hJ)⁻¹ (h/2)(W(y_new) − W): the difference to the trapezoidal rule,
-filtered through the step's own matrix where the rate is stiff (Hairer &
-Wanner, Solving ODEs II, §IV.8). The estimates are carried through the
-step's linearised dynamics, e ← (I − hJ)⁻¹ e + est — how the scheme itself
-propagates an error of its state: damped where the contact damps it (a node
-worn too little wears faster) — and e is the global error estimate against the
-run that simulates every cycle. A jump may use LOCAL_SHARE of the room
-tol·Y − |carried e| (max norm; Y = max|y − y(0)| the change so far), so
-|e| <= tol·Y throughout. Where the linear model holds the estimates fall and
-the jump grows by GROWTH per jump: the simulated cycles grow with log N once
-the rate varies smoothly.
-
-The Jacobian is estimated when a jump is rejected and there is none, or the
-one in hand was taken at fewer than JACOBIAN_AGE of the current cycles (else
-the jump is shortened), and when the carried error takes half the
-tolerance without one. Entries whose rate becomes negligible leave it; entries
-whose rate appears (a node coming into contact) enter it by their columns, one
-cycle each, and — for a problem whose Jacobian is near-symmetric
-(``Problem.symmetric``) — their rows from those columns. A jump whose whole
-change 2h·max|W| fits its share is forward Euler.
+A step from y_n over h cycles is checked by the next simulated cycle, the rate
+F_{n+1} at its end (which starts the next step): the local error estimate is
+(12(y_n − y_{n+1}) + 6h(F_n + F_{n+1}))/15, the RKC code's, for forward
+Euler (h/2)(F_{n+1} − F_n). The estimates are summed as vectors, e (signed, no
+damping counted), the first-order estimate of the global error against the
+run that simulates every cycle. A step may take LOCAL_SHARE of the room
+tol·Y − max|e| (Y = max|y − y(0)|, the change so far), so max|e| <= tol·Y
+throughout; a rejected step is retried shorter. The steps grow by up to
+GROWTH per step, so where the rate varies smoothly the cycles simulated grow
+with log N.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from wearcheck.cases.errors import SolverError
 
-#: factor on the jump the error estimate proposes (the estimate grows as h²)
+#: factor on the step the error estimate proposes (the estimate grows as h³)
 SAFETY = 0.8
-#: largest growth and shrinking of the jump from one jump to the next
+#: largest growth and shrinking of the step from one step to the next
 GROWTH = 2.0
 SHRINK = 0.2
-#: entries of y whose rate is below ACTIVE·max|W| are outside the Jacobian
-#: (in fretting the stick zone's round-off wear, 1e-17 of the slip annulus's)
-ACTIVE = 1e-6
-#: the differences' probe: PROBE times the largest change of the jump it is
-#: taken for, at least PROBE_FLOOR times the problem's scale of y
-PROBE = 1e-3
-PROBE_FLOOR = 1e-6
-#: share of the room left under the tolerance (tol·Y less the error carried
-#: from earlier jumps) that one jump's local error may take
+#: share of the room tol·Y − max|e| that one step's local error may take
 LOCAL_SHARE = 0.5
-GLOBAL = False
-#: a rejected jump estimates a new Jacobian when the one in hand was taken at
-#: fewer than this fraction of the cycles at the jump's start
-JACOBIAN_AGE = 0.1
+#: RKC's damping ε (stability interval 0.653 s² for ε = 2/13, the RKC code's)
+DAMPING = 2.0 / 13.0
+#: safety factor on the estimated spectral radius (nonlinear power iteration
+#: approaches it from below: 4-7 % low after 8 iterations on fretting's Jacobians)
+RADIUS_SAFETY = 1.2
+#: power iterations: from an alternating start, and warm from the last estimate
+POWER_COLD = 8
+POWER_WARM = 3
+#: the power iteration's probe: the largest entry of its perturbation, as a
+#: fraction of the problem's scale of y
+PROBE = 1e-6
+#: most stages of one step (the step is shortened to keep within)
+MAX_STAGES = 200
 #: what ``info["cycle_jumping"]["error_estimate"]`` means, in meta.json
 ERROR_MEANING = (
     "estimated error of the integrated variable against the run that simulates every cycle, "
-    "max norm over its largest change: the jumps' local error estimates carried through the "
-    "scheme's linearised dynamics (first order); at most the tolerance. local_error_sum: "
-    "the same estimates summed without that carrying (no damping counted)")
+    "max norm over its largest change: the steps' local error estimates summed as vectors "
+    "(first order, no damping counted); kept at most the tolerance. local_error_sum: their "
+    "norms summed")
 
 
 @dataclass
 class Cycle:
-    """One simulated cycle: the state after it, the rate W (change of y over the
+    """One simulated cycle: the state after it, the rate F (change of y over the
     cycle) and whatever the problem keeps of it (``record``)."""
 
     state: object
@@ -86,19 +81,16 @@ class Cycle:
 class Problem:
     """A cyclic process as the integrator sees it; states are the problem's own objects."""
 
-    #: ∂W/∂y is near-symmetric: an entry added to the Jacobian takes its row from
-    #: its column (one cycle instead of one per entry)
-    symmetric = False
-
     def cycle(self, state, n: int, probe: bool = False) -> Cycle:
         """Simulate cycle ``n`` (the one ending at cycle count n) from ``state``;
-        ``probe``: for the Jacobian, nothing of it is kept. Must not modify ``state``."""
+        ``probe``: a stage or a probe of the integrator, nothing of it is kept.
+        Must not modify ``state``."""
         raise NotImplementedError
 
     def advance(self, state, increment: np.ndarray, cycles: int, cycle: Cycle | None):
-        """The state after ``cycles`` jumped cycles that change y by ``increment``;
-        ``cycle`` is the simulated cycle the jump extrapolates (None for a probe,
-        ``cycles`` = 0). Must not modify ``state``."""
+        """The state ``cycles`` cycles after ``state`` with y changed by ``increment``;
+        ``cycle``: the simulated cycle from ``state`` (its sums per cycle), None
+        for a stage or probe state (``cycles`` = 0). Must not modify ``state``."""
         raise NotImplementedError
 
     def variable(self, state) -> np.ndarray:
@@ -106,8 +98,14 @@ class Problem:
         raise NotImplementedError
 
     def scale(self, state) -> float:
-        """A size of y (the smallest probe of the differences is PROBE_FLOOR of it)."""
+        """A size of y: the power iteration perturbs y by PROBE of it."""
         raise NotImplementedError
+
+    def events(self, cycle: Cycle) -> dict:
+        """Quantities that cross zero where the rate has a kink (a node coming into
+        contact, say), by a key that names the event, after a kept cycle; a step
+        lands where the last two kept cycles put the nearest crossing."""
+        return {}
 
 
 @dataclass(frozen=True)
@@ -115,7 +113,7 @@ class Plan:
     """What to run: ``cycles`` in all; ``tolerance`` on the global error relative to
     the largest change of y (0: every cycle simulated); ``landings``: cycle counts
     at which a simulated cycle must end; ``max_simulated``: the runaway guard on
-    the simulated cycles (all of them, the Jacobians' included);
+    the simulated cycles (all of them: kept, stages, probes, rejected);
     ``tolerance_key``: how messages name the tolerance."""
 
     cycles: int
@@ -125,51 +123,52 @@ class Plan:
     tolerance_key: str = "the jump tolerance"
 
 
-class Jacobian:
-    """J ≈ ∂W/∂y on the entries ``index`` (taken at cycle count ``cycle``), and the
-    solves with I − hJ of the step."""
+def rkc_coefficients(s: int) -> dict:
+    """RKC2's coefficients for s >= 2 stages (damping DAMPING).
 
-    def __init__(self, index: np.ndarray, matrix: np.ndarray, cycle: int):
-        self.index = np.asarray(index, dtype=int)
-        self.matrix = matrix
-        self.cycle = cycle
-        self._lu = None
+    Returns arrays over j = 0..s: mu, nu, mu_tilde, gamma_tilde (entries j >= 2;
+    mu_tilde[1] too) and ``beta``, the stability interval [−beta, 0] of hλ.
+    Stage recursion: Y1 = Y0 + mu_tilde[1] h F0; Y_j = (1 − mu_j − nu_j) Y0 +
+    mu_j Y_{j−1} + nu_j Y_{j−2} + mu_tilde_j h F(Y_{j−1}) + gamma_tilde_j h F0.
+    """
+    if s < 2:
+        raise ValueError(f"RKC needs s >= 2 stages, got {s}")
+    w0 = 1.0 + DAMPING / s**2
+    t = w0 * w0 - 1.0
+    arg = s * math.log(w0 + math.sqrt(t))
+    w1 = math.sinh(arg) * t / (math.cosh(arg) * s * math.sqrt(t) - w0 * math.sinh(arg))
+    T = np.zeros(s + 1)
+    dT = np.zeros(s + 1)
+    ddT = np.zeros(s + 1)
+    T[0], T[1], dT[1] = 1.0, w0, 1.0
+    for j in range(2, s + 1):
+        T[j] = 2 * w0 * T[j - 1] - T[j - 2]
+        dT[j] = 2 * T[j - 1] + 2 * w0 * dT[j - 1] - dT[j - 2]
+        ddT[j] = 4 * dT[j - 1] + 2 * w0 * ddT[j - 1] - ddT[j - 2]
+    b = np.zeros(s + 1)
+    b[2:] = ddT[2:] / dT[2:] ** 2
+    b[0] = b[1] = b[2]
+    a = 1.0 - b * T
+    mu = np.zeros(s + 1)
+    nu = np.zeros(s + 1)
+    mt = np.zeros(s + 1)
+    gt = np.zeros(s + 1)
+    mt[1] = b[1] * w1
+    for j in range(2, s + 1):
+        mu[j] = 2 * b[j] * w0 / b[j - 1]
+        nu[j] = -b[j] / b[j - 2]
+        mt[j] = 2 * b[j] * w1 / b[j - 1]
+        gt[j] = -a[j - 1] * mt[j]
+    beta = (w0 + 1.0) / w1          # where the stability polynomial leaves [−1, 1]
+    return dict(mu=mu, nu=nu, mu_tilde=mt, gamma_tilde=gt, beta=beta)
 
-    def solve(self, h: float, x: np.ndarray) -> np.ndarray:
-        """(I − hJ)⁻¹ x (non-finite where I − hJ is singular)."""
-        from scipy.linalg import lu_factor, lu_solve
 
-        if self._lu is None or self._lu[0] != h:
-            A = np.eye(len(self.index)) - h * self.matrix
-            with np.errstate(all="ignore"):
-                try:
-                    self._lu = (h, lu_factor(A, check_finite=False))
-                except (ValueError, np.linalg.LinAlgError):
-                    self._lu = (h, None)
-        if self._lu[1] is None:
-            return np.full_like(x, np.nan)
-        with np.errstate(all="ignore"):
-            return lu_solve(self._lu[1], x, check_finite=False)
-
-    def restrict(self, keep: np.ndarray) -> None:
-        """Keep the entries where ``keep`` (a mask over ``index``)."""
-        self.index = self.index[keep]
-        self.matrix = self.matrix[np.ix_(keep, keep)]
-        self._lu = None
-
-    def extend(self, entries: np.ndarray, columns: np.ndarray, symmetric: bool) -> None:
-        """Add ``entries`` with their ``columns`` of ∂W/∂y (rows over the old index
-        and the new entries); their rows from the columns if ``symmetric``, else zero."""
-        n, k = len(self.index), len(entries)
-        J = np.zeros((n + k, n + k))
-        J[:n, :n] = self.matrix
-        J[:, n:] = columns
-        if symmetric:
-            J[n:, :n] = columns[:n].T
-        order = np.argsort(np.r_[self.index, entries], kind="stable")
-        self.index = np.r_[self.index, entries][order]
-        self.matrix = J[np.ix_(order, order)]
-        self._lu = None
+def stages_for(h_rho: float) -> int:
+    """The fewest RKC2 stages (>= 2) stable for h·ρ."""
+    s = max(2, int(math.ceil(math.sqrt(max(h_rho, 0.0) / 0.653))))
+    while rkc_coefficients(s)["beta"] < h_rho:
+        s += 1
+    return s
 
 
 @dataclass
@@ -179,15 +178,18 @@ class Outcome:
     state: object
     cycles: int = 0
     rows: int = 0                  # simulated cycles kept (observed)
-    simulated: int = 0             # all simulated cycles: rows, rejected checks, Jacobians
-    jacobians: int = 0             # full estimates
-    jacobian_cycles: int = 0       # cycles spent on the Jacobian (estimates and entries added)
-    jumps: int = 0
-    rejected_jumps: int = 0
-    implicit_jumps: int = 0
-    largest_jump: int = 0          # cycles covered by a jump and its checking cycle
-    error_sum: float = 0.0         # Σ accepted local error estimates (absolute, max norm)
-    propagated_error: float = 0.0  # the global error estimate at the end (max norm)
+    simulated: int = 0             # all simulated cycles
+    stage_cycles: int = 0          # of them: RKC stages
+    radius_cycles: int = 0         # of them: power iterations for ρ
+    steps: int = 0
+    rkc_steps: int = 0
+    rejected_steps: int = 0
+    largest_step: int = 0          # cycles covered by a step
+    most_stages: int = 0
+    event_landings: int = 0        # steps cut to land at a kink
+    spectral_radius: float = 0.0   # the last estimate [1/cycle]
+    error_sum: float = 0.0         # Σ max|est| of the accepted steps
+    propagated_error: float = 0.0  # max|e| at the end
     largest_change: float = 0.0    # Y = max|y − y(0)| at the end
     tolerance: float = 0.0
 
@@ -201,42 +203,44 @@ class Outcome:
         return dict(error_estimate=self.error_estimate, tolerance=self.tolerance,
                     meaning=ERROR_MEANING, local_error_sum=self.error_sum / Y if Y > 0 else 0.0,
                     simulated_cycles=self.simulated, recorded_cycles=self.rows,
-                    jacobians=self.jacobians, jacobian_cycles=self.jacobian_cycles,
-                    jumps=self.jumps, implicit_jumps=self.implicit_jumps,
-                    rejected_jumps=self.rejected_jumps, largest_jump=self.largest_jump)
+                    stage_cycles=self.stage_cycles, radius_cycles=self.radius_cycles,
+                    steps=self.steps, rkc_steps=self.rkc_steps,
+                    rejected_steps=self.rejected_steps, largest_step=self.largest_step,
+                    most_stages=self.most_stages, event_landings=self.event_landings,
+                    spectral_radius=self.spectral_radius)
 
 
 @dataclass
-class _Jump:
-    start: object          # the state the jump starts from (after a simulated cycle)
+class _Step:
+    origin: object         # the state the step starts from
     n: int                 # its cycle count
-    cycle: Cycle           # the simulated cycle whose rate it extrapolates
-    origin: object         # the state that cycle started from
-    h: int                 # cycles jumped
+    rate: np.ndarray       # F at origin (the simulated cycle from it)
+    cycle: Cycle           # that cycle
+    h: int                 # cycles the step covers
     allowed: float         # the local error it may make
-    carried: np.ndarray    # the global error so far, carried over the jump
-    delta: np.ndarray | None = None
-    jacobian: Jacobian | None = None
+    stages: int = 1        # 1: forward Euler
+    increment: np.ndarray | None = None
 
 
 def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
     """Integrate ``problem`` from ``state`` (cycle count 0) to ``plan.cycles``.
 
-    ``observe(cycle, n)`` is called with every simulated cycle that is kept,
-    in order (``n`` the cycle count at its end); the cycles that check a
-    rejected jump and the Jacobian's are not kept. ``progress(fraction, text)``
-    as the run advances. Raises SolverError past ``plan.max_simulated``
-    simulated cycles or on non-finite values.
+    ``observe(cycle, n)`` is called with every simulated cycle that is kept, in
+    order (``n`` the cycle count at its end): the cycle from each accepted
+    state. Stages, probes and the cycles of rejected steps are not kept.
+    ``progress(fraction, text)`` as the run advances. Raises SolverError past
+    ``plan.max_simulated`` simulated cycles or on non-finite values.
     """
     tol = float(plan.tolerance)
     end = int(plan.cycles)
     landings = sorted({int(c) for c in plan.landings if 0 < c < end} | {end})
     y0 = np.array(problem.variable(state), dtype=float, copy=True)
     out = Outcome(state=state, tolerance=tol)
-    jac: Jacobian | None = None
-    error = np.zeros_like(y0)      # the global error estimate, carried (signed)
-    pending: _Jump | None = None
-    h_ctrl = 1.0
+    error = np.zeros_like(y0)      # Σ local error estimates (signed)
+    radius = None                  # (ρ, its vector, the count it was estimated at)
+    pending: _Step | None = None
+    seen = None                    # (count, events) of the last kept cycle
+    h_ctrl = 2.0
     n = 0
     last_report = -1.0
 
@@ -250,144 +254,159 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
     def change(st):
         return float(np.max(np.abs(problem.variable(st) - y0)))
 
-    def active(W):
-        top = float(np.max(np.abs(W)))
-        return np.flatnonzero(np.abs(W) > ACTIVE * top) if top > 0 else np.arange(0)
+    def rate_at(origin, count, y_origin, y):
+        """F at the profile y (a stage state built from ``origin``)."""
+        return simulate(problem.advance(origin, y - y_origin, 0, None), count, probe=True).rate
 
-    def carry(x, h):
-        """x carried over a jump of h cycles by the scheme (unchanged outside J)."""
-        x = x.copy()
-        if jac is not None and len(jac.index):
-            x[jac.index] = jac.solve(h, x[jac.index])
-        return x
+    def estimate_radius(origin, count, F):
+        """ρ by nonlinear power iteration on (F(y + εv) − F(y))/ε at ``origin``."""
+        nonlocal radius
+        y = problem.variable(origin)
+        active = np.abs(F) > 1e-6 * float(np.max(np.abs(F)))
+        v = radius[1] * active if radius is not None else np.zeros_like(F)
+        iterations = POWER_WARM
+        if not np.any(v):
+            v = np.where(np.arange(len(F)) % 2 == 0, 1.0, -1.0) * active
+            iterations = POWER_COLD
+        rho = 0.0
+        scale = PROBE * problem.scale(origin)
+        for _ in range(iterations):
+            top = float(np.max(np.abs(v)))
+            if top == 0.0:
+                break
+            eps = scale / top
+            u = (rate_at(origin, count, y, y + eps * v) - F) / eps
+            out.radius_cycles += 1
+            rho = float(np.linalg.norm(u) / np.linalg.norm(v))
+            v = u * active
+            if np.any(v):
+                v = v / float(np.max(np.abs(v)))
+        if not math.isfinite(rho):
+            raise SolverError("the cycle jumps' spectral radius is not finite")
+        radius = (RADIUS_SAFETY * rho, v, count)
+        out.spectral_radius = radius[0]
 
-    def stale(n0):
-        return jac is None or jac.cycle < JACOBIAN_AGE * n0
+    def step(origin, count, cyc, h):
+        """The step of h cycles from ``origin`` (rate ``cyc.rate``): the pending
+        step and the state after it (None if its increment is not finite)."""
+        F0 = cyc.rate
+        room = tol * change(origin) - float(np.max(np.abs(error)))
+        st = _Step(origin=origin, n=count, rate=F0, cycle=cyc, h=h, allowed=LOCAL_SHARE * room)
+        if 2.0 * h * float(np.max(np.abs(F0))) <= st.allowed or radius is None:
+            st.increment = h * F0                       # forward Euler
+        else:
+            s = stages_for(h * radius[0])
+            st.stages = s
+            c = rkc_coefficients(s)
+            y = problem.variable(origin)
+            Y2 = y
+            Y1 = y + c["mu_tilde"][1] * h * F0
+            for j in range(2, s + 1):
+                Fj = rate_at(origin, count + 1, y, Y1)
+                out.stage_cycles += 1
+                Yj = ((1 - c["mu"][j] - c["nu"][j]) * y + c["mu"][j] * Y1 + c["nu"][j] * Y2
+                      + c["mu_tilde"][j] * h * Fj + c["gamma_tilde"][j] * h * F0)
+                Y2, Y1 = Y1, Yj
+            st.increment = Y1 - y
+        if not np.all(np.isfinite(st.increment)):
+            return st, None
+        return st, problem.advance(origin, st.increment, h, cyc)
 
-    def columns(origin, count, cyc, entries, h, rows):
-        """∂W/∂y at ``origin`` for ``entries`` (rows ``rows``), one cycle each."""
-        W = cyc.rate
-        eps = max(PROBE * h * float(np.max(np.abs(W))), PROBE_FLOOR * problem.scale(origin))
-        C = np.empty((len(rows), len(entries)))
-        for k, i in enumerate(entries):
-            d = np.zeros_like(W)
-            d[i] = eps
-            Wi = simulate(problem.advance(origin, d, 0, None), count, probe=True).rate
-            C[:, k] = (Wi[rows] - W[rows]) / eps
-        out.jacobian_cycles += len(entries)
-        if not np.all(np.isfinite(C)):
-            raise SolverError("the cycle jumps' Jacobian has non-finite entries")
-        return C
+    def estimate(st: _Step, F1):
+        """The local error estimate (vector) of step st from the rate F1 at its end."""
+        if st.stages == 1:
+            return 0.5 * st.h * (F1 - st.rate)
+        return (-12.0 * st.increment + 6.0 * st.h * (st.rate + F1)) / 15.0
 
-    def estimate_jacobian(origin, count, cyc, h):
-        """A new Jacobian at ``origin``, the state ``cyc`` (cycle ``count``) started from."""
-        nonlocal jac
-        S = active(cyc.rate)
-        jac = Jacobian(S, columns(origin, count, cyc, S, h, S), count - 1)
-        out.jacobians += 1
-
-    def follow(origin, count, cyc, h):
-        """Let the Jacobian's entries follow the active ones of ``cyc``."""
-        S = active(cyc.rate)
-        keep = np.isin(jac.index, S)
-        if not keep.all():
-            jac.restrict(keep)
-        new = np.setdiff1d(S, jac.index)
-        if len(new):
-            rows = np.r_[jac.index, new]
-            jac.extend(new, columns(origin, count, cyc, new, h, rows), problem.symmetric)
-
-    def jump(start, n0, cyc, origin, h):
-        """The jump of h cycles from ``start`` (its increment None if not finite)."""
-        W = cyc.rate
-        carried = carry(error, h)
-        room = tol * change(start) - (float(np.max(np.abs(carried))) if GLOBAL else 0.0)
-        j = _Jump(start=start, n=n0, cycle=cyc, origin=origin, h=h,
-                  allowed=LOCAL_SHARE * room, carried=carried)
-        delta = h * W
-        if jac is not None and 2.0 * h * float(np.max(np.abs(W))) > j.allowed:
-            # the whole change would not fit: the linearly implicit step
-            S = jac.index
-            delta[S] = jac.solve(h, h * W[S])
-            j.jacobian = jac
-        ok = np.all(np.isfinite(delta)) and np.all(np.isfinite(carried))
-        j.delta = delta if ok else None
-        return j
-
-    def estimate(j: _Jump, W1):
-        """The local error estimate (vector) of jump j from the rate W1 after it: the
-        step less the trapezoidal rule's, filtered by the step's matrix."""
-        est = j.delta - 0.5 * j.h * (j.cycle.rate + W1)
-        if j.jacobian is not None:
-            S = j.jacobian.index
-            est[S] = j.jacobian.solve(j.h, est[S])
-        return est
-
-    def take(start, n0, cyc, origin, h):
-        """Jump h cycles (fewer where the step is not finite) from ``start``: the
-        pending jump, the state and the count after it."""
-        while h >= 1:
-            j = jump(start, n0, cyc, origin, h)
-            if j.delta is not None:
-                return j, problem.advance(start, j.delta, h, cyc), n0 + h
-            out.rejected_jumps += 1
-            h = int(SHRINK * h)
-        return None, start, n0
-
-    def factor(err, allowed):
+    def factor(err, allowed, order):
         if err <= 0.0:
             return GROWTH
         if not (allowed > 0.0 and math.isfinite(err)):
             return SHRINK
-        return min(GROWTH, max(SHRINK, SAFETY * math.sqrt(allowed / err)))
+        return min(GROWTH, max(SHRINK, SAFETY * (allowed / err) ** (1.0 / order)))
 
-    while n < end:
-        origin = state
-        cyc = simulate(state, n + 1)
-        if pending is not None:
-            j = pending
-            est = estimate(j, cyc.rate)
-            err = float(np.max(np.abs(est)))
-            if not err <= j.allowed:
-                out.rejected_jumps += 1
-                if stale(j.n):
-                    estimate_jacobian(j.origin, j.n, j.cycle, j.h)
-                    h = j.h
-                else:
-                    h = min(int(j.h * factor(err, j.allowed)), j.h - 1)
-                h_ctrl = max(1.0, h)
-                pending, state, n = take(j.start, j.n, j.cycle, j.origin, h)
+    def take(origin, count, cyc, h):
+        """Step h cycles (fewer while the step is not finite or needs too many
+        stages) from ``origin``; the pending step, the state and count after it."""
+        while h >= 2:
+            if radius is not None and stages_for(h * radius[0]) > MAX_STAGES:
+                h = int(0.9 * h * MAX_STAGES**2 / stages_for(h * radius[0]) ** 2)
                 continue
-            out.jumps += 1
-            out.largest_jump = max(out.largest_jump, j.h + 1)
-            out.implicit_jumps += j.jacobian is not None
+            st, new = step(origin, count, cyc, h)
+            if new is not None:
+                return st, new, count + h
+            out.rejected_steps += 1
+            h = int(SHRINK * h)
+        return None, cyc.state, count + 1
+
+    origin, n_origin = state, 0
+    while n < end:
+        cyc = simulate(origin, n_origin + 1)
+        if pending is not None:
+            st = pending
+            est = estimate(st, cyc.rate)
+            err = float(np.max(np.abs(est)))
+            order = 2 if st.stages == 1 else 3
+            if not err <= st.allowed:
+                out.rejected_steps += 1
+                if st.stages > 1 and radius[2] < st.n:
+                    # an unstable stage sequence looks like a large error: ρ afresh
+                    estimate_radius(st.origin, st.n, st.rate)
+                    h = st.h
+                else:
+                    h = min(int(st.h * factor(err, st.allowed, order)), st.h - 1)
+                h_ctrl = max(2.0, h)
+                pending, origin, n_origin = take(st.origin, st.n, st.cycle, h)
+                n = n_origin
+                continue
+            out.steps += 1
+            out.rkc_steps += st.stages > 1
+            out.most_stages = max(out.most_stages, st.stages)
+            out.largest_step = max(out.largest_step, st.h)
             out.error_sum += err
-            error = j.carried + est
-            if j.h >= int(h_ctrl):
-                h_ctrl *= factor(err, j.allowed)
-            else:                       # a jump cut short to land does not lengthen the next
-                h_ctrl = min(h_ctrl, max(1.0, j.h * factor(err, j.allowed)))
+            error = error + est
+            if st.h >= int(h_ctrl):
+                h_ctrl *= factor(err, st.allowed, order)
+            else:                       # a step cut short to land does not lengthen the next
+                h_ctrl = min(h_ctrl, max(2.0, st.h * factor(err, st.allowed, order)))
         pending = None
-        state, n = cyc.state, n + 1
+        n = n_origin + 1
         out.rows += 1
         observe(cyc, n)
         if progress is not None and n / end - last_report >= 0.01:
             last_report = n / end
             progress(min(n / end, 1.0), f"cycle {n}")
         if tol <= 0.0 or n >= end:
+            origin, n_origin = cyc.state, n
             continue
         land = next(c for c in landings if c > n)
-        h = min(int(h_ctrl), land - n - 1)
-        if h < 1:
-            continue
-        if jac is not None:
-            follow(origin, n, cyc, h)
-        if stale(n) and float(np.max(np.abs(carry(error, h)))) > 0.5 * tol * change(state):
-            # the error so far takes half the tolerance: a Jacobian, to carry it
-            # through the dynamics that damp it
-            estimate_jacobian(origin, n, cyc, h)
-        pending, state, n = take(state, n, cyc, origin, h)
-    out.state, out.cycles = state, n
-    out.largest_change = change(state)
+        h = min(int(h_ctrl), land - n_origin - 1)
+        events = problem.events(cyc)
+        if seen is not None:
+            crossing = _next_crossing(seen, (n, events))
+            if crossing is not None:
+                # the kink at the step's end: the next step starts past it
+                h = min(h, max(2, int(math.floor(crossing)) - n_origin))
+                out.event_landings += crossing - n_origin < h_ctrl
+        seen = (n, events)
+        if h >= 2 and (radius is None or n_origin > 2 * radius[2]):
+            estimate_radius(origin, n_origin + 1, cyc.rate)
+        pending, origin, n_origin = take(origin, n_origin, cyc, h)
+    out.state, out.cycles = origin, n
+    out.largest_change = change(origin)
     out.propagated_error = float(np.max(np.abs(error)))
     return out
+
+
+def _next_crossing(before, after) -> float | None:
+    """The earliest cycle count at which an event present in both (count, events)
+    crosses zero, extrapolated linearly; None if none approaches zero."""
+    (n0, e0), (n1, e1) = before, after
+    best = None
+    for key, v1 in e1.items():
+        v0 = e0.get(key)
+        if v0 is None or n1 <= n0 or v1 == 0.0 or abs(v1) >= abs(v0) or v0 * v1 < 0:
+            continue
+        at = n1 + v1 * (n1 - n0) / (v0 - v1)
+        best = at if best is None else min(best, at)
+    return best
