@@ -273,14 +273,7 @@ class Point:
 
 class Cycles(cycle_jumping.Problem):
     """The fretting run as :mod:`numerics.cycle_jumping` sees it: a cycle is
-    simulated increment by increment, the integrated variable is the profile f.
-
-    ∂W/∂f is symmetric to 0.2-0.5 % (Frobenius; the shipped case after 10³-3·10⁵
-    cycles), as the contact's stiffness is: a node coming into contact enters the
-    Jacobian by its column alone.
-    """
-
-    symmetric = True
+    simulated increment by increment, the integrated variable is the profile f."""
 
     def __init__(self, model: Model, counters: dict, loop_cycles=()):
         self.model = model
