@@ -17,7 +17,9 @@ SolverError, as is a contact that reaches the box's outermost pixels.
 
 Wear per pixel Δw = K p Δs (K = k μ/σ0) by explicit Euler (stable below
 h = 2 λ_min(G)/K, refused beyond), implicit Euler (the contact problem
-with G + hK·I) or variable-step BDF2 (:mod:`bem.wear`).
+with G + hK·I), variable-step BDF2 or the adaptive scheme: :mod:`bem.wear`
+supplies the implicit step, :mod:`numerics.stepping` runs the schemes as
+for the MDR and FEM.
 
 Outputs: history columns of ``cases.HISTORY_COLUMNS`` (contact_radius is
 the equivalent radius √(A/π) of the contact area A, wear_center the wear of

@@ -8,7 +8,7 @@ import time
 import numpy as np
 from scipy import optimize
 
-from wearcheck.cases import CaseError, RunResult, profiles, programme, reference
+from wearcheck.cases import CaseError, RunResult, profiles, programme, reference, validity
 
 from . import wear
 from .operator import HalfSpace
@@ -18,12 +18,6 @@ from .operator import HalfSpace
 #: implicit Euler on the paper case, 0.02 Δŝ² for BDF2)
 IMPLICIT_STEP_HAT = 0.1
 BDF2_STEP_HAT = 0.1
-#: runaway guards, as the other solvers: fixed steps (ŝ, steps); adaptive
-#: runs take far fewer steps per ŝ as wear slows, so they are capped in steps
-MAX_S_HAT = 1.0e4
-MAX_STEPS = 2_000_000
-ADAPTIVE_MAX_S_HAT = 1.0e9
-ADAPTIVE_MAX_STEPS = 100_000
 #: fewest pixels across the unworn contact radius
 MIN_PIXELS_IN_CONTACT = 4
 
@@ -138,6 +132,7 @@ def solve(case, progress=None) -> RunResult:
     sc = reference.scales(case)
     per_m = sc["s_hat_per_m"]
     sl, bem = case.sliding, case.bem
+    validity.check_planned(case)   # before the box is sized on the predicted scar
     x, dx, a_max = grid(case, sc)
     n = len(x)
     X, Y = np.meshgrid(x, x, indexing="ij")
@@ -163,7 +158,6 @@ def solve(case, progress=None) -> RunResult:
                 tangential_correction=("not modelled: wear.tangential_correction = "
                                        f"{str(case.wear.tangential_correction).lower()} ignored")
                 if case.wear.tangential_correction else "off")
-    adaptive = sl.scheme == "adaptive"
     if sl.scheme == "explicit":
         step_hat = 0.5 * limit_hat if sl.step_hat == "auto" else float(sl.step_hat)
         if step_hat > limit_hat:
@@ -172,25 +166,22 @@ def solve(case, progress=None) -> RunResult:
                 f"explicit Euler on this grid; the largest stable step is {limit_hat:.4g} "
                 f"(pixel {dx:.3g} m, bem.grid = {n}); use a smaller step or "
                 "sliding.scheme = \"implicit\"")
-    elif adaptive:
+    elif sl.scheme == "adaptive":
         step_hat = math.inf if sl.step_hat == "auto" else float(sl.step_hat)
-        info["tolerance"] = sl.tolerance
     else:
         auto = IMPLICIT_STEP_HAT if sl.scheme == "implicit" else BDF2_STEP_HAT
         step_hat = auto if sl.step_hat == "auto" else float(sl.step_hat)
     info["step_hat"] = float(step_hat) if math.isfinite(step_hat) else "unlimited"
-    s_end, stage_s, until = programme.sliding_plan(
-        case, step_hat, per_m, s_hat_cap=ADAPTIVE_MAX_S_HAT if adaptive else MAX_S_HAT,
-        max_steps=MAX_STEPS, adaptive=adaptive)
+    plan, until = programme.stepping_plan(case, step_hat, sc)
     rho = np.hypot(X, Y)
     ring = np.rint(rho / dx).astype(np.int64)
     rings = n // 2                      # whole rings inside the box
     r = np.arange(rings) * dx
-    out = wear.run(model, sl.scheme, step_hat / per_m, stage_s, until, s_end,
-                   sl.force_fraction, progress, tolerance=sl.tolerance, scales=sc,
-                   ring=(ring, rings, r),
-                   max_steps=ADAPTIVE_MAX_STEPS if adaptive else MAX_STEPS)
-    hist = programme.finish_history(case, out["history"], until, s_end, per_m)
+    watch = validity.BodyWatch(case, spacing=dx)
+    out = wear.run(model, plan, progress, ring=(ring, rings, r), watch=watch)
+    if watch.remarks:
+        info["warnings"] = watch.remarks
+    hist = programme.finish_history(case, out["history"], until, plan.end, per_m)
 
     # stages: azimuthal averages on rings one pixel wide, the full fields, anisotropy
     K = len(out["stages"])
@@ -222,14 +213,8 @@ def solve(case, progress=None) -> RunResult:
                     "over p0 (pressure_interior: on the rings wholly in contact), wear depth "
                     "over d (d0 under force control)")
     counters = out["counters"]
-    if adaptive:
-        info["time_error"] = dict(
-            estimate=counters["time_error"], rejected_steps=counters["rejected_steps"],
-            largest_step_hat=counters["largest_step_hat"],
-            meaning="largest step-doubling estimate of a step's local error (force /F0, depth "
-                    "and central wear /max(d0, value)), as the MDR's")
-    info.update(steps=counters["steps"], cg_iterations=counters["cg_iterations"],
-                operator_applications=op.applications,
+    counters.pop("F_start")
+    info.update(counters, operator_applications=op.applications,
                 max_complementarity_residual=float(np.max(hist["complementarity_residual"])))
     if progress is not None:
         progress(1.0, "done")

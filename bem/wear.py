@@ -1,4 +1,4 @@
-"""Gross-slip Reye–Archard wear of the pixel grid (the BEM's time loop).
+"""Gross-slip Reye–Archard wear of the pixel grid: the BEM's implicit wear step.
 
 The state is the worn profile f = f0 + w on the pixels. Over a sliding
 increment h each pixel wears by Δw = K p h, K = k μ/σ0 (pressure-driven
@@ -8,19 +8,14 @@ iterate on the linearised law, :func:`implicit_state`).
 
 - explicit Euler: w_{n+1} = w_n + h K p_n, then a static contact solve;
   stable for h K / λ_min(G) <= 2 (:func:`explicit_limit`).
-- implicit Euler: p_{n+1} solves the contact problem with the operator
-  G + h K I on the profile f_n (gap = f_n - d + (G + hK) p), then
-  f_{n+1} = f_n + h K p_{n+1}.
-- BDF2 (variable step): the same problem on a f_n + b f_{n-1} with wear
-  compliance c h K (:func:`bdf2_coefficients`), started by a short backward
-  Euler step and a doubling ramp as in the MDR.
-- adaptive (as the MDR's): backward Euler with step doubling. Each step is
-  solved once whole and as two halves; their difference (force /F0, depth
-  and central wear /max(d0, value)) is the local error estimate; a step
-  above ``tolerance`` is halved and retried, one below 0.2·tolerance lets
-  the next step double (steps on the ladder 2^k ŝ from 2^-7). The two-half
-  state is kept and Richardson's correction (two − whole) is carried into
-  the next step's start profile ("deferred" correction).
+- implicit step of wear compliance c h: p_{n+1} solves the contact problem
+  with the operator G + c h K I on a start profile (f_n: backward Euler;
+  a f_n + b f_{n-1}: the variable-step BDF2), then f_{n+1} = start + c h K p_{n+1}.
+
+:class:`Wear` hands these to :mod:`numerics.stepping`, which runs every
+scheme (the step control, stages, step doubling with the deferred
+Richardson correction, BDF2's start, the caps) as for the MDR and FEM
+(docs/time-stepping.md).
 """
 
 from __future__ import annotations
@@ -32,19 +27,10 @@ import numpy as np
 
 from wearcheck.cases import SolverError, wear_law
 from wearcheck.cases.result import scar_radius
+from wearcheck.numerics import stepping
 
 from . import contact
 from .operator import HalfSpace
-
-#: BDF2: largest ratio of consecutive steps (zero-stable below 1 + √2)
-BDF2_MAX_RATIO = 2.0
-#: BDF2: first (backward Euler) step as a fraction of the step (as the MDR)
-BDF2_FIRST_STEP = 1.0 / 16.0
-#: adaptive scheme (as the MDR's): first step in ŝ, the ladder 2^k ŝ it climbs,
-#: and the fraction of the tolerance below which the step doubles (the
-#: estimate grows as h², fourfold per doubling)
-ADAPTIVE_FIRST_STEP_HAT = 2.0 ** -7
-ADAPTIVE_GROW_BELOW = 0.2
 
 
 @dataclass
@@ -85,14 +71,6 @@ def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
 def wear_speed_slope(model: Model, p: np.ndarray) -> np.ndarray:
     """d(dw/ds)/dp divided by K: n (p/σ0)^(n-1)."""
     return wear_law.slope(p, model.exponent, model.hardness)
-
-
-def bdf2_coefficients(h: float, h_prev: float | None) -> tuple[float, float, float]:
-    """Variable-step BDF2: f_{n+1} = a f_n + b f_{n-1} + c h f'_{n+1}; None: backward Euler."""
-    if h_prev is None:
-        return 1.0, 0.0, 1.0
-    w = h / h_prev
-    return (1.0 + w) ** 2 / (1.0 + 2.0 * w), -w * w / (1.0 + 2.0 * w), (1.0 + w) / (1.0 + 2.0 * w)
 
 
 def explicit_limit(op: HalfSpace, wear_rate: float) -> float:
@@ -189,32 +167,73 @@ def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> 
     return new
 
 
-def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
-        force_fraction: float, progress=None, *, tolerance: float | None = None,
-        scales: dict | None = None, ring: tuple | None = None,
-        max_steps: int = 2_000_000) -> dict:
-    """Step the wear from the unworn state (h, stage_s, s_end in metres of sliding).
+class Wear(stepping.Problem):
+    """The BEM's implicit wear step on its pixel grid, as :mod:`numerics.stepping` steps it.
 
-    Adaptive: h is the largest step (inf for none), ``tolerance`` and
-    ``scales`` (F0, d0, s_hat_per_m) set the error control. ``ring`` =
-    (ring index per pixel, number of rings, radii) adds the ``scar_radius``
-    column (from the ring-averaged wear). Returns the history, the stages
-    reached (s, f, p, gap, depth) and counters.
+    Each contact solve starts from the pressure extrapolated linearly in s
+    from the last two accepted states (the second half of a doubled step:
+    from the first half's); ``cg_iterations`` counts every solve's iterations.
+    """
+
+    def __init__(self, model: Model, start: State):
+        self.model = model
+        self.last = None          # (p, step) one accepted state back, for the extrapolation
+        self.cg_iterations = start.iterations
+
+    def _guess(self, state, h):
+        """The pressure extrapolated linearly in s over h from ``state``."""
+        if self.last is None:
+            return state.p
+        guess = np.maximum(state.p + (h / self.last[1]) * (state.p - self.last[0]), 0.0)
+        return guess if np.any(guess > 0) else state.p
+
+    def implicit(self, origin, base, h, c, sub):
+        # a doubled step's halves: the first from the whole step's guess
+        # (extrapolated over the whole step), the second from the first
+        p_guess = origin.p if sub.kind == "second" else self._guess(sub.start, sub.length)
+        new = implicit_state(self.model, base, c * h, p_guess)
+        self.cg_iterations += new.iterations
+        return new
+
+    def explicit(self, state, h, sub):
+        new = contact_state(self.model, state.f + h * wear_speed(self.model, state.p), 0.0,
+                            state.p)
+        self.cg_iterations += new.iterations
+        return new
+
+    def profile(self, state):
+        return state.f
+
+    def measures(self, state):
+        i0, j0 = self.model.centre
+        return state.force, state.depth, state.f[i0, j0] - self.model.f0[i0, j0]
+
+    def accepted(self, old, new, h):
+        self.last = (old.p, h)
+
+
+def run(model: Model, plan: stepping.Plan, progress=None, *, ring: tuple | None = None,
+        watch=None) -> dict:
+    """Step the wear from the unworn state as ``plan`` says.
+
+    ``ring`` = (ring index per pixel, number of rings, radii) adds the
+    ``scar_radius`` column (from the ring-averaged wear). Returns the history,
+    the stages reached (s, f, p, gap, depth), counters (the stepping's of
+    :func:`numerics.stepping.info`, ``cg_iterations``, ``F_start``).
+    ``watch(s, contact_radius, scar_radius)`` is called at every recorded step
+    (:class:`cases.validity.BodyWatch`).
     """
     area = model.op.spacing**2
     i0, j0 = model.centre
     state = contact_state(model, model.f0.copy())
-    F_start = state.force
-    if not F_start > 0.0:
+    if not state.force > 0.0:
         raise SolverError("the unworn indenter carries no load")
     hist = {k: [] for k in ("s", "force", "depth", "contact_radius", "wear_center",
                             "wear_volume", "max_pressure", "cg_iterations",
                             "complementarity_residual", "scar_radius")}
     stages = []
-    stage_s = list(stage_s)
-    counters = {"steps": 0, "cg_iterations": state.iterations}
 
-    def record(st, s):
+    def record(st, s, reached):
         w = st.f - model.f0
         hist["s"].append(s)
         hist["force"].append(st.force)
@@ -234,116 +253,14 @@ def run(model: Model, scheme: str, h: float, stage_s, until: str, s_end: float,
             hist["scar_radius"].append(scar_radius(radii, total / count))
         else:
             hist["scar_radius"].append(math.nan)
-        while stage_s and stage_s[0] <= s * (1 + 1e-12) + 1e-300:
+        if watch is not None:
+            watch(s, hist["contact_radius"][-1], hist["scar_radius"][-1])
+        for _ in range(reached):
             stages.append((s, st.f.copy(), st.p.copy(), st.gap.copy(), st.depth))
-            stage_s.pop(0)
 
-    ramp = []
-    if scheme == "bdf2":
-        ramp = [BDF2_FIRST_STEP * h]
-        while sum(ramp) < h * (1 - 1e-9):
-            ramp.append(sum(ramp))
-    adaptive = scheme == "adaptive"
-    corr = None              # adaptive: Richardson's correction for the next start
-    if adaptive:
-        per_m = scales["s_hat_per_m"]
-        F0, d0 = scales["F0"], scales["d0"]
-        h_cur = min(ADAPTIVE_FIRST_STEP_HAT / per_m, h)
-        time_error = 0.0
-        counters.update(rejected_steps=0, largest_step_hat=0.0)
-
-    def backward_euler(start_f, p_guess, hn):
-        return implicit_state(model, start_f, hn, p_guess)
-
-    def error_of(a, b):
-        """Local error estimate between two solutions of one step."""
-        wa = a.f[i0, j0] - model.f0[i0, j0]
-        return max(abs(a.force - b.force) / F0,
-                   abs(a.depth - b.depth) / max(d0, abs(a.depth)),
-                   abs(a.f[i0, j0] - b.f[i0, j0]) / max(d0, abs(wa)))
-
-    previous = None          # BDF2: (f_{n-1}, h_{n-1})
-    last = None              # (p_{n-1}, h_{n-1}) for the warm start's extrapolation
-    s = 0.0
-    last_report = -1.0
-    record(state, s)
-    while True:
-        if until == "force_fraction" and s > 0.0 and state.force < force_fraction * F_start:
-            break
-        if s >= s_end:
-            break
-        target = s_end
-        if stage_s:
-            target = min(target, stage_s[0])
-        hstep = h_cur if adaptive else h
-        if target - s <= hstep * (1 + 1e-9):
-            hn = target - s
-        elif (scheme == "bdf2" or adaptive) and target - s < 2.0 * hstep:
-            hn = 0.5 * (target - s)
-        else:
-            hn = hstep
-        if scheme == "bdf2":
-            cap = math.inf if previous is None else BDF2_MAX_RATIO * previous[1]
-            if ramp:
-                cap = min(cap, ramp.pop(0))
-            hn = min(hn, cap)
-        # warm start: the pressure extrapolated linearly from the last two steps
-        guess = state.p
-        if last is not None and scheme != "explicit":
-            guess = np.maximum(state.p + (hn / last[1]) * (state.p - last[0]), 0.0)
-            if not np.any(guess > 0):
-                guess = state.p
-        if scheme == "explicit":
-            new = contact_state(model, state.f + hn * wear_speed(model, state.p), 0.0, guess)
-        elif adaptive:
-            on_ladder = hn == h_cur
-            start = state.f if corr is None else state.f + corr
-            full = backward_euler(start, guess, hn)
-            half = backward_euler(start, guess, 0.5 * hn)
-            two = backward_euler(half.f, half.p, 0.5 * hn)
-            counters["cg_iterations"] += full.iterations + half.iterations
-            err = error_of(two, full)
-            if err > tolerance and hn > 1e-12 * max(s, hn):
-                counters["rejected_steps"] += 1
-                counters["cg_iterations"] += two.iterations
-                h_cur = 0.5 * hn if on_ladder else min(
-                    h_cur, 2.0 ** math.floor(math.log2(0.5 * hn * per_m)) / per_m)
-                continue
-            # keep the backward-Euler state (monotone at the edge) and carry
-            # Richardson's correction into the next step's start profile
-            new, corr = two, two.f - full.f
-            time_error = max(time_error, err)
-            counters["largest_step_hat"] = max(counters["largest_step_hat"], hn * per_m)
-            if on_ladder and err < ADAPTIVE_GROW_BELOW * tolerance and 2.0 * hn <= h:
-                h_cur = 2.0 * hn
-        else:
-            if scheme == "bdf2" and previous is not None:
-                a, b, c = bdf2_coefficients(hn, previous[1])
-                base, eff = a * state.f + b * previous[0], c * hn
-            else:
-                base, eff = state.f, hn
-            new = implicit_state(model, base, eff, guess)
-            if scheme == "bdf2":
-                previous = (state.f, hn)
-        if not np.all(np.isfinite(new.f)) or not math.isfinite(new.force):
-            raise SolverError("the wear run produced non-finite values; reduce sliding.step_hat")
-        last = (state.p, hn)
-        state = new
-        s = s + hn if target - s > hn * (1 + 1e-9) else target
-        counters["steps"] += 1
-        counters["cg_iterations"] += state.iterations
-        record(state, s)
-        if counters["steps"] >= max_steps:
-            raise SolverError(f"the wear run took more than {max_steps} steps; raise "
-                              "sliding.step_hat or sliding.tolerance")
-        if progress is not None:
-            frac = s / s_end if until == "distance" else \
-                (1.0 - state.force / F_start) / (1.0 - force_fraction)
-            if frac - last_report >= 0.01:
-                last_report = frac
-                progress(min(max(frac, 0.0), 1.0), f"F/F0 = {state.force / F_start:.3g}")
-    counters["F_start"] = F_start
-    if adaptive:
-        counters["time_error"] = time_error
+    problem = Wear(model, state)
+    outcome = stepping.run(problem, state, plan, record, progress)
+    counters = dict(stepping.info(outcome, plan), cg_iterations=problem.cg_iterations,
+                    F_start=outcome.force_start)
     return dict(history={k: np.asarray(v) for k, v in hist.items()}, stages=stages,
                 counters=counters)

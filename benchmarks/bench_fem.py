@@ -34,7 +34,7 @@ def one_size(n: int) -> dict:
     from wearcheck import meshes
     from wearcheck.cases import reference
     from threadpoolctl import threadpool_limits
-    from wearcheck.fem.contact import PrefixCholesky, solve_lcp
+    from wearcheck.numerics.superelement import PrefixCholesky, solve_lcp
     from wearcheck.fem.model import build
     from wearcheck.fem.solver import mesh_parameters
 

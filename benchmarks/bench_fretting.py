@@ -16,11 +16,14 @@
 
 3. The stick radius under force control (docs/fretting.md, §2.1): the
    paper's sphere as a paraboloid, u0 = 0.5 u*, k = 0.1 (1000 times the
-   paper's: the limiting state within 800 cycles). c∞/c0 against N = 200 to
-   1600 (and 3200 at k = 0.01) with successive differences, their order and
-   the Richardson limit; against the time discretisation at N = 200 and 800
-   (k, jump tolerance, no jumps, increments per cycle); the closed-form
-   bounds c0 <= c <= c_max.
+   paper's: the limiting state within 1600 cycles, k n = 160; c is there by
+   k n = 80, the depth only by 160). c∞/c0 against N = 200 to 1600 (and 3200
+   at k = 0.01) with successive differences, their order and the Richardson
+   limit; the limiting depth against Popov's d∞(c∞) and the mean raise of the
+   1D profile over the stick zone that separates them, with the same
+   convergence; against the time discretisation at N = 200 and 800 (k, jump
+   tolerance, no jumps, increments per cycle); the closed-form bounds
+   c0 <= c <= c_max.
 4. The approach to Popov's limit as the cycles grow (depth control, where
    Popov's profile is exact): the force error against F∞ at k·n = 5 ... 100
    (k·n measures the wear done), split into the grid's floor (the error at
@@ -41,6 +44,7 @@ import time
 import numpy as np
 
 from wearcheck import cases, mdr
+from wearcheck.mdr import transforms
 from wearcheck.cases import SolverError
 from wearcheck.cases import reference as ref
 from wearcheck.cases import reference_fretting as rf
@@ -143,27 +147,38 @@ def stick_radius_growth(quick):
     print(f"\n3. Stick radius under force control (u0 = 0.5 u*): Cattaneo–Mindlin c0 = "
           f"{c0 / a:.4f} a; closed-form bound c_max/c0 = {c_max / c0:.4f}")
     print(f"{'N':>5} {'k':>6} {'cycles':>6} {'cpu s':>6} {'c_inf/c0':>9} {'diff':>9} "
-          f"{'order':>6} {'d/d_inf(c)':>10} {'max c/c_max':>11}")
+          f"{'order':>6} {'d/d_inf(c)-1':>12} {'order':>6} {'raise/d':>9} {'max c/c_max':>11}")
     Ns = [200, 400, 800] if quick else [200, 400, 800, 1600]
-    vals = []
+    vals, dvals = [], []
     for N in Ns + ([] if quick else [3200]):
         # k = 0.1 at N = 3200 is refused with 20 increments (increment wear number
         # 1.8 > 1.3) and, resolved, ends at 1.01655 (docs/fretting.md §5): k = 0.01 there
         k = 0.1 if N <= 1600 else 0.01
-        case, _, _ = paraboloid(N, int(round(80 / k)), k=k)
+        case, _, _ = paraboloid(N, int(round(160 / k)), k=k)
         res, cpu = timed(case)
         h = res.history
-        c = h["stick_radius"][-1]
+        c, d = h["stick_radius"][-1], h["depth"][-1]
         vals.append(c / c0)
+        dvals.append(d / rf.limiting_depth(FORCE, case.E_star, c, R) - 1)
         diff = vals[-1] - vals[-2] if len(vals) > 1 else float("nan")
         order = (math.log2(abs(vals[-3] - vals[-2]) / abs(diff)) if len(vals) > 2
                  else float("nan"))
-        dr = h["depth"][-1] / rf.limiting_depth(FORCE, case.E_star, c, R)
+        d_order = (math.log2(abs(dvals[-3] - dvals[-2]) / abs(dvals[-1] - dvals[-2]))
+                   if len(dvals) > 2 else float("nan"))
+        # the mean raise of the 1D profile over the stick zone, (1/c)∫_0^c (g - x²/R) dx:
+        # in the limit (annulus unloaded) d = d_inf(c) + that, exactly
+        x = res.r
+        g = transforms.to_1d(res.f[-1])
+        st = x <= c
+        raise_ = np.trapezoid((g - x**2 / R)[st], x[st]) / c / d
         print(f"{N:5d} {k:6g} {h['cycles'][-1]:6.0f} {cpu:6.1f} {vals[-1]:9.5f} {diff:9.2e} "
-              f"{order:6.2f} {dr:10.4f} {np.max(h['stick_radius']) / c_max:11.4f}")
+              f"{order:6.2f} {dvals[-1]:12.4e} {d_order:6.2f} {raise_:9.2e} "
+              f"{np.max(h['stick_radius']) / c_max:11.4f}")
     if len(vals) > 2:
         rich = vals[len(Ns) - 1] + (vals[len(Ns) - 1] - vals[len(Ns) - 2])  # first order
-        print(f"Richardson (first order, N = {Ns[-2]}, {Ns[-1]}): c_inf/c0 -> {rich:.5f}")
+        d_rich = 2 * dvals[len(Ns) - 1] - dvals[len(Ns) - 2]
+        print(f"Richardson (first order, N = {Ns[-2]}, {Ns[-1]}): c_inf/c0 -> {rich:.5f}, "
+              f"d/d_inf(c) - 1 -> {d_rich:.2e}")
     print("\nTime discretisation (c_inf/c0; k only scales time, so cycles = 80/k):")
     print(f"{'N':>5} {'k':>6} {'tol':>6} {'incr':>5} {'simulated':>9} {'cpu s':>6} "
           f"{'c_inf/c0':>9}")

@@ -2,9 +2,7 @@
 
     python benchmarks/bench_long.py [--quick] [--big 25600,102400] [--baseline PYTHON] [--only 1b,2]
 
-1. Paper case, MDR N = 800: the adaptive scheme at several tolerances and
-   with each way of accepting a doubled step (deferred Richardson correction,
-   the default; plain backward Euler; Richardson's extrapolated profile),
+1. Paper case, MDR N = 800: the adaptive scheme at several tolerances
    against fixed-step implicit Euler and BDF2: solve time, steps, max |F/F0 −
    reference| over the history, the estimate the run reports, and the largest
    edge-peak prominence over the stages (comparisons/analysis/edge_peak.py).
@@ -42,11 +40,9 @@ import time
 import numpy as np
 
 from wearcheck import cases, fem, mdr
-from wearcheck.cases import profiles, reference
+from wearcheck.cases import reference
 from wearcheck.comparisons.analysis import scar
 from wearcheck.comparisons.analysis.edge_peak import find_edge_peak
-from wearcheck.mdr import linalg
-from wearcheck.mdr import solver as mdr_solver
 
 PAPER = cases.shipped("paper")
 BALL = cases.shipped("ball_on_flat")
@@ -82,54 +78,36 @@ def error(history, ref) -> float:
                                - F(history["s_hat"][m]))))
 
 
-def table_paper_mdr(tols, quick=False):
+def table_paper_mdr(tols):
     print("\n## 1. Paper case, MDR N = 800: time error and edge peak against scheme\n")
     ref = reference_curve()
-    print("| scheme | accept | tolerance / step | solve s | steps | max |ΔF/F0| | reported "
+    print("| scheme | tolerance / step | solve s | steps | max |ΔF/F0| | reported "
           "estimate | edge peak (max prominence /p(0)) |")
-    print("|---|---|---|---|---|---|---|---|")
-    case = cases.load(PAPER)
-    model0, sc = mdr_solver.build_model(case)
-    per = sc["s_hat_per_m"]
-    stage_s = [s / per for s in case.stages.s_hat]
-
-    def profile(x):
-        return profiles.height(case.indenter, x, case.table)
-
-    accepts = ("deferred",) if quick else ("deferred", "euler", "extrapolated")
-    for accept in accepts:
-        for tol in tols:
-            model, _ = mdr_solver.build_model(case)
-            t = time.perf_counter()
-            with linalg.single_threaded_blas():
-                out = mdr_solver.run(model, "adaptive", np.inf, stage_s, "force_fraction",
-                                     1e4 / per, 0.01, tolerance=tol, scales=sc,
-                                     profile=profile, accept=accept)
-            dt = time.perf_counter() - t
-            h = out["history"]
-            h["s_hat"] = h["s"] * per
-            c = out["counters"]
-            print(f"| adaptive | {accept} | {tol:g} | {dt:.3f} | {c['steps']} | "
-                  f"{error(h, ref):.2e} | {c['time_error']:.2e} | "
-                  f"{max_peak(out['r'], out['p'], out['stage_s'], h):.3g} |")
+    print("|---|---|---|---|---|---|---|")
+    for tol in tols:
+        res = mdr.solve(cases.load(PAPER, [f"sliding.tolerance={tol}"]))
+        print(f"| adaptive | {tol:g} | {res.solve_seconds:.3f} | {res.info['steps']} | "
+              f"{error(res.history, ref):.2e} | {res.info['time_error']['estimate']:.2e} | "
+              f"{max_peak(res.r, res.p, res.stage_s, res.history):.3g} |")
     for scheme, steps in (("implicit", (0.1, 0.01)), ("bdf2", (0.1, 0.05))):
         for st in steps:
             res = mdr.solve(cases.load(PAPER, [f"sliding.scheme={scheme}",
                                                f"sliding.step_hat={st}"]))
-            print(f"| {scheme} | — | Δŝ = {st:g} | {res.solve_seconds:.3f} | "
+            print(f"| {scheme} | Δŝ = {st:g} | {res.solve_seconds:.3f} | "
                   f"{res.info['steps']} | {error(res.history, ref):.2e} | — | "
                   f"{max_peak(res.r, res.p, res.stage_s, res.history):.3g} |")
 
 
 def child_big(N, python=sys.executable, precision=None, fft=None):
-    """The paper case at N in a fresh process; ``precision`` sets
-    mdr.wear.KRYLOV_PRECISION there, ``fft`` the FFT library of the MDR's
-    products (mdr.transforms.FFT); None: the checkout's defaults."""
-    force = (f"from wearcheck.mdr import wear; wear.KRYLOV_PRECISION = {precision!r}; "
-             if precision else "") + (f"transforms.FFT = {fft!r}; " if fft else "")
+    """The paper case at N in a fresh process; ``precision`` is its
+    mdr.krylov_precision, ``fft`` the FFT library of the MDR's products
+    (mdr.transforms.FFT, the installation's choice); None: the defaults."""
+    force = f"transforms.FFT = {fft!r}; " if fft else ""
+    keys = [f"mdr.elements={N}", "stages.s_hat=[0.0]"] + \
+        ([f"mdr.krylov_precision={precision}"] if precision else [])
     code = ("import json, resource, sys; from wearcheck import cases, mdr; "
             "from wearcheck.mdr import transforms; " + force +
-            f"c = cases.load(cases.shipped('paper'), ['mdr.elements={N}', 'stages.s_hat=[0.0]']); "
+            f"c = cases.load(cases.shipped('paper'), {keys!r}); "
             "r = mdr.solve(c); h = r.history; "
             "print(json.dumps(dict(solve=r.solve_seconds, steps=r.info['steps'], "
             "rss=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "
@@ -173,7 +151,7 @@ def table_big(Ns, baseline=None, rounds=2):
     # iterations (the default) and float64 ones
     from wearcheck.mdr import transforms
     print("Krylov float32: iterations in float32 inside float64 iterative refinement "
-          "(mdr.wear.KRYLOV_PRECISION, the default); float64: the float64 GMRES. Alternated "
+          "(mdr.krylov_precision, the default); float64: the float64 GMRES. Alternated "
           f"{rounds} times in fresh processes; the machine was shared.\n")
     runs = [("this", sys.executable, None, None), ("this", sys.executable, "float64", None)]
     if transforms.FFT == "fftw":
@@ -335,8 +313,7 @@ def main():
     print(f"# bench_long ({time.strftime('%Y-%m-%d %H:%M')}, load average "
           f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores: a shared machine)")
     if "1" in only:
-        table_paper_mdr((1e-2, 1e-3, 1e-4) if args.quick else (3e-2, 1e-2, 1e-3, 1e-4, 1e-5),
-                        args.quick)
+        table_paper_mdr((1e-2, 1e-3, 1e-4) if args.quick else (3e-2, 1e-2, 1e-3, 1e-4, 1e-5))
     if "1b" in only:
         table_speed(args.baseline, alternations=2 if args.quick else 6)
     Ns = [int(n) for n in str(args.big).split(",") if int(n) > 0]

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import csv
+import hashlib
+import io
 import math
 import tomllib
 from dataclasses import dataclass, field, fields, replace
@@ -39,6 +41,9 @@ class Case:
     source: str = ""
     #: tabulated profile (r, f) in metres when indenter.profile == "table"
     table: tuple[np.ndarray, np.ndarray] | None = field(default=None, compare=False, repr=False)
+    #: the table's file as read: path, SHA-256 of its bytes, rows, last radius
+    #: (recorded in every run's meta.json as "profile_table")
+    table_file: dict | None = field(default=None, compare=False, repr=False)
     #: non-fatal remarks on the case (e.g. elastic similarity violated)
     warnings: tuple[str, ...] = ()
 
@@ -293,12 +298,15 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
                                 f"remove [{section}] (to start from a shipped case: "
                                 "wearcheck cases NAME > my.toml, then edit it)")
     base = Path(source).parent if source != "<dict>" else Path.cwd()
-    built, table = _check_indenter(built, base)
+    built, table, table_file = _check_indenter(built, base)
     _check_materials(built)
     _check_programme(built)
-    case = Case(**built, source=str(source), table=table)
+    case = Case(**built, source=str(source), table=table, table_file=table_file)
     _check_sphere_depth(case)
+    _check_sphere_force(case)
     _check_scales(case)
+    if case.fretting is None:
+        _check_tangential_correction(case)
     if case.stages.cycles is not None:
         # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
         from . import reference
@@ -320,25 +328,45 @@ def _check_sphere_depth(case: Case) -> None:
                         "smaller: d/R <= 0.01 gives a0/R <= 0.1)")
 
 
+def _usable(value) -> bool:
+    """A positive finite number."""
+    return math.isfinite(value) and value > 0
+
+
+def _check_sphere_force(case: Case) -> None:
+    """A force that would press the sphere deeper than its radius (as _check_sphere_depth).
+
+    Checked before the contact is solved for: past about 34 E* R² (a = R - 1e-15 R)
+    no contact radius on the sphere carries the force, and the root finder's
+    failure said only "not computable in floating point".
+    """
+    from . import reference
+    ind, ld = case.indenter, case.loading
+    if ind.profile != "sphere" or ld.control != "force":
+        return
+    try:
+        deepest = reference.sphere(case.E_star, ind.radius, depth=ind.radius)["force"]
+        valid = reference.sphere(case.E_star, ind.radius,
+                                 depth=0.1 * ind.radius * math.atanh(0.1))["force"]
+    except (ArithmeticError, ValueError, RuntimeError):
+        return   # moduli out of range: _check_scales says so
+    if _usable(deepest) and ld.force >= deepest:
+        raise CaseError(f"key 'loading.force' = {ld.force!r}: presses the sphere deeper than its "
+                        f"radius (indenter.radius = {ind.radius!r} m), where it has no surface; "
+                        f"the force must be below {deepest:.4g} N, which presses it as deep as "
+                        f"its radius (half-space theory wants a0/R <= 0.1: at most "
+                        f"{valid:.4g} N)")
+
+
 def _check_scales(case: Case) -> None:
     """The unworn contact must be computable: extreme (valid) numbers can underflow."""
     from . import reference
-    def usable(value):
-        return math.isfinite(value) and value > 0
     try:
         sc = reference.scales(case)
-        ok = all(usable(sc[k]) for k in ("a0", "d0", "F0", "p0"))
+        ok = all(_usable(sc[k]) for k in ("a0", "d0", "F0", "p0"))
     except (ArithmeticError, ValueError, RuntimeError):  # RuntimeError: a root not found
         ok = False
-    ind, ld = case.indenter, case.loading
-    if ok and ind.profile == "sphere" and ld.control == "force" and sc["d0"] >= ind.radius:
-        # as a depth past the radius (_check_sphere_depth): no surface there to touch
-        raise CaseError(f"key 'loading.force' = {ld.force!r}: presses the sphere deeper than "
-                        f"its radius (depth d0 = {sc['d0']:.4g} m >= indenter.radius = "
-                        f"{ind.radius!r} m), where it has no surface; the force must be far "
-                        f"smaller (half-space theory wants a0/R <= 0.1, here a0/R = "
-                        f"{sc['a0'] / ind.radius:.3g})")
-    if ok and not usable(sc["s_hat_per_m"]):
+    if ok and not _usable(sc["s_hat_per_m"]):
         # the contact is fine: the wear keys put the sliding scale out of range
         w = case.wear
         raise CaseError(f"keys 'wear.k' = {w.k!r}, 'wear.mu' = {w.mu!r}, 'wear.hardness' = "
@@ -356,6 +384,33 @@ def _check_scales(case: Case) -> None:
                            if case.indenter.radius is not None else ""))
 
 
+def _check_tangential_correction(case: Case) -> None:
+    """The correction is the springs' reversal at each stroke end: it needs a stroke
+    longer than that reversal (docs/theory.md §4)."""
+    if not case.wear.tangential_correction:
+        return
+    sl = case.sliding
+    if sl.stroke is None:
+        # case files written for the earlier reading (an increment of paper
+        # Eq. 15, which changed F/F0 by 1e-6) have the key without a stroke
+        raise CaseError("key 'wear.tangential_correction' = true needs 'sliding.stroke' (m): "
+                        "the correction is the sliding each stroke end loses while the "
+                        "tangential springs reverse (2μq/G* per stroke), so it depends on the "
+                        "stroke; give the reciprocating stroke (one way), or remove the key "
+                        "(the earlier reading without a stroke changed nothing measurable)")
+    from . import reference
+    sc = reference.scales(case)
+    # the largest spring limit of the unworn contact, μ E* d0/G* (the line load
+    # E*(d0 - g) peaks where g = 0): u* of Cattaneo-Mindlin for the paraboloid.
+    # Wear lowers it (the line load spreads), so the start decides
+    u_star = case.wear.mu * case.E_star * sc["d0"] / case.G_star
+    if sl.stroke <= 2.0 * u_star:
+        raise CaseError(f"key 'sliding.stroke' = {sl.stroke!r}: with "
+                        "wear.tangential_correction the stroke must exceed the springs' "
+                        f"reversal 2u* = 2μE*d0/G* = {2.0 * u_star:.4g} m of the unworn contact; "
+                        "a shorter stroke is partial slip (give a [fretting] section instead)")
+
+
 def _check_indenter(built, base: Path):
     ind: Indenter = built["indenter"]
     allowed, needed = PROFILE_KEYS[ind.profile], PROFILE_REQUIRED[ind.profile]
@@ -370,18 +425,20 @@ def _check_indenter(built, base: Path):
     if ind.profile == "truncated_paraboloid" and ind.flat_radius >= ind.radius:
         raise CaseError(f"key 'indenter.flat_radius' = {ind.flat_radius!r}: must be smaller "
                         f"than indenter.radius = {ind.radius!r}")
-    table = None
+    table = table_file = None
     if ind.profile == "table":
         file = Path(ind.file)
         if not file.is_absolute():
             file = (base / file).resolve()
-        table = read_profile_table(file)
+        table, digest = read_profile_table(file)
+        table_file = dict(file=str(file), sha256=digest, rows=len(table[0]),
+                          last_radius=float(table[0][-1]))
         built["indenter"] = replace(ind, file=str(file))
-    return built, table
+    return built, table, table_file
 
 
-def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Read a tabulated profile: two columns r, f in metres."""
+def read_profile_table(file: Path) -> tuple[tuple[np.ndarray, np.ndarray], str]:
+    """Read a tabulated profile: two columns r, f in metres; and the SHA-256 of the file."""
     name = "indenter.file"
     if file.is_dir():
         raise CaseError(f"key '{name}' = \"{file}\": is a directory, not a CSV file")
@@ -389,9 +446,10 @@ def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
         raise CaseError(f"key '{name}' = \"{file}\": file does not exist")
     rows = []
     try:
+        # one read: the digest is of the bytes parsed (the file may change afterwards)
+        raw = file.read_bytes()
         # utf-8-sig: a byte-order mark would otherwise glue onto the first number
-        with open(file, newline="", encoding="utf-8-sig") as fh:
-            lines = list(csv.reader(fh))
+        lines = list(csv.reader(io.StringIO(raw.decode("utf-8-sig"), newline="")))
     except UnicodeDecodeError as exc:
         raise CaseError(f"key '{name}' = {format_value(str(file))}: not UTF-8 text ({exc.reason} at "
                         f"byte {exc.start}); save the table as UTF-8") from None
@@ -434,7 +492,7 @@ def read_profile_table(file: Path) -> tuple[np.ndarray, np.ndarray]:
     if np.any(f[1:] <= 0):
         raise CaseError(f"key '{name}' = \"{file}\": f must be positive for r > 0 "
                         "(the tip at r = 0 touches first)")
-    return r, f
+    return (r, f), hashlib.sha256(raw).hexdigest()
 
 
 def _check_materials(built):

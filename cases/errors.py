@@ -24,3 +24,12 @@ class SolverError(WearcheckError):
     """
 
     exit_code = 3
+
+
+class RunWarning(UserWarning):
+    """A remark on a run that still gives a result: half-space theory stretched, an approximation.
+
+    Issued once per run through :mod:`warnings`; the solver registry also
+    records it in the run's ``info["warnings"]`` (so ``meta.json`` has it) and
+    the command line prints it as a ``note:`` line.
+    """

@@ -19,9 +19,22 @@ def equivalent_radius(indenter: Indenter) -> float:
     return float(np.sqrt(indenter.radius * indenter.radius_y))
 
 
+#: PCHIP interpolants of the tables seen last, by the identity of their radius
+#: array (a case's table is built once and never changed): building one per
+#: evaluation cost ~4 ms, which every recorded step of a run pays (cases/validity.py)
+_INTERPOLANTS: dict = {}
+
+
 def _table_interpolant(table):
     r, f = table
-    return scipy.interpolate.PchipInterpolator(r, f, extrapolate=True)
+    hit = _INTERPOLANTS.get(id(r))
+    if hit is not None and hit[0] is r and hit[1] is f:
+        return hit[2]
+    interpolant = scipy.interpolate.PchipInterpolator(r, f, extrapolate=True)
+    if len(_INTERPOLANTS) >= 8:
+        _INTERPOLANTS.clear()
+    _INTERPOLANTS[id(r)] = (r, f, interpolant)   # (r, f) kept: their ids stay theirs
+    return interpolant
 
 
 def height(indenter: Indenter, r, table=None) -> np.ndarray:
@@ -47,7 +60,10 @@ def height(indenter: Indenter, r, table=None) -> np.ndarray:
     if kind == "table":
         rt, ft = table
         out = _table_interpolant(table)(np.minimum(r, rt[-1]))
-        # beyond the table: continue with the last slope (the profile keeps rising)
+        # beyond the table: continue with the last slope (the profile keeps rising).
+        # Only the gap outside the contact sees it: a contact or scar that
+        # leaves the table stops the run (cases/validity.py), as that continuation
+        # is a guess, not the measured body
         slope_end = _table_interpolant(table).derivative()(rt[-1])
         return np.where(r > rt[-1], ft[-1] + slope_end * (r - rt[-1]), out)
     raise ValueError(f"unknown profile {kind!r}")

@@ -1,12 +1,15 @@
 """How far a run slides and where it keeps its stages, with the solvers' run-length caps.
 
-Shared by the solvers that step in ŝ (MDR, BEM): the checks are about the case,
-so they live beside it rather than in each solver.
+Shared by the solvers that step in ŝ (MDR, FEM, BEM): the checks are about the
+case, so they live beside it rather than in each solver; :func:`stepping_plan`
+turns them into the plan :mod:`numerics.stepping` runs.
 """
 
 from __future__ import annotations
 
 import math
+
+from wearcheck.numerics import stepping
 
 from .errors import CaseError, SolverError
 
@@ -43,8 +46,8 @@ def sliding_plan(case, step_hat: float, per_m: float, *, s_hat_cap: float, max_s
         expected = s_end * per_m / step_hat
         if expected > max_steps:
             raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: the run would take "
-                            f"{expected:.3g} steps (cap {max_steps}); raise the step or use "
-                            "sliding.scheme = \"adaptive\"")
+                            f"{expected:.3g} steps (cap {max_steps}); raise the step"
+                            + ("" if adaptive else " or use sliding.scheme = \"adaptive\""))
     else:
         s_end = s_hat_cap / per_m
     stage_s = [sh / per_m for sh in case.stages.s_hat]
@@ -52,6 +55,35 @@ def sliding_plan(case, step_hat: float, per_m: float, *, s_hat_cap: float, max_s
         stage_s = [s for s in stage_s if s <= s_end * (1 + 1e-12)]
     until = "force_fraction" if sl.until == "force_fraction" else "distance"
     return s_end, stage_s, until
+
+
+def stepping_plan(case, step_hat: float, sc: dict, *,
+                  control: str = "ladder") -> tuple[stepping.Plan, str]:
+    """The plan of a case's wear run for :func:`numerics.stepping.run`, and its stop rule.
+
+    Parameters
+    ----------
+    case : the case; step_hat : the step in ŝ (adaptive: the largest, inf for
+    none); sc : :func:`cases.reference.scales` of the case; control : the
+    adaptive scheme's step control ("ladder" or "continuous", the solver's choice).
+
+    Raises
+    ------
+    CaseError
+        a run past the scheme's caps (:func:`sliding_plan`).
+    """
+    sl = case.sliding
+    per_m = sc["s_hat_per_m"]
+    s_hat_cap, max_steps = stepping.caps(sl.scheme)
+    s_end, stage_s, until = sliding_plan(case, step_hat, per_m, s_hat_cap=s_hat_cap,
+                                         max_steps=max_steps,
+                                         adaptive=sl.scheme == "adaptive")
+    plan = stepping.Plan(
+        scheme=sl.scheme, step=step_hat / per_m, end=s_end, per_m=per_m, stages=tuple(stage_s),
+        force_fraction=sl.force_fraction if until == "force_fraction" else None,
+        tolerance=sl.tolerance, force_scale=sc["F0"], depth_scale=sc["d0"], control=control,
+        max_steps=max_steps, step_key=f"key 'sliding.step_hat' = {sl.step_hat!r}")
+    return plan, until
 
 
 def finish_history(case, history: dict, until: str, s_end: float, per_m: float) -> dict:

@@ -101,7 +101,14 @@ def energy_per_cycle_displacement(amplitude, mu, force, u_star):
 # -- Popov's limiting profile (constant normal force and amplitude) -----------
 
 def limiting_depth(force, E_star, stick_radius, R):
-    """d∞ = F/(2E*c) + c²/(3R): the depth once the slip annulus carries no pressure."""
+    """Popov's d∞ = F/(2E*c) + c²/(3R): the depth once the slip annulus carries no pressure.
+
+    Exact when the stick zone |x| <= c is unworn (depth control, or c = c0);
+    under force control c grows, the springs between c0 and c wore before
+    they stuck, and the limiting depth lies above this by their mean raise of
+    the 1D profile over the stick zone (5e-5 of d at u0 = 0.5u*,
+    docs/fretting.md §2).
+    """
     c = stick_radius
     return force / (2.0 * E_star * c) + c * c / (3.0 * R)
 

@@ -118,8 +118,10 @@ class Wear:
     mu: float = key(unit="1", positive=True, doc="coefficient of friction μ, τ = μ p (paper Eq. 14)")
     hardness: float = key(unit="Pa", positive=True, doc="hardness σ0 of the worn indenter")
     tangential_correction: bool = key(False,
-                                      doc="subtract the elastic tangential displacement of the "
-                                          "surface from the slip (paper Eqs. 15-16)")
+                                      doc="reciprocating sliding: take off the slip the "
+                                          "tangential springs lose at each stroke end while "
+                                          "they reverse (2μq/G* per stroke, paper Eqs. 15-16; "
+                                          "MDR only); needs sliding.stroke")
     pressure_exponent: float = key(1.0, minimum=1.0, maximum=4.0,
                                    doc="exponent n of the wear law dw/ds = (k μ/σ0)·σ0·(p/σ0)^n "
                                        "(1: Reye–Archard, the paper); in [1, 4] (below 1 the "
@@ -186,6 +188,19 @@ class MDRSettings:
                                    "√2·a0, the contact radius reached at complete wear under "
                                    "depth control; the domain grows (the grid is remapped) "
                                    "when a worn contact nears its edge")
+    linear_solver: str = key("auto", choices=("auto", "direct", "iterative"),
+                             doc="how the implicit wear steps are solved: direct (a nested LU "
+                                 "of the compliance per step size, 8 (N+1)² bytes each; "
+                                 "adaptive steps keep to the ladder 2^k ŝ so that each serves "
+                                 "many steps), iterative (FFT products and GMRES with a "
+                                 "coarse-grid preconditioner, memory O(N); adaptive steps are "
+                                 "set continuously), or auto: direct up to N = 2048. Both "
+                                 "solve the same equations (to GMRES's tolerance)")
+    krylov_precision: str = key("float32", choices=("float32", "float64"),
+                                doc="iterative solves: the GMRES iterations in float32 inside an "
+                                    "iterative refinement with float64 residuals (the answer "
+                                    "meets the float64 tolerance, 10-15 % faster at N = 102400), "
+                                    "or in float64 throughout (docs/mixed-precision.md)")
 
 
 @dataclass(frozen=True)

@@ -80,7 +80,8 @@ META = (
     Item("solve_seconds", "s", "time in the solver proper"),
     Item("stages_requested_s_hat", "", "the stages the case asked for"),
     Item("stages_reached", "", "how many of them the run stored"),
-    Item("warnings", "", "remarks on the case (e.g. elastic similarity violated)"),
+    Item("warnings", "", "remarks on the case and the run (e.g. elastic similarity violated, "
+                         "half-space theory stretched: docs/limits.md)"),
     Item("info", "", "the solver's facts about the run (steps, step used, grid, iterations)"),
     Item("command", "", "the command line that wrote this output"),
     Item("cwd", "", "the working directory of that command"),
@@ -91,6 +92,11 @@ META = (
     Item("created", "", "local time of writing, ISO 8601"),
     Item("host", "", "the machine's name"),
     Item("data_dictionary", "", "units and meanings of every file, column, array and key"),
+)
+#: meta.json keys that only some runs write
+META_OPTIONAL = (
+    Item("profile_table", "", "indenter.profile = \"table\": the table read: file, sha256 "
+                              "(of its bytes), rows, last_radius [m]"),
 )
 
 #: files of a comparison directory (``wearcheck compare``)
@@ -137,6 +143,8 @@ METRICS = (
     Item("step_hat", "", "per solver: median sliding step in ŝ"),
     Item("run_end", "", "per solver: ŝ and F/F0 where the run ended"),
     Item("approximate", "", "per solver that solved an approximation of the case: why"),
+    Item("run_warnings", "", "per solver, its remarks on its run (e.g. half-space theory "
+                             "stretched; docs/limits.md)"),
     Item("anisotropy", "", "per solver with a square grid (BEM), per stage: largest "
                            "deviation of pressure (/p0) and wear (/d) from ring averages"),
     Item("edge_peaks", "", "per solver and stage: the edge-peak detector's finding"),
@@ -197,14 +205,16 @@ def _table(items) -> dict:
 UNDECLARED = "not declared by the solver's registry entry"
 
 
-def run_dictionary(solver=None, history_names=(), field_names=(), stage_names=()) -> dict:
+def run_dictionary(solver=None, history_names=(), field_names=(), stage_names=(),
+                   meta_names=()) -> dict:
     """The data dictionary of one run directory (written into its meta.json).
 
     ``solver`` is its registry entry (or None): its extra history columns and
     fields that the run wrote are added (a solver may write different extras
     by mode, e.g. the MDR's fretting runs); written columns and fields it does
     not declare are listed as undeclared, never left out. ``stage_names``: the
-    optional stages.npz arrays written (``STAGES_OPTIONAL``).
+    optional stages.npz arrays written (``STAGES_OPTIONAL``); ``meta_names``:
+    the optional meta.json keys written (``META_OPTIONAL``).
     """
     history = _table(HISTORY)
     fields = {}
@@ -222,8 +232,10 @@ def run_dictionary(solver=None, history_names=(), field_names=(), stage_names=()
         history.setdefault(name, dict(unit="?", meaning=UNDECLARED))
     for name in field_names:
         fields.setdefault(name, dict(unit="?", meaning=UNDECLARED))
+    meta = _table(META)
+    meta.update({k: v for k, v in _table(META_OPTIONAL).items() if k in meta_names})
     return dict(files=_table(RUN_FILES), history_csv=history, stages_npz=stages,
-                fields_npz=fields, meta_json=_table(META), solver=info)
+                fields_npz=fields, meta_json=meta, solver=info)
 
 
 def comparison_dictionary() -> dict:
@@ -246,7 +258,7 @@ def doc_tables() -> dict[str, str]:
         "run-files": markdown(RUN_FILES, "file"),
         "history": markdown(HISTORY, "column"),
         "stages": markdown(STAGES + STAGES_OPTIONAL, "array"),
-        "meta": markdown(META, "key"),
+        "meta": markdown(META + META_OPTIONAL, "key"),
         "comparison-files": markdown(COMPARISON_FILES, "file"),
         "metrics": markdown(METRICS, "key"),
         "stage-metrics": markdown(STAGE_METRICS, "key"),

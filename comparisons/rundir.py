@@ -171,14 +171,17 @@ def write_run_files(directory: Path, case: cases.Case, result: RunResult, solver
         np.savez(directory / "fields.npz", **result.fields)
     meta = dict(solver=solver, scales=scales, solve_seconds=result.solve_seconds,
                 stages_requested_s_hat=list(case.stages.s_hat),
-                stages_reached=len(result.stage_s), warnings=list(case.warnings),
+                stages_reached=len(result.stage_s),
+                warnings=list(case.warnings) + list(result.info.get("warnings", [])),
                 info=result.info)
     meta.update(provenance(argv))
+    if case.table_file is not None:   # the tabulated profile read, by content
+        meta["profile_table"] = dict(case.table_file)
     if extra_meta:
         meta.update(extra_meta)
     meta["data_dictionary"] = layout.run_dictionary(_registered(solver), list(result.history),
                                                     list(result.fields or {}),
-                                                    list(result.stage_extra or {}))
+                                                    list(result.stage_extra or {}), list(meta))
     write_json(directory / "meta.json", meta)
     entry = _registered(solver)
     if entry is not None and entry.run_report:  # e.g. the MDR's fretting report

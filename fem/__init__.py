@@ -20,7 +20,8 @@ those DOFs is the inverse of the trailing Schur block; the wear loop only
 touches C. Full fields are recovered for the stored stages only.
 
 Contact is node-to-node: gap_i = z_i + w_i − d + (C f)_i >= 0, f_i >= 0,
-f_i gap_i = 0, solved by a warm-started active-set method (:mod:`fem.contact`)
+f_i gap_i = 0, solved by a warm-started active-set method
+(:mod:`numerics.superelement`, shared with any solver that condenses a body)
 to a complementarity residual below 1e-9 (forces over F0, gaps over d);
 depth or force control (then d is the extra unknown).
 Nodal pressure p_i = f_i / A_i with A_i = ∫ φ_i 2πr ds (row-sum lumping).
@@ -35,7 +36,7 @@ unworn, up to 7 % p0 and negative values near a worn edge) and does not
 drive the wear, which always uses the lumped p.
 Wear dw_i/ds = (k μ/σ0) σ0 (p_i/σ0)^n by the adaptive scheme (default; step
 doubling with a deferred Richardson correction), explicit or implicit Euler
-or variable-step BDF2 (:mod:`fem.wear`); the candidate contact arc is sized
+or variable-step BDF2 (:mod:`numerics.stepping`); the candidate contact arc is sized
 for the predicted final contact radius (√2·a0 under depth control, the
 long-run scar radius under force control);
 the contact radius is interpolated between the last loaded and the first

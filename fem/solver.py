@@ -9,10 +9,10 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from wearcheck import meshes
-from wearcheck.cases import CaseError, SolverError, RunResult, reference
+from wearcheck.cases import CaseError, SolverError, RunResult, programme, reference, validity
 from wearcheck.cases.profiles import height
+from wearcheck.numerics import stepping, superelement
 
-from . import wear
 from .model import build
 
 #: growth of the element size away from the contact arc, per element order:
@@ -36,15 +36,6 @@ BDF2_AUTO_STEP_HAT = 0.01
 #: fewest arc nodes required inside the unworn contact radius
 MIN_NODES_IN_CONTACT = 5
 
-
-#: runaway guards: longest run in ŝ and most steps (fixed steps; adaptive
-#: steps grow as wear slows, so those runs are capped in steps, ŝ < 1e9)
-MAX_S_HAT = 1.0e4
-MAX_STEPS = 2_000_000
-ADAPTIVE_MAX_S_HAT = 1.0e9
-ADAPTIVE_MAX_STEPS = 100_000
-#: the adaptive scheme's first step in ŝ (the ladder of steps 2^k ŝ it climbs)
-ADAPTIVE_FIRST_STEP_HAT = 2.0 ** -7
 #: largest Poisson ratio before volumetric locking shows (see check_case)
 MAX_POISSON_RATIO = 0.495
 
@@ -87,6 +78,7 @@ def check_case(case) -> None:
 def mesh_parameters(case) -> meshes.SphereMeshParameters:
     """The mesh of a case, after checking that the FEM can represent it."""
     check_case(case)
+    validity.check_planned(case, fem_sphere=True)
     fem, order, R = case.fem, case.fem.element_order, case.indenter.radius
     a0 = reference.scales(case)["a0"]
     # the arc is sized for the contact's final radius: √2·a0 under depth control,
@@ -108,10 +100,13 @@ def mesh_parameters(case) -> meshes.SphereMeshParameters:
                         f"would lie inside the unworn contact (a0 = {a0:.4g} m); at least "
                         f"{MIN_NODES_IN_CONTACT} are needed, i.e. fem.contact_nodes >= {need}")
     if rc >= R:
+        # (a predicted scar past R itself was refused by validity.check_planned, as
+        # by the other solvers: here only the arc's margin beyond it does not fit)
         raise CaseError(f"key 'fem.contact_factor' = {fem.contact_factor!r}: the candidate "
-                        f"arc would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m"
-                        + (f" (predicted final scar radius {predicted:.4g} m: shorten the run "
-                           "or lower the load)" if case.loading.control == "force" else ""))
+                        f"arc would reach r = {rc:.4g} m, beyond indenter.radius = {R:.4g} m "
+                        f"(predicted final scar radius {predicted:.4g} m); use "
+                        f"fem.contact_factor < {math.floor(R / predicted * 1000) / 1000:g} "
+                        "(>= 1 reaches the predicted scar), or shorten the run or lower the load")
     return meshes.SphereMeshParameters(radius=R, contact_radius=rc, contact_edges=edges,
                                        growth=GROWTH[order])
 
@@ -169,7 +164,7 @@ def _solve(case, progress=None) -> RunResult:
         center[0] = 1.0
 
     with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-        limit = wear.explicit_limit(C, area, rate) if np.all(np.isfinite(C)) else math.nan
+        limit = superelement.explicit_limit(C, area, rate) if np.all(np.isfinite(C)) else math.nan
         n_exp = case.wear.pressure_exponent
         if n_exp != 1.0:
             # the rate's derivative n (p/σ0)^(n-1) scales the stiffness; bound p by 1.5 p0
@@ -195,39 +190,22 @@ def _solve(case, progress=None) -> RunResult:
                             f"Euler stability limit of this mesh, {limit_hat:.4g} (node spacing "
                             f"{model.stats()['contact_spacing']:.3g} m); use a step <= "
                             f"{limit_hat:.4g} or sliding.scheme = \"implicit\"")
-    step = step_hat / per_m
-    s_end = case.end_distance
-    if s_end is not None:
-        # refuse a run that cannot end in reasonable time before starting it
-        key = "sliding.distance" if sl.until == "distance" else "sliding.cycles"
-        cap = ADAPTIVE_MAX_S_HAT if adaptive else MAX_S_HAT
-        if s_end * per_m > cap:
-            raise CaseError(f"key '{key}' = {getattr(sl, key.split('.')[1])!r}: ŝ = "
-                            f"{s_end * per_m:.4g} exceeds the FEM's cap of {cap:g}")
-        if s_end / step > MAX_STEPS:
-            raise CaseError(f"key 'sliding.step_hat' = {sl.step_hat!r}: the run would take "
-                            f"{s_end / step:.3g} steps (cap {MAX_STEPS}); raise the step or "
-                            "use sliding.scheme = \"adaptive\"")
+    plan, until = programme.stepping_plan(case, step_hat, sc)
+    step, s_end = plan.step, plan.end
     control = case.loading.control
-    value = getattr(case.loading, control)
-    stage_s = [sh / per_m for sh in case.stages.s_hat]
-    distance = s_end
-    if distance is not None:
-        stage_s = [s for s in stage_s if s <= distance * (1 + 1e-12)]
+    problem = superelement.Superelement(
+        C, z, r, area, rate, control=control, value=getattr(case.loading, control),
+        gap_scale=d0, force_scale=F0, pressure_scale=p0, center=center, exponent=n_exp,
+        hardness=case.wear.hardness)
 
     def loop_progress(frac, text):
         if progress:
             progress(0.05 + 0.9 * frac, text)
 
     t0 = time.perf_counter()
-    out = wear.run(C, z, r, area, rate, control=control, value=value, step=step,
-                   scheme=sl.scheme, stage_s=stage_s,
-                   until="force_fraction" if sl.until == "force_fraction" else "distance",
-                   distance=distance, force_fraction=sl.force_fraction, gap_scale=d0,
-                   force_scale=F0, pressure_scale=p0, center=center, progress=loop_progress,
-                   max_steps=ADAPTIVE_MAX_STEPS if adaptive else MAX_STEPS,
-                   tolerance=sl.tolerance, depth_scale=d0, exponent=n_exp,
-                   hardness=case.wear.hardness, first_step=ADAPTIVE_FIRST_STEP_HAT / per_m)
+    watch = validity.BodyWatch(case, fem_sphere=True,
+                               spacing=model.stats()["contact_spacing"])
+    out = superelement.run(problem, plan, loop_progress, watch=watch)
     t_loop = time.perf_counter() - t0
 
     # stages: full arc values (with the axis node for P2)
@@ -258,17 +236,14 @@ def _solve(case, progress=None) -> RunResult:
                    contact_radius=np.array(out.contact_radius),
                    wear_center=np.array(out.wear_center), wear_volume=np.array(out.wear_volume),
                    scar_radius=np.array(out.scar_radius))
-    history["s_hat"] = history["s"] * per_m
-    # cycles: NaN without a stroke (one set of columns for every case)
-    cpm = case.cycles_per_metre
-    history["cycles"] = history["s"] * (cpm if cpm is not None else math.nan)
+    history = programme.finish_history(case, history, until, s_end, per_m)
     info = dict(
         solver="fem", scheme=sl.scheme,
         step_hat=step_hat if math.isfinite(step_hat) else "unlimited",
         step=step if math.isfinite(step) else "unlimited",
         pressure_exponent=n_exp,
-        explicit_limit_step_hat=float(limit_hat), steps=out.steps,
-        lcp_iterations=out.lcp_iterations, lcp_tolerance=wear.LCP_TOL,
+        explicit_limit_step_hat=float(limit_hat),
+        lcp_iterations=out.lcp_iterations, lcp_tolerance=superelement.LCP_TOL,
         max_complementarity_residual=out.max_residual,
         refactorisations=out.refactorisations, borderings=out.borderings,
         compliance_route=model.timings["compliance_method"],
@@ -287,14 +262,10 @@ def _solve(case, progress=None) -> RunResult:
         body=("elastic sphere of radius indenter.radius clamped on its flat top face, against "
               "a rigid plane; the initial gap is the case's profile f(r_i)"),
     )
-    if adaptive:
-        info.update(tolerance=sl.tolerance, rejected_steps=out.rejected_steps,
-                    largest_step_hat=out.largest_step * per_m,
-                    time_error=dict(estimate=out.time_error, meaning=(
-                        "largest step-doubling estimate of a step's local error (force /F0, "
-                        "depth and central wear /max(d0, value)); the recorded states are "
-                        "backward-Euler states one step off the Richardson-corrected solution")))
-    info["predicted_scar_radius"] = reference.predicted_scar_radius(case, s_end or 0.0)
+    info.update(stepping.info(out.outcome, plan))
+    info["predicted_scar_radius"] = reference.predicted_scar_radius(case, case.end_distance or 0.0)
+    if watch.remarks:
+        info["warnings"] = watch.remarks
     if progress:
         progress(1.0, "done")
     return RunResult(history=history, stage_s=np.array([st[0] for st in out.stages]),

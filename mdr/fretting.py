@@ -47,11 +47,11 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from wearcheck.cases import CaseError, RunResult, SolverError, profiles, reference
+from wearcheck.cases import CaseError, RunResult, SolverError, profiles, reference, validity
 from wearcheck.cases.result import scar_radius
 from wearcheck.numerics import cycle_jumping
 
-from . import contact, linalg, tangential, transforms
+from . import contact, linalg, resolution, tangential, transforms
 
 #: most simulated cycles a run may take (runaway guard)
 MAX_SIMULATED_CYCLES = 200_000
@@ -69,6 +69,11 @@ MONOTONE_TOLERANCE = 1e-6
 #: gross slip and at 2.5-4 in partial slip (docs/fretting.md, §5;
 #: benchmarks/bench_fretting_increments.py)
 WEAR_NUMBER_LIMIT = 1.3
+#: grid cells a refusal of an unresolved slip annulus proposes, and the width
+#: (in cells at the contact edge) below which the grid's own a - c is not
+#: taken as the annulus's width (its estimate from the amplitude is)
+ANNULUS_CELLS = 4.0
+ANNULUS_MEASURED = 0.5
 #: margin of the increments a refusal proposes: Λ grows by up to 1.5x from the
 #: first cycles (where the check fires) to the run's end, and Λ·increments is
 #: constant to 5 %
@@ -339,13 +344,15 @@ class Cycles(cycle_jumping.Problem):
         return point.st.normal["depth"]
 
 
-def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> dict:
+def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None, watch=None) -> dict:
     """The fretting run from the unworn state; numerics without case handling.
 
     Returns history (arrays, one entry per simulated cycle kept and the
     initial ramp as cycle 0), stages (cycles, s, f, p, tau), loops (Q(u) of
     the simulated cycles at the stage cycles), counters and the cycle
     jumping's report (``jumping``, :meth:`numerics.cycle_jumping.Outcome.info`).
+    ``watch(s, contact_radius, scar_radius, cycle)`` is called at every
+    recorded cycle (:class:`cases.validity.BodyWatch`).
     """
     st = initial_state(model)
     hist = {k: [] for k in HISTORY_KEYS}
@@ -377,6 +384,9 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None) -> d
         hist["dissipated_energy_1d"].append(totals["energy_1d"])
         hist["energy_per_cycle"].append(acc["energy"])
         hist["max_pressure"].append(float(np.max(n["p"])))
+        if watch is not None:
+            watch(totals["s"], n["contact_radius"], hist["scar_radius"][-1],
+                  cycle=totals["cycles"])
         while stage_set and stage_set[0] < totals["cycles"]:
             stage_set.pop(0)
         if stage_set and stage_set[0] == totals["cycles"]:
@@ -456,17 +466,35 @@ def _check_slip_resolved(model, st, acc):
     if a - c >= cell:
         return
     N = len(model.x) - 1
+    amp, value = (("fretting.amplitude", model.amplitude) if model.amplitude is not None
+                  else ("fretting.force_amplitude", model.force_amplitude))
+    width, measured = a - c, True
+    if width < ANNULUS_MEASURED * cell:
+        # the grid's a and c are then mostly the sub-grid interpolation (their
+        # difference even negative, e.g. -1.9e-7 m at an amplitude of 1e-30 m):
+        # springs slide where μ q/G* < U, q falling as E* g'(a) (a - r) at the
+        # edge, so a - c = G* U/(μ |q'(a)|), with U = Q/(2 a G*) while the
+        # contact sticks (Mindlin's a Q/(3 μ F) for a paraboloid)
+        q, x = st.normal["q"], model.x
+        slope = (q[m - 1] - q[m]) / (x[m] - x[m - 1]) if m >= 1 else q[0] / x[1]
+        U = model.amplitude if model.amplitude is not None else \
+            model.force_amplitude / (2.0 * a * model.G_star)
+        width, measured = model.G_star * U / (model.mu * slope), False
+    said = (f"{width:.3g} m wide (a - c, a = {a:.4g} m)" if measured else
+            f"narrower than the grid measures, about {width:.3g} m (G*U/(μ|q'(a)|), a = "
+            f"{a:.4g} m)")
     # the cell at the edge scales as 1/N (t = r² uniform); with 4 cells in the
     # annulus the first cycle's energy was 10-12 % low (Q* = 0.01 μF, N = 1900;
-    # u0 = 0.003 u*, N = 4200)
-    need = 100 * math.ceil(N * 4.0 * cell / max(a - c, 1e-300) / 100)
-    amp = ("fretting.amplitude" if model.amplitude is not None
-           else "fretting.force_amplitude")
+    # u0 = 0.003 u*, N = 4200). The annulus grows in proportion to a small amplitude.
+    cells = width / cell
+    need = 100 * math.ceil(N * ANNULUS_CELLS / cells / 100)
+    remedy = f"raise {amp} to about {value * ANNULUS_CELLS / cells:.3g}"
+    if need <= resolution.MAX_PROPOSED_ELEMENTS:
+        remedy = f"mdr.elements = {need} would put {ANNULUS_CELLS:g} cells in it (or {remedy})"
     raise SolverError(
-        f"mdr.elements = {N} does not resolve the slip annulus of {amp}: it is "
-        f"{a - c:.3g} m wide (a - c, a = {a:.4g} m), {(a - c) / cell:.2g} of the grid cell "
-        f"at the contact edge, so the run would dissipate and wear almost nothing; "
-        f"mdr.elements = {need} would put 4 cells in it (or raise {amp})")
+        f"key '{amp}' = {value!r}: mdr.elements = {N} does not resolve its slip annulus: it "
+        f"is {said}, {cells:.2g} of the grid cell at the contact edge, so the run would "
+        f"dissipate and wear almost nothing; {remedy}")
 
 
 def _check_monotone(model, hist, normal, cycle):
@@ -556,6 +584,7 @@ def solve(case, progress=None) -> RunResult:
 
 def _solve(case, progress=None) -> RunResult:
     t0 = time.perf_counter()
+    resolution.check(case)
     model, sc = build_model(case)
     fr = case.fretting
     if fr.jump_tolerance == 0 and fr.cycles > MAX_SIMULATED_CYCLES:
@@ -564,7 +593,8 @@ def _solve(case, progress=None) -> RunResult:
                         "are simulated; set a jump tolerance")
     stage_cycles = (default_stage_cycles(fr.cycles) if fr.stage_cycles is None
                     else [int(c) for c in fr.stage_cycles])
-    out = run(model, fr.cycles, fr.jump_tolerance, stage_cycles, progress)
+    watch = validity.BodyWatch(case)
+    out = run(model, fr.cycles, fr.jump_tolerance, stage_cycles, progress, watch=watch)
     hist = out["history"]
     hist["s_hat"] = hist["s"] * sc["s_hat_per_m"]
     a0, F0 = sc["a0"], sc["F0"]
@@ -576,6 +606,8 @@ def _solve(case, progress=None) -> RunResult:
                 jump_tolerance=fr.jump_tolerance, stage_cycles=stg["cycles"].tolist(),
                 gross_slip_displacement_unworn=u_star, cycle_jumping=out["jumping"],
                 increment_wear_number_limit=WEAR_NUMBER_LIMIT, **out["counters"])
+    if watch.remarks:
+        info["warnings"] = watch.remarks
     loops = out["loops"]
     fields = None
     if loops["cycles"]:

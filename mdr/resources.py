@@ -24,14 +24,17 @@ def memory_bytes(case, elements: int | None = None) -> float:
     127 MB (7.0 N²: one factorisation of the whole grid, built while the
     compliance's transient is alive); past the dense limit (N > 2048: FFT and
     GMRES, O(N)) 10.5 MB at N = 3000. The model bounds these: 40 MB fixed,
-    DENSE_MATRICES[scheme] N² doubles up to the dense limit, 2 kB per node,
+    DENSE_MATRICES[scheme] N² doubles when solved directly (mdr.linear_solver;
+    "auto": up to the dense limit), 2 kB per node,
     and the stored stages (profile and pressure, 16 bytes per node and stage).
     """
     n = float(case.mdr.elements if elements is None else elements) + 1.0
     per = DENSE_MATRICES.get(case.sliding.scheme, max(DENSE_MATRICES.values()))
     if getattr(case, "fretting", None) is not None:
         per = 0.0  # partial slip: no implicit gross-slip step (fretting.toml: 1.6 MB at N = 800)
-    dense = per * 8.0 * n * n if n <= _DENSE_MAX + 1 else 0.0
+    solver = case.mdr.linear_solver
+    direct = solver == "direct" or (solver == "auto" and n <= _DENSE_MAX + 1)
+    dense = per * 8.0 * n * n if direct else 0.0
     stages = 16.0 * n * len(case.stages.s_hat)
     return 40e6 + dense + 2e3 * n + stages
 

@@ -108,6 +108,18 @@ def shear_traction(v: np.ndarray, G_star: float, dt: float) -> np.ndarray:
     return transforms.pressure(G_star * v, dt)
 
 
+def reciprocating_slip(L: np.ndarray, stroke: float) -> np.ndarray:
+    """3D slip per unit sliding of reciprocating gross slip (docs/theory.md §4).
+
+    At each stroke end a spring reverses its deformation from +L to -L before
+    it slides again, so of a stroke ℓ (one way) it slides ℓ - 2L(x), and
+    nothing where ℓ <= 2L (it sticks). Paper Eq. 16 takes the 1D slip to 3D,
+    here by the exact inverse of the discrete Eq. 2 (exact on functions linear
+    in t, constants included): S(r) = 1 - T⁻¹[min(2L/ℓ, 1)](r).
+    """
+    return 1.0 - transforms.from_1d_exact(np.minimum(2.0 * L / stroke, 1.0))
+
+
 def slip_3d(slip_1d: np.ndarray) -> np.ndarray:
     """Relative 3D slip u^(0) - u^(3D)(r) from the 1D slip by paper Eq. 16 (= Eq. 3)."""
     return transforms.to_3d(slip_1d)

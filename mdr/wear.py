@@ -2,7 +2,9 @@
 
 The state is the worn 3D profile f at the nodes. One step over a sliding
 increment h raises it by Δf = K p S h, K = k μ/σ0, where S is the slip per
-unit sliding (1, or 1 - (μ/G*) T⁻¹[dq/ds] with the tangential correction).
+unit sliding: 1, or with the tangential correction what the springs'
+reversal at each stroke end leaves of a stroke ℓ, 1 - T⁻¹[2μq/(G*ℓ)]
+(:func:`mdr.tangential.reciprocating_slip`).
 
 Explicit Euler uses the pressure at the start of the step. Implicit Euler
 uses the pressure at its end: on the contact nodes 0..m it solves
@@ -11,13 +13,14 @@ uses the pressure at its end: on the contact nodes 0..m it solves
 
 the contact problem of the 3D compliance plus a diagonal wear compliance
 (docs/theory.md §7-8). The variable-step BDF2 is the same problem with f_n replaced
-by a f_n + b f_{n-1} and h by c h (:func:`bdf2_coefficients`).
+by a f_n + b f_{n-1} and h by c h (:func:`numerics.stepping.bdf2_coefficients`).
 
 T⁻¹ and P⁻¹ are triangular, so on the contact set only their leading blocks
-enter: up to DENSE_MAX nodes one LU factorisation without
-pivoting serves every contact set (its factors' leading blocks), started at
-the present contact and grown by bordering as the contact grows; finer grids
-apply each operator as one FFT convolution and solve by GMRES with a
+enter: solved directly (mdr.linear_solver; "auto": up to DENSE_MAX nodes) one
+LU factorisation without pivoting serves every contact set (its factors'
+leading blocks), started at the present contact and grown by bordering as the
+contact grows; solved iteratively (finer grids) each operator is applied as
+one FFT convolution and the step solved by GMRES with a
 coarse-grid preconditioner (a handful of iterations whatever the grid: the
 operator's condition number is about 1 + 2.4/Δŝ), each contact iteration
 starting from the last one's pressure.
@@ -33,7 +36,7 @@ from scipy.sparse.linalg import LinearOperator, eigs
 
 from wearcheck.cases import SolverError, wear_law
 
-from . import contact, linalg, transforms
+from . import contact, linalg, tangential, transforms
 
 
 @dataclass
@@ -46,9 +49,12 @@ class Model:
     wear_rate: float        # K = k μ / σ0 [1/Pa]
     depth: float | None     # depth control
     force: float | None     # force control
-    tangential: float = 0.0  # μ/G* with the tangential correction, else 0
+    tangential: float = 0.0  # μ/G* with the tangential correction (L = μq/G*), else 0
+    stroke: float | None = None  # reciprocating stroke ℓ (one way) [m], for the correction
     exponent: float = 1.0    # n of the wear law dw/ds = K σ0 (p/σ0)^n
     hardness: float = 1.0    # σ0 [Pa]; enters only when exponent != 1
+    linear_solver: str = "auto"       # mdr.linear_solver (:func:`solves_directly`)
+    krylov_precision: str = "float32"  # mdr.krylov_precision (:meth:`ImplicitSystem.solve`)
 
     def __post_init__(self):
         self.t = self.x**2                              # nodes in t = r²
@@ -66,7 +72,7 @@ class State:
     force: float
     contact_radius: float
     m: int
-    slip: np.ndarray | None = None     # slip factor S for the next step
+    slip: np.ndarray | None = None     # slip per unit sliding S of this state (None: 1)
     stats: dict = field(default_factory=dict)
 
 
@@ -85,42 +91,30 @@ def contact_state(model: Model, f: np.ndarray) -> State:
     g = transforms.to_1d(f)
     c = contact.solve_normal(g, model.t, model.dt, model.E_star, model.depth, model.force)
     return State(f=f, depth=c["depth"], q=c["q"], p=c["p"], force=c["force"],
-                 contact_radius=c["contact_radius"], m=c["m"])
+                 contact_radius=c["contact_radius"], m=c["m"], slip=slip_factor(model, c["q"]))
 
 
-def _slip(model: Model, old: State, new: State, h: float) -> np.ndarray | None:
-    """Slip per unit sliding for the step after ``new`` (paper Eqs. 15-16, lagged one step).
+def slip_factor(model: Model, q: np.ndarray) -> np.ndarray | None:
+    """Slip per unit sliding S(r) under the line load q (None: 1, no correction).
 
-    A 1D spring in gross slip carries μ q/G* of tangential deformation, so it
-    slips h - (μ/G*) Δq over a step; Eq. 16 takes that to 3D.
+    With the tangential correction the springs reverse their deformation
+    ±μq/G* at each stroke end and slide the rest of the stroke
+    (:func:`mdr.tangential.reciprocating_slip`).
     """
-    if model.tangential == 0.0 or h <= 0.0:
+    if model.tangential == 0.0:
         return None
-    return 1.0 - model.tangential * transforms.from_1d_exact(new.q - old.q) / h
+    return tangential.reciprocating_slip(model.tangential * q, model.stroke)
 
 
 def explicit_step(model: Model, state: State, h: float) -> State:
-    """Forward Euler: wear by the pressure at the start of the step."""
+    """Forward Euler: wear by the pressure and slip at the start of the step."""
     S = 1.0 if state.slip is None else state.slip
     f = state.f + h * S * wear_speed(model, state.p)
-    new = contact_state(model, f)
-    new.slip = _slip(model, state, new, h)
-    return new
+    return contact_state(model, f)
 
 
-def bdf2_coefficients(h: float, h_prev: float | None) -> tuple[float, float, float]:
-    """Variable-step BDF2: f_{n+1} = a f_n + b f_{n-1} + c h f'_{n+1}.
-
-    With ω = h/h_prev: a = (1+ω)²/(1+2ω), b = -ω²/(1+2ω), c = (1+ω)/(1+2ω)
-    (a + b = 1). ``h_prev=None`` (no history) gives backward Euler (1, 0, 1).
-    """
-    if h_prev is None:
-        return 1.0, 0.0, 1.0
-    w = h / h_prev
-    return (1.0 + w) ** 2 / (1.0 + 2.0 * w), -w * w / (1.0 + 2.0 * w), (1.0 + w) / (1.0 + 2.0 * w)
-
-
-#: largest grid factorised densely (nested LU, exact); finer grids use GMRES
+#: largest grid factorised densely (nested LU, exact) with mdr.linear_solver =
+#: "auto"; finer grids use GMRES
 DENSE_MAX = 2048
 #: relative tolerance of the contact conditions (gap and line load, times d)
 EDGE_TOL = 1e-9
@@ -133,17 +127,26 @@ EDGE_TOL = 1e-9
 #: with loose passes at 1e-5; 5228, 1396, 7.3 s at 1e-7; 5634, 887, 6.9 s with
 #: every pass at this tolerance
 ACCURATE_RTOL = 1e-9
-#: precision of the Krylov iterations of the matrix-free path (N > DENSE_MAX):
-#: float32 inside an iterative refinement with float64 residuals
-#: (linalg.gmres's ``low``; the answer keeps the float64 tolerance), or
-#: float64 throughout. A float32 product (complex FFTs of half the length)
-#: takes 0.65-0.85 of a float64 one at 8000-72000 nodes; paper case, N = 102400:
-#: 15.5 s against 17.8 (docs/mixed-precision.md)
-KRYLOV_PRECISION = "float32"
 #: a nested LU too small for a contact set grows to at least this factor
 NESTED_GROWTH = 1.1
-#: nodes of the coarse grid that preconditions GMRES on finer grids
+#: nodes of the coarse grid that preconditions GMRES on finer grids, at most
+#: a quarter of the grid's (the contact holds 40-80 % of the nodes, so the
+#: coarse grid stays coarser than the contacts it preconditions also when a
+#: small grid is solved iteratively)
 COARSE_NODES = 256
+
+
+def solves_directly(model: Model) -> bool:
+    """Whether the implicit steps of ``model`` are factorised (mdr.linear_solver;
+    "auto": up to DENSE_MAX nodes) rather than solved by GMRES."""
+    if model.linear_solver == "auto":
+        return len(model.x) - 1 <= DENSE_MAX
+    return model.linear_solver == "direct"
+
+
+def coarse_nodes(N: int) -> int:
+    """Nodes of the coarse grid of the GMRES preconditioner on a grid of N elements."""
+    return max(min(COARSE_NODES, N // 4), 2)
 
 
 _UNIT_COMPLIANCE: dict = {}
@@ -190,8 +193,8 @@ def coarse_eigen(nc: int):
 class ImplicitSystem:
     """(T⁻¹ P⁻¹/E* + σ) p = r on the contact nodes, σ = h K S, for any contact set.
 
-    Up to DENSE_MAX nodes: the nested LU of the whole grid's matrix for the
-    run's regular step, exact for every contact set. Finer grids: GMRES,
+    Direct (:func:`solves_directly`): the nested LU of the whole grid's matrix
+    for the run's regular step, exact for every contact set. Iterative: GMRES,
     preconditioned by the same operator on a coarse t-uniform grid whose
     contact edge coincides with the fine one (linear interpolation in t
     between the grids) plus 1/σ on what the coarse grid cannot represent
@@ -206,7 +209,7 @@ class ImplicitSystem:
         self.sigma = h * model.wear_rate
         self.rtol = rtol        # GMRES's relative residual in the contact iteration
         self.dt, self.E = model.dt, model.E_star
-        self.nested = N <= DENSE_MAX
+        self.nested = solves_directly(model)
         self.N = N
         self.model = model
         self.lu = None
@@ -214,7 +217,8 @@ class ImplicitSystem:
             # factorise only the contact sets the run is likely to need; grow on demand
             self._factor(N + 1 if nodes is None else nodes)
         else:
-            self._eigen = coarse_eigen(COARSE_NODES)
+            self.nc = coarse_nodes(N)
+            self._eigen = coarse_eigen(self.nc)
 
     def _factor(self, n: int) -> None:
         n = min(n, self.N + 1)
@@ -247,28 +251,28 @@ class ImplicitSystem:
         paper case at N = 102400, 705 of them).
         """
         lam, V, Vinv = self._eigen
-        scale = math.sqrt(n * self.dt / COARSE_NODES) / self.E
+        scale = math.sqrt(n * self.dt / self.nc) / self.E
         return V @ ((Vinv @ rc) / (scale * lam + sigma))
 
     def _transfer(self, n: int):
         """Linear interpolation in t from a coarse grid to a contact of n nodes.
 
-        The coarse grid has COARSE_NODES + 1 nodes spanning the same contact
+        The coarse grid has nc + 1 nodes spanning the same contact
         (the last one, the contact edge, carries no pressure). Returns the
         coarse cell j of each fine node, its weights (1 - w, w) on the cell's
         ends, the sparse interpolation matrix P (built directly in compressed
         form) and the first fine node of each cell (None when a cell is empty,
-        n < COARSE_NODES), which makes the transpose Pᵀ r two segment sums
+        n < nc), which makes the transpose Pᵀ r two segment sums
         (np.add.reduceat): building Pᵀ as a matrix took 0.18 s of conversions
         in the paper case at N = 102400, forming both with bincounts per
         GMRES iteration 1.3 ms of each preconditioning. Cached per contact set.
         """
         cache = _TRANSFERS
-        out = cache.get((n, COARSE_NODES))
+        nc = self.nc
+        out = cache.get((n, nc))
         if out is None:
             from scipy import sparse
 
-            nc = COARSE_NODES
             xi = np.arange(n) * (nc / n)          # fine node -> coarse coordinate
             j = xi.astype(np.int64)
             w1 = xi - j
@@ -283,12 +287,12 @@ class ImplicitSystem:
                 # the contact set of one GMRES solve is fixed; a few suffice, and
                 # each holds 6n numbers (kept per system, they took 250 MB at N = 102400)
                 cache.clear()     # (atomic: solves may run in threads)
-            out = cache[(n, COARSE_NODES)] = (j, w0, w1, P, starts)
+            out = cache[(n, nc)] = (j, w0, w1, P, starts)
         return out
 
     def _restrict(self, r: np.ndarray) -> np.ndarray:
-        """Pᵀ r on the coarse nodes 0..COARSE_NODES-1 (the edge node's entry dropped)."""
-        nc = COARSE_NODES
+        """Pᵀ r on the coarse nodes 0..nc-1 (the edge node's entry dropped)."""
+        nc = self.nc
         j, w0, w1, P, starts = self._transfer(len(r))
         if starts is None:
             return (np.bincount(j, r * w0, minlength=nc + 1) +
@@ -301,12 +305,33 @@ class ImplicitSystem:
         # the coarse solve where the coarse grid resolves r, 1/σ (the wear
         # compliance, dominant at grid scale) on the rest:
         # P A_c⁻¹ R r + (r - P R r)/σ, R = Pᵀ nc/n
-        n, nc = len(r), COARSE_NODES
+        n, nc = len(r), self.nc
+        if n <= nc:
+            # a contact of fewer nodes than the coarse grid (a fine grid on a wide
+            # domain): the coarse grid would be the finer one, and GMRES did not
+            # converge in 300 iterations under it (paper case, N = 3000,
+            # mdr.domain_factor >= 3.8, <= 104 nodes in the contact); the block
+            # itself is small enough to factorise
+            return self._block_solve(r, sigma)
         P = self._transfer(n)[3]
         rc = self._restrict(r) * (nc / n)
         ec = self._coarse_solve(rc, n, sigma)
         # the pressure vanishes at the contact edge: coarse node nc carries none
         return r / sigma + P @ np.r_[ec - rc / sigma, 0.0]
+
+    def _block_solve(self, r: np.ndarray, sigma: float) -> np.ndarray:
+        """(A_n + σ) e = r with the contact's own n×n block (n <= COARSE_NODES), LU cached."""
+        from scipy.linalg import lu_factor, lu_solve
+        n = len(r)
+        cache = self.__dict__.setdefault("_blocks", {})
+        lu = cache.get((n, sigma))
+        if lu is None:
+            A = compliance_block(self.model, n)
+            A[np.diag_indices(n)] += sigma
+            if len(cache) >= 8:
+                cache.clear()
+            lu = cache[(n, sigma)] = lu_factor(A, check_finite=False)
+        return lu_solve(lu, np.asarray(r, dtype=float), check_finite=False)
 
     def unit_response(self, n, sigma, stats, rtol):
         """The solution p1 for a unit right-hand side on nodes 0..n-1 and its force F1.
@@ -353,7 +378,7 @@ class ImplicitSystem:
 
             def precond(v):
                 return self._twolevel(v, s0)
-            if KRYLOV_PRECISION == "float32":
+            if self.model.krylov_precision == "float32":
                 low = self._low(sigma, s0)
         return linalg.gmres(lambda v: self.matvec(v, sigma), precond, r, x0=x0,
                             rtol=rtol, stats=stats, low=low)
@@ -437,23 +462,28 @@ class FarGap:
         return g
 
 
-def implicit_step(model: Model, state: State, h: float, m_guess: int | None = None,
-                  system: ImplicitSystem | None = None,
-                  previous: tuple[np.ndarray, float] | None = None,
-                  p_guess: np.ndarray | None = None, far_gap: FarGap | None = None) -> State:
-    """Backward Euler, or BDF2 with ``previous``: wear by the pressure at the end of the step.
+def implicit_step(model: Model, state: State, h: float, c: float = 1.0,
+                  base: np.ndarray | None = None, m_guess: int | None = None,
+                  system: ImplicitSystem | None = None, p_guess: np.ndarray | None = None,
+                  far_gap: FarGap | None = None) -> State:
+    """An implicit step of length h: wear by the pressure at the end of the step.
+
+    The new profile is ``base + c h K S p`` with p the contact pressure of
+    that profile: backward Euler from ``state`` (``base`` = state.f, c = 1),
+    or the variable-step BDF2 step (``base`` = a f_n + b f_{n-1},
+    :func:`numerics.stepping.bdf2_coefficients`). ``state``: the state the
+    step starts from (its contact set and pressure start the solve). The slip
+    factor S (tangential correction) is the end state's, as the scheme's wear
+    rate at the end of the step is: the step is solved with the start state's
+    S and again with the S of its result until S settles (SLIP_TOL; lagged by
+    one step instead, S made BDF2 first order: 3.5e-3 in F/F0 at Δŝ = 0.1,
+    ℓ = 5u*, against 2.2e-4 without the correction). ``system`` must be built
+    for c h when it is to be used directly.
 
     ``p_guess`` (nodes 0..N) starts the iterative solves of finer grids (the
     pressure at the start of the step if None); the result is the same to the
     solver's tolerance. ``far_gap`` (one per grid, kept across steps) spares
     the full 1D transform of each contact iteration (:class:`FarGap`).
-
-    ``previous = (f_{n-1}, h_{n-1})``, the profile one step before ``state``
-    and the step from it, makes this the variable-step BDF2 step: the same
-    contact problem from a f_n + b f_{n-1} with wear compliance c h K S
-    (:func:`bdf2_coefficients`). The slip factor S (tangential correction)
-    is the lagged first-order one of either scheme. ``system`` must be built
-    for c h when it is to be used for the regular step directly.
 
     With a pressure exponent n != 1 the wear speed K σ0 (p/σ0)^n is
     linearised about the last iterate (Newton): wear compliance c h K S n
@@ -466,13 +496,41 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
     # full slip everywhere (no tangential correction): a scalar, so the wear
     # compliance is one number and the regular step's factors solve it directly
     S = 1.0 if state.slip is None else state.slip
-    if previous is None:
-        base, hc = state.f, h
-    else:
-        a, b, c = bdf2_coefficients(h, previous[1])
-        base, hc = a * state.f + b * previous[0], c * h
+    if base is None:
+        base = state.f
+    hc = c * h
     system = system or ImplicitSystem(model, hc)
     m = max(state.m if m_guess is None else m_guess, 0)
+    total = {}
+    for _ in range(SLIP_ITERATIONS):
+        new = _implicit_step_with_slip(model, state, base, hc, S, system, m, p_guess, far_gap)
+        for k, v in new.stats.items():
+            total[k] = total.get(k, 0) + v
+        new.slip = slip_factor(model, new.q)
+        if new.slip is None:
+            break
+        change = float(np.max(np.abs(new.slip - S)))
+        if change <= max(SLIP_TOL, 10.0 * system.rtol):
+            break
+        S, m, p_guess = new.slip, new.m, new.p
+    else:
+        raise SolverError(f"implicit wear step: the slip factor of the tangential correction "
+                          f"did not settle in {SLIP_ITERATIONS} solves (last change "
+                          f"{change:.2e}); reduce sliding.step_hat")
+    new.stats = total
+    return new
+
+
+#: the implicit step's slip factor S (tangential correction) is iterated to the
+#: end state's until it changes by at most SLIP_TOL, or 10 times the solve's
+#: tolerance where that is looser (S is 1 - O(2u*/ℓ); 1e-9 is far below any
+#: time error a step may have), in at most SLIP_ITERATIONS solves
+SLIP_TOL = 1e-9
+SLIP_ITERATIONS = 30
+
+
+def _implicit_step_with_slip(model, state, base, hc, S, system, m, p_guess, far_gap) -> State:
+    """The implicit step from ``base`` with wear compliance hc K S (Newton for n != 1)."""
     if model.exponent == 1.0:
         new = _implicit_solve(model, state, base, hc, S, system, m,
                               state.p if p_guess is None else p_guess, far_gap)
@@ -521,7 +579,6 @@ def implicit_step(model: Model, state: State, h: float, m_guess: int | None = No
         # the converged profile by the wear law itself (not its linearisation)
         new.f = base + hc * S * wear_speed(model, new.p)
         new.stats = total
-    new.slip = _slip(model, state, new, h)
     return new
 
 

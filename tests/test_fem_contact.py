@@ -5,7 +5,7 @@ import pytest
 from scipy import linalg, optimize
 
 from wearcheck.cases import SolverError
-from wearcheck.fem.contact import PrefixCholesky, complementarity_residual, solve_lcp
+from wearcheck.numerics.superelement import PrefixCholesky, complementarity_residual, solve_lcp
 
 
 def _problem(n=60, seed=0):

@@ -8,7 +8,7 @@ import pytest
 from wearcheck import cases
 from wearcheck import fem
 from wearcheck.cases import CaseError, SolverError, reference
-from wearcheck.fem import wear
+from wearcheck.numerics import stepping, superelement
 
 
 @pytest.fixture(autouse=True)
@@ -124,14 +124,21 @@ def test_explicit_limit_is_sharp_and_oscillation_is_detected():
     C = 1e-9 * np.exp(-np.abs(x[:, None] - x[None, :]) / 0.3) + 1e-11 * np.eye(n)
     area = np.full(n, 1e-10)
     rate = 1e-13
-    limit = wear.explicit_limit(C, area, rate)
+    limit = superelement.explicit_limit(C, area, rate)
     z = 1e-7 * x**2 + 1e-12 * rng.standard_normal(n) ** 2
-    kw = dict(control="depth", value=2e-8, scheme="explicit", stage_s=[0.0],
-              until="distance", gap_scale=1e-8, force_scale=1.0, pressure_scale=1e9)
-    ok = wear.run(C, z, x, area, rate, step=0.9 * limit, distance=200 * limit, **kw)
+
+    def run(step, distance):
+        problem = superelement.Superelement(C, z, x, area, rate, control="depth", value=2e-8,
+                                            gap_scale=1e-8, force_scale=1.0,
+                                            pressure_scale=1e9)
+        plan = stepping.Plan(scheme="explicit", step=step, end=distance, per_m=1.0,
+                             stages=(0.0,), depth_scale=1e-8)
+        return superelement.run(problem, plan)
+
+    ok = run(0.9 * limit, 200 * limit)
     assert ok.force[-1] < ok.force[0]
     with pytest.raises(SolverError, match="oscillates"):
-        wear.run(C, z, x, area, rate, step=1.3 * limit, distance=2000 * limit, **kw)
+        run(1.3 * limit, 2000 * limit)
 
 
 def test_force_control_wear():

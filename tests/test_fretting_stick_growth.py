@@ -18,6 +18,7 @@ import pytest
 
 from test_fretting_mdr import FORCE, MU, R, make
 from wearcheck import mdr
+from wearcheck.mdr import transforms
 from wearcheck.cases import reference_fretting as rf
 
 
@@ -96,14 +97,32 @@ def test_stick_radius_growth_is_independent_of_the_time_discretisation(base):
     assert ref / c0 - 1 > 0.01
 
 
-def test_stick_radius_growth_converges_in_N(base):
+def test_stick_radius_growth_and_limiting_depth_converge_in_N(base):
     # successive differences of c∞/c0 halve with N (first order: the edge
-    # lies between nodes); the growth is far larger than what the grid changes
+    # lies between nodes); the growth is far larger than what the grid changes.
+    # Runs at k = 0.2 for 800 cycles (k n = 160): c is at its limit by k n = 80
+    # (the base run), but the depth still rises there by 4e-5 while the last
+    # load leaves the slip annulus (measured at N = 800: it carries 5.2e-5 F
+    # at k n = 80, 1e-12 at 160)
     case, res, u0 = base
     c0 = rf.stick_radius_bounds(FORCE, case.E_star, case.G_star, MU, u0, R)[0]
-    ratios = [res.history["stick_radius"][-1] / c0]
-    for N in (400, 800):
-        ratios.append(_run(N=N)[1].history["stick_radius"][-1] / c0)
+    ratios, excess, raise_ = [], [], []
+    for N in (200, 400, 800):
+        case, r, _ = _run(N=N, k=0.2)
+        h = r.history
+        c, d = h["stick_radius"][-1], h["depth"][-1]
+        ratios.append(c / c0)
+        # the limiting depth against Popov's d∞(c∞) = F/(2E*c) + c²/3R
+        excess.append(d / rf.limiting_depth(FORCE, case.E_star, c, R) - 1)
+        # In the limit the annulus carries nothing, so d = d∞(c) + (1/c)∫_0^c
+        # (g - x²/R) dx exactly: the springs between c0 and c∞ wore while they
+        # still slid. That mean raise of the 1D profile, measured on the grid
+        x = r.r
+        g = transforms.to_1d(r.f[-1])
+        stick = x <= c
+        assert np.max(np.abs(g - x**2 / R)[x <= c0 * (1 - 1e-3)]) < 1e-12 * d   # unworn core
+        assert np.all((g - x**2 / R)[stick] > -1e-12 * d)                        # never below
+        raise_.append(np.trapezoid((g - x**2 / R)[stick], x[stick]) / c / d)
     diffs = np.abs(np.diff(ratios))
     rate = math.log2(diffs[0] / diffs[1])
     # measured c∞/c0 = 1.01739, 1.01646, 1.01598 (N = 200, 400, 800; 1.01574 at
@@ -111,3 +130,14 @@ def test_stick_radius_growth_converges_in_N(base):
     assert rate > 0.7
     growth = ratios[-1] - 1
     assert growth > 20 * diffs[-1]
+    # d∞/d∞(c∞) - 1 = -2.85e-3, -1.41e-3, -6.86e-4 (-3.20e-4 at N = 1600,
+    # k = 0.1): first order (rate 0.99) towards a limit above 0. Richardson's
+    # limit 2e(800) - e(400) = 3.9e-5 (4.7e-5 from 800 and 1600), and the mean
+    # raise is 4.7e-5 (7.4e-5, 5.2e-5 at N = 200, 400): the true limiting depth
+    # is above Popov's by that much. 2e-5: the Richardson limit's own error (a
+    # second-order term of 8e-6 here); equality with Popov's d∞(c∞) would fail
+    d_diffs = np.abs(np.diff(excess))
+    assert 0.8 < math.log2(d_diffs[0] / d_diffs[1]) < 1.2
+    limit = 2 * excess[2] - excess[1]
+    assert limit == pytest.approx(raise_[2], abs=2e-5)
+    assert raise_[2] > 3e-5

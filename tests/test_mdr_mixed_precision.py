@@ -5,49 +5,46 @@ Checked against dense float64 algebra: the implicit step's matrix assembled
 transforms) and solved by numpy, and residuals measured in float64.
 """
 
+import dataclasses
+
 import numpy as np
 import pytest
 
 from wearcheck import cases, mdr
 from wearcheck.mdr import linalg, solver, transforms, wear
 
-from test_mdr_wear import make
+from test_mdr_wear import make, u_star_of
 
 
 @pytest.fixture(scope="module")
 def system_3000():
-    # a contact of ~3000 nodes on a grid above DENSE_MAX (patched): the
-    # matrix-free system, its assembled matrix and a right-hand side of the step
-    mp = pytest.MonkeyPatch()
-    mp.setattr(wear, "DENSE_MAX", 1000)
-    try:
-        case = make(N=10000)
-        model, sc = solver.build_model(case)
-        st = wear.contact_state(model, model.f0.copy())
-        system = wear.ImplicitSystem(model, 0.05 / sc["s_hat_per_m"])
-        assert not system.nested
-        n = st.m + 1
-        A = wear.compliance_block(model, n)
-        A[np.diag_indices(n)] += system.sigma
-        b = st.depth - model.f0[:n]
-        # |A⁻¹|₂ <= sqrt(|A⁻¹|₁ |A⁻¹|_inf) (Hölder), from numpy's inverse
-        Ainv = np.linalg.inv(A)
-        system.inverse_bound = np.sqrt(np.linalg.norm(Ainv, 1) * np.linalg.norm(Ainv, np.inf))
-        yield system, A, b, st.p[:n]
-    finally:
-        mp.undo()
+    # a contact of ~3000 nodes on a grid above DENSE_MAX: the matrix-free
+    # system (float32 Krylov iterations, the default mdr.krylov_precision), its
+    # assembled matrix and a right-hand side of the step
+    case = make(N=10000)
+    model, sc = solver.build_model(case)
+    st = wear.contact_state(model, model.f0.copy())
+    system = wear.ImplicitSystem(model, 0.05 / sc["s_hat_per_m"])
+    assert not system.nested and model.krylov_precision == "float32"
+    n = st.m + 1
+    A = wear.compliance_block(model, n)
+    A[np.diag_indices(n)] += system.sigma
+    b = st.depth - model.f0[:n]
+    # |A⁻¹|₂ <= sqrt(|A⁻¹|₁ |A⁻¹|_inf) (Hölder), from numpy's inverse
+    Ainv = np.linalg.inv(A)
+    system.inverse_bound = np.sqrt(np.linalg.norm(Ainv, 1) * np.linalg.norm(Ainv, np.inf))
+    return system, A, b, st.p[:n]
 
 
 @pytest.mark.parametrize("rtol", [1e-7, 1e-9, 1e-12])
 @pytest.mark.parametrize("start", ["zero", "guess"])
-def test_mixed_precision_solve_meets_the_float64_tolerance(system_3000, rtol, start, monkeypatch):
+def test_mixed_precision_solve_meets_the_float64_tolerance(system_3000, rtol, start):
     # the answer of float32 iterations must satisfy |b - A x| <= rtol |b| in
     # float64 with the assembled matrix (bound: rtol itself; the FFT and the
     # dense matrix differ by ~1e-15 relative, far below 1e-12), so its error
     # against numpy's dense solve is at most |A⁻¹| rtol |b|
     system, A, b, guess = system_3000
     assert 2500 < len(b) < 3500
-    monkeypatch.setattr(wear, "KRYLOV_PRECISION", "float32")
     stats = {}
     x = system.solve(b, system.sigma, None if start == "zero" else guess, stats, rtol)
     assert x.dtype == np.float64
@@ -102,10 +99,11 @@ def test_float32_toeplitz_products_by_half_length_transforms(n):
                                    rtol=0, atol=1e-12 * np.max(np.abs(direct)))
 
 
-def test_float64_path_stays_callable(system_3000, monkeypatch):
-    # KRYLOV_PRECISION = "float64": no float32 iteration at all, same tolerance
+def test_float64_path_stays_callable(system_3000):
+    # mdr.krylov_precision = "float64": no float32 iteration at all, same tolerance
     system, A, b, guess = system_3000
-    monkeypatch.setattr(wear, "KRYLOV_PRECISION", "float64")
+    system = wear.ImplicitSystem(dataclasses.replace(system.model, krylov_precision="float64"),
+                                 system.sigma / system.model.wear_rate)
     stats = {}
     x = system.solve(b, system.sigma, guess, stats, 1e-9)
     assert np.linalg.norm(b - A @ x) <= 1e-9 * np.linalg.norm(b)
@@ -118,15 +116,16 @@ def test_the_inner_residual_is_trusted_within_its_bound(monkeypatch):
     # every refined solve of a small adaptive and fixed-step run on the
     # matrix-free path (and one with the tangential correction: σ per node):
     # each meets its tolerance in float64 and keeps γ in bound
-    monkeypatch.setattr(wear, "DENSE_MAX", 64)
-    monkeypatch.setattr(wear, "COARSE_NODES", 48)
     eps32 = float(np.finfo(np.float32).eps)
+    # the tangential correction at a stroke of 5u*: S from 0.68 to 1, σ per node
+    stroke = 5.0 * u_star_of(make(N=50, control="force"))
     for kw, rtol in ((dict(scheme="adaptive", tolerance=1e-4), 1e-7),
                      (dict(step_hat=0.15), wear.ACCURATE_RTOL),
-                     (dict(step_hat=0.15, tangential=True), wear.ACCURATE_RTOL)):
+                     (dict(step_hat=0.15, tangential=True, stroke=stroke), wear.ACCURATE_RTOL)):
         audit = []
         monkeypatch.setattr(linalg, "REFINE_AUDIT", audit)
-        res = mdr.solve(make(N=300, s_hat=2.0, control="force", stages=(0.0, 1.0), **kw))
+        res = mdr.solve(make(N=300, s_hat=2.0, control="force", stages=(0.0, 1.0),
+                             linear_solver="iterative", **kw))
         assert len(audit) > 20
         a = np.array(audit)
         assert np.all(a[:, 0] * a[:, 2] <= rtol)          # |b - A x| <= rtol |b|
@@ -166,7 +165,6 @@ def test_the_implicit_system_falls_back_when_its_float32_solves_stall(system_300
     # each pass leaves a third of the residual): float64 GMRES takes over and
     # the answer meets rtol against the assembled matrix
     system, A, b, guess = system_3000
-    monkeypatch.setattr(wear, "KRYLOV_PRECISION", "float32")
     low = system._low
     monkeypatch.setattr(system, "_low", lambda sigma, s0: low(1.5 * sigma, s0), raising=False)
     stats = {}

@@ -7,18 +7,20 @@ import pytest
 
 from wearcheck import cases
 from wearcheck import mdr
-from wearcheck.cases import reference
+from wearcheck.cases import profiles, programme, reference
 from wearcheck.mdr import linalg, solver, wear
+from wearcheck.numerics import stepping
 
 R = 0.01
 D = 1e-6
 
 
 def make(N=200, s_hat=None, stages=(0.0,), domain_factor=1.3, control="depth",
-         **sliding):
+         linear_solver="auto", **sliding):
     """A paraboloid case; s_hat: slide to that ŝ (else until the force fraction).
 
     Fixed-step implicit Euler unless ``scheme`` is given (these tests are about it).
+    ``linear_solver="iterative"`` runs a small grid on the GMRES path of fine ones.
     """
     sliding.setdefault("scheme", "implicit")
     loading = dict(control="depth", depth=D) if control == "depth" else \
@@ -30,7 +32,8 @@ def make(N=200, s_hat=None, stages=(0.0,), domain_factor=1.3, control="depth",
                          tangential_correction=sliding.pop("tangential", False)),
                sliding=dict(until="force_fraction", **sliding),
                stages=dict(s_hat=list(stages)),
-               mdr=dict(elements=int(N), domain_factor=domain_factor))
+               mdr=dict(elements=int(N), domain_factor=domain_factor,
+                        linear_solver=linear_solver))
     if control == "force":
         raw["sliding"]["until"] = "distance"
         raw["sliding"]["distance"] = 0.0
@@ -41,6 +44,16 @@ def make(N=200, s_hat=None, stages=(0.0,), domain_factor=1.3, control="depth",
         raw["sliding"].pop("force_fraction", None)
         case = cases.from_dict(raw)
     return case
+
+
+def run_with_control(case, control):
+    """The MDR run of ``case`` (adaptive) with the step control given: the
+    solver's own choice is the ladder for direct solves, continuous for
+    iterative ones. Returns :func:`mdr.solver.run`'s dict."""
+    model, sc = solver.build_model(case)
+    plan, _ = programme.stepping_plan(case, math.inf, sc, control=control)
+    return solver.run(model, plan,
+                      profile=lambda x: profiles.height(case.indenter, x, case.table))
 
 
 def force_at(res, s_hat):
@@ -149,19 +162,21 @@ def test_grid_scale_oscillation_is_detected():
     N = 200
     model, per = _model_and_scale(make(N=N))
     limit = solver.stability_limit_hat(model, per) / per
-    s_end = 3.0 / per
-    args = ([], "distance", s_end, 0.01)
+
+    def plan(scheme, step):
+        return stepping.Plan(scheme=scheme, step=step, end=3.0 / per, per_m=per)
+
     with pytest.raises(cases.SolverError, match="oscillation"):
-        solver.run(model, "explicit", 3.0 * limit, *args)
-    wrong = solver.run(model, "explicit", 3.0 * limit, *args, check_oscillation=False)
-    right = solver.run(model, "implicit", 0.01 / per, *args)   # time error ~7e-4
+        solver.run(model, plan("explicit", 3.0 * limit))
+    wrong = solver.run(model, plan("explicit", 3.0 * limit), check_oscillation=False)
+    right = solver.run(model, plan("implicit", 0.01 / per))   # time error ~7e-4
     F_wrong = wrong["history"]["force"][-1] / wrong["history"]["force"][0]
     F_right = right["history"]["force"][-1] / right["history"]["force"][0]
     # measured 0.228 against 0.279: an error 100 times the time error of a
     # stable step, with nothing non-finite to betray it
     assert abs(F_wrong - F_right) > 0.02
     # a stable explicit run is not flagged
-    solver.run(model, "explicit", 0.5 * limit, *args)
+    solver.run(model, plan("explicit", 0.5 * limit))
 
 
 def test_observed_order_in_N():
@@ -178,47 +193,102 @@ def test_observed_order_in_N():
     assert diffs[-1] < 1e-4
 
 
-def test_tangential_correction_is_small_and_speeds_wear():
-    # With the tangential correction the slip per unit sliding is
-    # 1 + (μ E* K/G*) p (paper Eqs. 15-16 with Δq = -E* Δg), so wear runs
-    # ahead by a relative amount between 0 and ε = μ E* K p0/G* = 8.0e-6
-    # (measured 0.3-0.4 ε: the pressure-weighted mean of p/p0)
-    plain = mdr.solve(make(N=200, s_hat=3.0, step_hat=0.1))
-    corr = mdr.solve(make(N=200, s_hat=3.0, step_hat=0.1, tangential=True))
+def u_star_of(case):
+    """Cattaneo–Mindlin's gross-slip displacement of the unworn contact, μE*d0/G*."""
+    return case.wear.mu * case.E_star * reference.scales(case)["d0"] / case.G_star
+
+
+def test_tangential_correction_slip_is_the_springs_reversal():
+    # docs/theory.md §4: a spring reverses ±μq/G* at each stroke end, so of a
+    # stroke ℓ it slides ℓ - 2μq/G*; Eq. 16 of the Hertz line load
+    # E*(d - x²/R) is E*(d - r²/2R), so S(r) = 1 - 2u*(1 - r²/(2Rd))/ℓ on the
+    # contact, u* = μE*d/G*. The line load is linear in t on every segment
+    # inside the contact and T⁻¹ is causal and exact there: round-off (1e-12)
     case = make(N=200)
-    sc = reference.scales(case)
-    eps = case.wear.mu * case.E_star * case.wear_rate * sc["p0"] / case.G_star
-    Fp, Fc = plain.history["force"] / sc["F0"], corr.history["force"] / sc["F0"]
-    assert np.all(Fc <= Fp + 1e-12)
-    s = plain.history["s_hat"]
-    dFds = np.gradient(Fp, s)
-    k = (s > 0.9) & (s < 3.0)
-    shift = (Fp - Fc)[k] / (-dFds[k] * s[k])
-    assert np.all(shift > 0.1 * eps) and np.all(shift < eps)
+    u_star = u_star_of(case)
+    stroke = 20.0 * u_star
+    corrected = make(N=200, tangential=True, stroke=stroke)
+    model, sc = solver.build_model(corrected)
+    state = wear.contact_state(model, model.f0.copy())
+    inside = model.x < sc["a0"] * (1 - 1e-9)
+    r = model.x[inside][:-1]          # the last node's segment holds the edge's kink
+    S = 1.0 - 2.0 * u_star * (1.0 - r**2 / (2.0 * R * D)) / stroke
+    np.testing.assert_allclose(state.slip[:len(r)], S, rtol=0, atol=1e-12)
+    # without the key there is no factor (S = 1, a scalar in the implicit step)
+    plain, _ = solver.build_model(case)
+    assert wear.contact_state(plain, plain.f0.copy()).slip is None
 
 
-def test_runaway_guard(monkeypatch):
-    monkeypatch.setattr(solver, "MAX_STEPS", 5)
-    with pytest.raises(cases.SolverError, match="steps"):
-        mdr.solve(make(N=50, step_hat=0.1))
+@pytest.mark.parametrize("ratio", [5.0, 20.0])
+def test_tangential_correction_slows_the_wear_by_the_closed_form(ratio):
+    # dV/ds = K ∫ p S dA; with Hertz's p and S above, ∫ p (d - r²/2R) dA =
+    # (4/5) d F, so the initial volume rate is K F (1 - (8/5) u*/ℓ): 0.32 and
+    # 0.08 slower at ℓ = 5u*, 20u*. Measured over ŝ = 0.001 as the ratio to
+    # the run without the correction, which cancels most of the grid's error
+    # of the volume rate. Tolerance 1e-3 of the correction: the wear moves the
+    # ratio by 0.37 ŝ of the correction (measured at ŝ = 0.0025 and 0.01, at
+    # N = 100-800), the grid by -7e-4 (N = 100), -3e-4 (200), 0 (800)
+    case = make(N=200)
+    u_star = u_star_of(case)
+    stroke = ratio * u_star
+    runs = [mdr.solve(make(N=200, s_hat=0.001, step_hat=0.00025, tangential=t, stroke=stroke))
+            for t in (False, True)]
+    V_plain, V_corr = (r.history["wear_volume"][-1] for r in runs)
+    expected = 1.0 - 1.6 * u_star / stroke
+    assert V_corr / V_plain == pytest.approx(expected, abs=1e-3 * (1.0 - expected))
 
 
-def test_matrix_free_path_solves_the_same_equations(monkeypatch):
+def test_tangential_correction_needs_a_stroke_longer_than_the_reversal():
+    u_star = u_star_of(make(N=50))
+    # a case file of the earlier reading (no stroke) is told what to do
+    with pytest.raises(cases.CaseError, match=r"wear\.tangential_correction.*sliding\.stroke"):
+        make(N=50, tangential=True)
+    # a stroke within 2u* is partial slip: the fretting solver's case
+    with pytest.raises(cases.CaseError, match=r"sliding\.stroke.*partial slip.*\[fretting\]"):
+        make(N=50, tangential=True, stroke=1.99 * u_star)
+    make(N=50, tangential=True, stroke=2.01 * u_star)
+
+
+def test_runaway_guard():
+    # the plan's step cap stops an MDR run that would pass it (ten steps
+    # asked, five allowed)
+    model, per = _model_and_scale(make(N=50))
+    plan = stepping.Plan(scheme="implicit", step=0.1 / per, end=1.0 / per, per_m=per,
+                         max_steps=5)
+    with pytest.raises(cases.SolverError, match="more than 5 steps"):
+        solver.run(model, plan)
+
+
+def test_matrix_free_path_solves_the_same_equations():
     # grids above DENSE_MAX use FFT operators, GMRES and a coarse-grid
     # preconditioner instead of the nested LU: the same discrete equations,
     # so the histories agree to the GMRES tolerance (rtol 1e-9; measured 3e-10
     # in F, 1e-8 of the peak in p)
-    dense = [mdr.solve(make(N=300, s_hat=2.0, step_hat=0.15, control=c, stages=(0.0, 1.0)))
-             for c in ("depth", "force")]
-    monkeypatch.setattr(wear, "DENSE_MAX", 64)
-    monkeypatch.setattr(wear, "COARSE_NODES", 48)
-    free = [mdr.solve(make(N=300, s_hat=2.0, step_hat=0.15, control=c, stages=(0.0, 1.0)))
-            for c in ("depth", "force")]
+    dense, free = ([mdr.solve(make(N=300, s_hat=2.0, step_hat=0.15, control=c,
+                                   stages=(0.0, 1.0), linear_solver=solver_))
+                    for c in ("depth", "force")] for solver_ in ("direct", "iterative"))
     for a, b in zip(dense, free):
         assert b.info["gmres_iterations"] > 0
         for key in ("force", "depth", "contact_radius", "wear_volume"):
             np.testing.assert_allclose(b.history[key], a.history[key], rtol=1e-7)
         np.testing.assert_allclose(b.p, a.p, rtol=0, atol=1e-7 * np.max(a.p))
+
+
+def test_the_solve_settings_are_validated_case_keys():
+    # mdr.linear_solver and mdr.krylov_precision: a value outside the choices
+    # is refused naming the key, the value and what is allowed; a direct solve
+    # above the "auto" limit is costed as the dense factorisations it makes
+    # (at least one of (N+1)² doubles), so the memory guard sees it
+    paper = cases.shipped("paper")
+    for key, bad, allowed in (("mdr.linear_solver", "gmres", '"auto", "direct", "iterative"'),
+                              ("mdr.krylov_precision", "float16", '"float32", "float64"')):
+        with pytest.raises(cases.CaseError) as err:
+            cases.load(paper, [f"{key}={bad}"])
+        assert str(err.value) == f"key '{key}' = \"{bad}\": must be one of {allowed}"
+    from wearcheck.mdr.resources import memory_bytes
+    auto, direct = (cases.load(paper, ["mdr.elements=4096", f"mdr.linear_solver={s}"])
+                    for s in ("auto", "direct"))
+    assert memory_bytes(direct) - memory_bytes(auto) >= 8.0 * 4097**2
 
 
 def test_adaptive_iterative_solves_keep_to_a_share_of_the_tolerance(monkeypatch):
@@ -240,14 +310,11 @@ def test_adaptive_iterative_solves_keep_to_a_share_of_the_tolerance(monkeypatch)
 
     monkeypatch.setattr(linalg, "gmres", spy)
     for path in ("direct", "iterative"):
-        if path == "iterative":
-            monkeypatch.setattr(wear, "DENSE_MAX", 64)
-            monkeypatch.setattr(wear, "COARSE_NODES", 48)
-            # the ladder's steps, as the direct path (iterative paths otherwise
-            # set them continuously), so that the histories can be compared
-            monkeypatch.setattr(solver, "ADAPTIVE_ERROR_TARGET", None)
-        runs[path] = [mdr.solve(make(N=300, s_hat=2.0, scheme="adaptive", tolerance=tol,
-                                     control=c, stages=(0.0, 1.0)))
+        # the ladder's steps on both paths (iterative ones otherwise set them
+        # continuously), so that the histories can be compared
+        runs[path] = [run_with_control(make(N=300, s_hat=2.0, scheme="adaptive", tolerance=tol,
+                                            control=c, stages=(0.0, 1.0), linear_solver=path),
+                                       "ladder")
                       for c in ("depth", "force")]
     # the share reaches every iterative solve of the adaptive runs; a fixed-step
     # run keeps the accurate solves
@@ -256,8 +323,8 @@ def test_adaptive_iterative_solves_keep_to_a_share_of_the_tolerance(monkeypatch)
     mdr.solve(make(N=300, s_hat=0.5, step_hat=0.15))
     assert used and set(used) == {wear.ACCURATE_RTOL}
     for a, b in zip(runs["direct"], runs["iterative"]):
-        assert b.info["gmres_iterations"] > 10 * a.info["gmres_iterations"]
-        ha, hb = a.history, b.history
+        assert b["counters"]["gmres_iterations"] > 10 * a["counters"]["gmres_iterations"]
+        ha, hb = a["history"], b["history"]
         k = 0
         while k < min(len(ha["s"]), len(hb["s"])) and ha["s"][k] == hb["s"][k]:
             k += 1
@@ -284,17 +351,15 @@ def test_progress_is_reported():
 
 
 @pytest.mark.parametrize("direct", [True, False])
-def test_implicit_step_state_satisfies_its_contact_problem(direct, monkeypatch):
+def test_implicit_step_state_satisfies_its_contact_problem(direct):
     # one backward-Euler step from a worn start, solved directly (nested LU,
     # bordered as the contact grows) or by GMRES (the coarse-grid path, forced
     # on this small grid): the state must solve T⁻¹[q/E*] + σ p = d − f_n on
     # the contact (checked with the transforms themselves, not the solver's
     # matrix), its line load must be P⁻¹ p (the direct step takes it from the
     # 1D gap instead) and its force Eq. 12 of that line load
-    if not direct:
-        monkeypatch.setattr(wear, "DENSE_MAX", 100)
     from wearcheck.mdr import transforms
-    case = make(N=400)
+    case = make(N=400, linear_solver="direct" if direct else "iterative")
     model, sc = solver.build_model(case)
     st = wear.contact_state(model, model.f0.copy())
     h = 0.3 / sc["s_hat_per_m"]
@@ -374,13 +439,12 @@ def test_far_gap_sees_a_penetration_beyond_its_window():
     assert not np.any(d - transforms.to_1d(f)[800:] > 1e-9 * d)
 
 
-def test_far_gap_leaves_a_run_unchanged(monkeypatch):
-    # fine grids check the contact beyond a window against a reference (forced
-    # here on a small GMRES grid): the same contact sets, so the same history
-    # to round-off, with the full transform done a few times per run instead
-    # of once per contact iteration
-    monkeypatch.setattr(wear, "DENSE_MAX", 64)
-    monkeypatch.setattr(wear, "COARSE_NODES", 48)
+def test_far_gap_leaves_the_steps_unchanged(monkeypatch):
+    # fine grids (N > solver.FAR_GAP_FROM) check the contact beyond a window
+    # against a reference: the same contact sets as the full transform, so the
+    # same steps to round-off, with the full transform done a few times per
+    # run instead of once per contact iteration. Here 30 backward-Euler steps
+    # of a small GMRES grid, with the check and without, by depth and by force
     full = []
     original = wear.FarGap.full
 
@@ -389,17 +453,24 @@ def test_far_gap_leaves_a_run_unchanged(monkeypatch):
         return original(self, f)
 
     monkeypatch.setattr(wear.FarGap, "full", spy)
-    runs = {}
-    for threshold in (100, 10**9):
-        monkeypatch.setattr(solver, "FAR_GAP_FROM", threshold)
-        runs[threshold] = [mdr.solve(make(N=300, s_hat=2.0, scheme="adaptive", tolerance=1e-4,
-                                          control=c, stages=(0.0, 1.0)))
-                           for c in ("depth", "force")]
-    assert 0 < len(full) < 0.1 * sum(r.info["contact_iterations"] for r in runs[100])
-    for a, b in zip(runs[100], runs[10**9]):
-        assert a.info["contact_iterations"] == b.info["contact_iterations"]
-        for key in ("force", "depth", "contact_radius", "wear_center"):
-            np.testing.assert_allclose(a.history[key], b.history[key], rtol=1e-12, atol=0)
+    iterations = 0
+    for control in ("depth", "force"):
+        model, sc = solver.build_model(make(N=300, control=control, linear_solver="iterative"))
+        h = 0.1 / sc["s_hat_per_m"]
+        system = wear.ImplicitSystem(model, h)
+        runs = []
+        for far_gap in (wear.FarGap(), None):
+            st = wear.contact_state(model, model.f0.copy())
+            steps = []
+            for _ in range(30):
+                st = wear.implicit_step(model, st, h, system=system, far_gap=far_gap)
+                steps.append((st.m, st.stats["contact_iterations"], st.force, st.depth, st.f[0]))
+            runs.append(np.array(steps))
+        with_check, without = runs
+        iterations += with_check[:, 1].sum()
+        np.testing.assert_array_equal(with_check[:, :2], without[:, :2])
+        np.testing.assert_allclose(with_check[:, 2:], without[:, 2:], rtol=1e-12, atol=0)
+    assert 0 < len(full) < 0.1 * iterations
 
 
 def test_coarse_solve_through_eigenvectors_is_the_shifted_solve():
@@ -411,8 +482,8 @@ def test_coarse_solve_through_eigenvectors_is_the_shifted_solve():
     model, sc = solver.build_model(case)
     system = wear.ImplicitSystem.__new__(wear.ImplicitSystem)
     system.dt, system.E = model.dt, model.E_star
-    system._eigen = wear.coarse_eigen(wear.COARSE_NODES)
-    nc = wear.COARSE_NODES
+    nc = system.nc = wear.COARSE_NODES
+    system._eigen = wear.coarse_eigen(nc)
     rng = np.random.default_rng(1)
     for n, h_hat in ((3000, 2.0 ** -7), (50000, 0.25), (700, 1.0)):
         sigma = h_hat / sc["s_hat_per_m"] * model.wear_rate
@@ -424,13 +495,13 @@ def test_coarse_solve_through_eigenvectors_is_the_shifted_solve():
 
 
 @pytest.mark.parametrize("n", [30, 47, 48, 49, 257, 5000])
-def test_restriction_is_the_interpolation_transposed(n, monkeypatch):
+def test_restriction_is_the_interpolation_transposed(n):
     # the preconditioner's restriction by segment sums (or bincounts where a
-    # coarse cell is empty, n < COARSE_NODES) against the sparse transpose of
-    # its interpolation matrix, and that matrix against np.interp
-    monkeypatch.setattr(wear, "COARSE_NODES", 48)
+    # coarse cell is empty, n < nc) against the sparse transpose of its
+    # interpolation matrix, and that matrix against np.interp (nc = 48)
     wear._TRANSFERS.clear()
     system = wear.ImplicitSystem.__new__(wear.ImplicitSystem)
+    system.nc = 48
     j, w0, w1, P, starts = system._transfer(n)
     rng = np.random.default_rng(n)
     r = rng.standard_normal(n)

@@ -129,3 +129,37 @@ def test_scales_of_paper_case():
     assert sc["p0"] == pytest.approx(2 * case.E_star * sc["a0"] / (math.pi * 0.01), rel=1e-13)
     assert sc["s_hat_per_m"] == pytest.approx(
         case.wear.k * case.wear.mu * case.E_star / (case.wear.hardness * sc["a0"]), rel=1e-14)
+
+
+@pytest.mark.parametrize("n", [1.0, 2.0, 3.5])
+def test_worn_sphere_asymptote_is_the_spherical_cap(n):
+    # the cap of height h worn by dh/ds = K_n (F/(π b²))^n with b² = 2Rh - h²:
+    # ∫_0^h (2Rη - η²)^n dη = K_n (F/π)^n s, solved here by quadrature and a
+    # root (the reference uses the incomplete beta function); 1e-10: the
+    # quadrature's tolerance
+    from scipy import optimize
+    Rb, F, K, H = 0.005, 2.0, 1e-15, 6e9
+    Kn = K * H ** (1.0 - n)
+    for s in (2.0, 2e3, 2e5):
+        out = ref.worn_sphere_asymptote(Rb, F, s, K, exponent=n, hardness=H)
+        rhs = Kn * (F / math.pi) ** n * s
+
+        def lhs(h):
+            return integrate.quad(lambda e: (2 * Rb * e - e * e) ** n, 0.0, h,
+                                  epsabs=0, epsrel=1e-13)[0] - rhs
+        h = optimize.brentq(lhs, 0.0, Rb, xtol=1e-30, rtol=1e-14)
+        assert float(out["wear_center"]) == pytest.approx(h, rel=1e-10)
+        assert float(out["scar_radius"]) == pytest.approx(math.sqrt(2 * Rb * h - h * h), rel=1e-10)
+        if n == 1.0:
+            # Archard: the cap's volume is K F s (round-off)
+            assert float(out["wear_volume"]) == pytest.approx(K * F * s, rel=1e-12)
+    # the paraboloid's law is the small-cap limit: larger by (b/R)²/12 in b for
+    # n = 1 (series of the cap's volume), 5.3e-4 at b/R = 0.08
+    if n == 1.0:
+        for s in (2.0, 2e3):
+            b = float(ref.worn_sphere_asymptote(Rb, F, s, K)["scar_radius"])
+            bp = float(ref.worn_sphere_asymptote(Rb, F, s, K, profile="paraboloid")["scar_radius"])
+            assert bp / b - 1 == pytest.approx((b / Rb) ** 2 / 12, rel=0.1)
+    # past the hemisphere there is no cap
+    assert math.isnan(float(ref.worn_sphere_asymptote(Rb, F, 1e40, K, exponent=n,
+                                                      hardness=H)["scar_radius"]))

@@ -359,8 +359,8 @@ def test_refine_and_sweep_refuse_a_user_directory(tmp_path, capsys, command):
     (d / "refinement-mdr.csv").write_text("mine")
     (d / "sweep.csv").write_text("mine")
     before = _snapshot(tmp_path)
-    extra = (["--levels", "20,40"] if command == "refine"
-             else ["--vary", "mdr.elements=20,40"])
+    extra = (["--levels", "40,60"] if command == "refine"
+             else ["--vary", "mdr.elements=40,60"])
     assert cli_main([command, HERTZ, "--out", str(d), "--workers", "1", *extra, "--quiet"]) == 2
     _one_error_line(capsys.readouterr().err)
     assert _snapshot(tmp_path) == before  # nothing overwritten, no meta.json added
@@ -656,7 +656,7 @@ def test_a_case_path_with_quotes_backslashes_and_newlines_writes_valid_toml(tmp_
 def test_a_bom_prefixed_case_file_runs_in_sweep(tmp_path):
     case = tmp_path / "bom.toml"
     case.write_bytes(b"\xef\xbb\xbf" + Path(HERTZ).read_bytes())
-    assert cli_main(["sweep", str(case), "--vary", "mdr.elements=20,30", "--workers", "1",
+    assert cli_main(["sweep", str(case), "--vary", "mdr.elements=40,50", "--workers", "1",
                      "--out", str(tmp_path / "s"), "--quiet"]) == 0
     assert (tmp_path / "s" / "sweep.csv").is_file()
 

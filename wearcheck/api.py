@@ -167,7 +167,7 @@ def solve(case: str | Path | Case, solver: str = "mdr", *,
     finally:
         if bar is not None:
             bar.close()
-    notes = list(case.warnings)
+    notes = list(case.warnings) + list(run.info.get("warnings", []))  # (the run's: warned)
     missing = list(case.stages.s_hat)[len(run.stage_s):]
     if missing:
         text = ("the run ended before the stages at ŝ = " + ", ".join(f"{s:g}" for s in missing)

@@ -6,8 +6,10 @@ grid at the contact edge) and time (the sliding steps). Each run reports how fin
 both are: its radii, from which the spacing at the stage's contact radius
 follows (the BEM's pixel ``info.pixel``, the FEM's ``info.mesh.contact_spacing``,
 the MDR's grid uniform in r²), and, when adaptive, the step-doubling estimate
-of its time error (``info.time_error.estimate``, in F0 for the force). The
-rule, decided here and stated in the report:
+of its time error (``info.time_error.estimate``, in F0 for the force); a run at
+fixed first-order steps (implicit or explicit Euler) gets the estimate
+:func:`first_order_time_error` from its own history. The rule, decided here and
+stated in the report:
 
 - the time steps are blamed when the larger time-error estimate of the pair,
   carried to the failing stage's scale, uses at least :data:`TIME_SHARE` of the
@@ -44,9 +46,11 @@ class Resolution:
     key, value : its resolution setting ("bem.grid") and the case's value (None if
         it has none, e.g. a notebook solver).
     points_across : the stage's contact radius over the run's grid spacing there.
-    time_error : the run's step-doubling estimate of its time error (adaptive
-        runs; None for fixed steps).
+    time_error : the run's estimate of its time error: step doubling (adaptive
+        runs), :func:`first_order_time_error` (fixed implicit or explicit Euler
+        steps); None for BDF2's fixed steps.
     approximate : why the run solved an approximation of the case, or None.
+    step_hat : the fixed step the run took (``info.step_hat``), or None.
     """
 
     solver: str
@@ -56,6 +60,7 @@ class Resolution:
     points_across: float
     time_error: float | None = None
     approximate: str | None = None
+    step_hat: float | None = None
 
 
 def points_across(r, a) -> float:
@@ -90,6 +95,25 @@ def worst_failure(stages) -> dict | None:
                              scale=c.get("scale"), scale_from=c.get("scale_from"),
                              unit=c.get("unit"), unworn=c.get("unworn"))
     return worst
+
+
+def first_order_time_error(history, F0, d0) -> float:
+    """Global time error of a fixed-step first-order run, estimated from its history.
+
+    Euler's local error in a step h is h²/2 |y''|; summed over the steps without
+    the damping that wear provides (so an upper estimate), it is
+    Σ ½ |Δy_{n+1} − Δy_n| over the recorded steps. Taken for the force (/F0) and
+    for the depth and central wear (/d0), the largest; NaN with fewer than three
+    recorded steps. The same units as the step-doubling estimate of an adaptive run.
+    """
+    out = math.nan
+    for name, scale in (("force", F0), ("depth", d0), ("wear_center", d0)):
+        y = np.asarray(history.get(name, ()), float)
+        y = y[np.isfinite(y)]
+        if y.size >= 3 and scale > 0:
+            e = 0.5 * float(np.abs(np.diff(y, 2)).sum()) / scale
+            out = e if not np.isfinite(out) else max(out, e)
+    return out
 
 
 def time_share(error, failure) -> float:
@@ -152,10 +176,19 @@ def advise(failure: dict, runs: list[Resolution], *, scheme: str, tolerance: flo
     time_advice = None
     if timed is not None:
         share, r = timed
-        time_advice = dict(setting="sliding.tolerance", value=tolerance,
-                           suggestion=tolerance / TOLERANCE_FACTOR, solver=r.solver,
-                           reason=f"{r.title}'s own time-error estimate uses "
-                                  f"{100 * share:.0f} % of the {label} tolerance at {where}")
+        reason = (f"{r.title}'s own time-error estimate uses {100 * share:.0f} % of the "
+                  f"{label} tolerance at {where}")
+        if scheme == "adaptive":
+            time_advice = dict(setting="sliding.tolerance", value=tolerance,
+                               suggestion=tolerance / TOLERANCE_FACTOR, solver=r.solver,
+                               reason=reason)
+        else:   # fixed steps: first order, the error halves with the step
+            time_advice = dict(setting="sliding.step_hat", value=step_hat,
+                               suggestion=(step_hat / REFINE_FACTOR
+                                           if isinstance(step_hat, (int, float))
+                                           else r.step_hat / REFINE_FACTOR
+                                           if r.step_hat else None),
+                               solver=r.solver, reason=reason)
     elif failure["s_hat"] > 0.0 and scheme != "adaptive":
         time_advice = dict(setting="sliding.step_hat", value=step_hat, suggestion=None,
                            solver=None, reason=f"the {scheme} scheme's fixed steps report no "

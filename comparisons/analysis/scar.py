@@ -50,8 +50,10 @@ def scar_table(history: dict, case) -> dict:
     [m], ``wear_volume`` (true) [m³], ``lab_volume`` π D⁴/(64 R) [m³],
     ``lab_volume_deviation`` V_lab/V − 1; under force control also
     ``archard_volume`` K F s [m³] (the exact worn volume for exponent 1),
-    ``asymptote_diameter`` 2 (4 R K F s/π)^(1/4) and its generalisation to the
-    pressure exponent [m], ``asymptote_wear_center`` b²/2R [m].
+    ``asymptote_diameter`` 2b of the long-run asymptote
+    (:func:`wearcheck.cases.reference.worn_sphere_asymptote`: the exact
+    spherical cap for a sphere, b = (4 R K F s/π)^(1/4) for a paraboloid, n = 1)
+    [m], ``asymptote_wear_center`` its cap height [m].
     """
     R = case.indenter.radius
     s = np.asarray(history["s"], dtype=float)
@@ -69,9 +71,11 @@ def scar_table(history: dict, case) -> dict:
     if case.loading.control == "force":
         F = case.loading.force
         out["archard_volume"] = case.wear_rate * F * s[keep]
-        asym = reference.worn_sphere_asymptote(R, F, s[keep], case.wear_rate,
-                                               exponent=case.wear.pressure_exponent,
-                                               hardness=case.wear.hardness)
+        # the exact spherical cap for a sphere, the paraboloid's law otherwise
+        asym = reference.worn_sphere_asymptote(
+            R, F, s[keep], case.wear_rate, exponent=case.wear.pressure_exponent,
+            hardness=case.wear.hardness,
+            profile="sphere" if case.indenter.profile == "sphere" else "paraboloid")
         out["asymptote_diameter"] = 2.0 * asym["scar_radius"]
         out["asymptote_wear_center"] = asym["wear_center"]
     return out

@@ -53,6 +53,9 @@ def main(args) -> int:
         if args.vtk:
             from wearcheck.comparisons.present.vtk import export_run
             export_run(tmp, revolve=args.revolve)
+    if not args.quiet:
+        for text in result.info.get("warnings", []):   # the solver's remarks on the run
+            print(f"note: {text}", file=sys.stderr)
     missing = [] if case.fretting is not None else list(case.stages.s_hat)[len(result.stage_s):]
     if missing and not args.quiet:
         # as the Python API warns: a stage the user asked for is not in stages.npz

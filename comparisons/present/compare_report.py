@@ -73,6 +73,9 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
         blocks.append(R.para(f"Note: {w}"))
     for n, text in m.get("approximate", {}).items():
         blocks.append(R.para(f"Approximate: {title(n)} — {text}"))
+    for n, texts in m.get("run_warnings", {}).items():
+        blocks += [R.para(f"Note: {title(n)} — {t}") for t in texts
+                   if t != m.get("approximate", {}).get(n)]
     if m.get("reference_note"):
         blocks.append(R.para(f"Reference: {m['reference_note']}."))
     blocks += _checks_blocks(m)
@@ -376,7 +379,7 @@ def _sphere_blocks(sw) -> list:
                      "Δa/a"], rows),
             R.para(f"Within the force tolerance {sw['force_tolerance']:g}: a0/R ≤ "
                    f"{fmt(lim)} (every swept ratio up to it). Fit over a0/R ≤ 0.02: ΔF/F ≈ "
-                   f"{fmt(sw['slope'])}·a0/R (docs/theory.md §13 estimate: 2/π ≈ 0.637), so the "
+                   f"{fmt(sw['slope'])}·a0/R (docs/theory.md §13: a0/R scaling, constant measured), so the "
                    f"finite sphere alone uses the whole force tolerance at a0/R ≈ "
                    f"{fmt(sw['ratio_at_tolerance'])}. Shipped cases: {shipped}."),
             ] + ([R.image(sw["figure"], f"{title(sw['solver'])} force relative to the half-space force against "
@@ -394,6 +397,9 @@ def print_summary(m, out, stream=None) -> None:
     ref = title(m["reference"])
     for name, why in (m.get("skipped") or {}).items():
         print(f"skipped {title(name)}: {why}", file=stream)
+    for name, texts in m.get("run_warnings", {}).items():
+        for text in texts:
+            print(f"note: {title(name)}: {text}", file=stream)
     for name, pair in m["pairs"].items():
         print(f"{title(name)} against {ref} (differences relative to each stage's own scale):",
               file=stream)

@@ -210,6 +210,9 @@ def analyse(case, results, reference_solver=None) -> dict:
                     for k, v in results.items()}
     m["approximate"] = {k: v.info.get("approximate") for k, v in results.items()
                         if v.info.get("approximate")}
+    # each solver's remarks on its run (cases.validity: half-space theory stretched, ...)
+    m["run_warnings"] = {k: list(v.info["warnings"]) for k, v in results.items()
+                         if v.info.get("warnings")}
     m["anisotropy"] = {k: v.info["anisotropy"] for k, v in results.items()
                        if isinstance(v.info.get("anisotropy"), dict)}
     tr = truncated_reference(case, results, sc)
@@ -248,10 +251,23 @@ def _resolution(case, name, result, stage) -> diagnosis.Resolution:
         points = diagnosis.points_across(result.r, a)
     err = result.info.get("time_error")
     err = err.get("estimate") if isinstance(err, dict) else None
+    if err is None and case.sliding.scheme in ("implicit", "explicit"):
+        sc = cases.reference.scales(case)
+        err = diagnosis.first_order_time_error(result.history, sc["F0"], sc["d0"])
     return diagnosis.Resolution(solver=name, title=title, key=key, value=value,
                                 points_across=points,
                                 time_error=float(err) if err is not None else None,
-                                approximate=result.info.get("approximate") or None)
+                                approximate=result.info.get("approximate") or None,
+                                step_hat=_number(result.info.get("step_hat")))
+
+
+def _number(x):
+    """``x`` as a float when it is a finite number, else None."""
+    try:
+        x = float(x)
+    except (TypeError, ValueError):
+        return None
+    return x if math.isfinite(x) else None
 
 
 def diagnose(case, results, m) -> None:
