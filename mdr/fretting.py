@@ -150,8 +150,7 @@ def solve_normal(model: Model, st: State) -> None:
     pp = np.zeros(N1)
     pp[:K] = transforms.pressure(q, model.dt)
     st.normal = dict(depth=float(depth), q=qq, p=pp, force=float(model.weights[:K] @ q),
-                     contact_radius=contact.contact_radius(g, depth, model.t, m), m=m,
-                     gap=float(g[m + 1] - depth))
+                     contact_radius=contact.contact_radius(g, depth, model.t, m), m=m)
     st.L = tangential.limit(qq, model.mu, model.G_star)
     st.unsolved = 0.0
 
@@ -185,6 +184,9 @@ def increment(model: Model, st: State, target: float, acc: dict) -> None:
     tau = tangential.shear_traction(v_new[:n], model.G_star, model.dt)
     s3 = tangential.slip_3d(slip[:n])
     work = np.maximum(tau * s3, 0.0)                    # dissipation per area [J/m²]
+    # the 3D slip of the nodes whose springs slid: the wear per unit pressure
+    # (over (k/σ0) μ) of the cycle-averaged rate's Jacobian
+    acc["slid"][:n] += np.where(np.abs(slip[:n]) > 0.0, np.abs(s3), 0.0)
     acc["energy"] += transforms.volume(work, model.dt)
     # the 1D springs' own dissipation, an independent sum (MDR energy equivalence)
     acc["energy_1d"] += float(model.weights[:n] @ (np.abs(model.G_star * v_new[:n])
@@ -217,7 +219,7 @@ def targets(model: Model, start: float, end: float, n: int) -> np.ndarray:
 def run_path(model: Model, st: State, path: np.ndarray, loop: bool = False) -> dict:
     """Drive the indenter through the targets of ``path``; the cycle's sums."""
     acc = dict(energy=0.0, energy_1d=0.0, slide=0.0, wear=np.zeros_like(st.f),
-               slipped=np.zeros(len(st.f), dtype=bool), largest_wear=0.0, wear_number=0.0)
+               slid=np.zeros_like(st.f), slipped=np.zeros(len(st.f), dtype=bool), largest_wear=0.0, wear_number=0.0)
     us, Qs = [st.u], [st.Q]
     u_lo = u_hi = st.u
     Q_amp = abs(st.Q)
@@ -322,26 +324,25 @@ class Cycles(cycle_jumping.Problem):
     def variable(self, point):
         return point.st.f
 
-    def events(self, cycle):
-        """Where the wear per cycle has kinks: the first node outside the contact
-        coming in (its gap g − d) and the last one in it leaving (d − g), the
-        innermost slipping node coming to stick (U − L) and the outermost
-        sticking one starting to slip (L − U); relative to d and U."""
-        st, acc = cycle.state.st, cycle.record
-        n = st.normal
-        m, d = n["m"], n["depth"]
-        out = {("enter", m + 1): n["gap"] / d,
-               ("leave", m): n["q"][m] / (self.model.E_star * d)}
-        U = acc["u_amp"]
-        slipped = acc["slipped"] | (st.L <= 0.0)
-        if U > 0 and not slipped[0] and slipped.any():
-            k = int(np.argmax(slipped))
-            out[("stick", k)] = (U - st.L[k]) / U
-            out[("slip", k - 1)] = (st.L[k - 1] - U) / U
-        return out
+    def jacobian(self, cycle):
+        """The wear's response to the pressure, the stiff part of ∂W/∂f.
 
-    def scale(self, point):
-        return point.st.normal["depth"]
+        Where the surface slides, τ = μp and the wear per cycle is W = (k/σ0) μ p s,
+        s the 3D slip per cycle; a profile change Δf changes p by P Δf (the
+        normal contact's linear response on its contact set, force or depth
+        held), so ∂W/∂f ≈ diag((k/σ0) μ s) P on the sliding nodes. This is what
+        makes the problem stiff (a node worn too far unloads and wears less)
+        and what stays as the wear vanishes in the limit (s does not); the
+        slip's own change with the profile is left to the step, which is second
+        order for any J (a W-method). No cycle is simulated for it.
+        """
+        model, st, acc = self.model, cycle.state.st, cycle.record
+        m = st.normal["m"]
+        index = np.flatnonzero(acc["slid"][:m + 1] > 0.0)
+        if not len(index):
+            return None
+        P = _pressure_response(model, m, index)
+        return index, (model.k_over_hardness * model.mu * acc["slid"][index])[:, None] * P
 
 
 def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None, watch=None) -> dict:
@@ -515,6 +516,38 @@ def _check_monotone(model, hist, normal, cycle):
             f"{abs(now / prev - 1):.2g} (relative) while wear can only remove material; "
             "raise fretting.increments, or lower fretting.jump_tolerance, wear.k or "
             "mdr.elements")
+
+
+def _normal_operators(model: Model) -> tuple[np.ndarray, np.ndarray]:
+    """The MDR's normal transforms as matrices on the grid (once per model): A with
+    g = A f (paper Eq. 2, :func:`transforms.to_1d`) and B with p = B q (paper
+    Eq. 13, :func:`transforms.pressure`), both linear."""
+    if getattr(model, "_normal_ops", None) is None:
+        n = len(model.x)
+        eye = np.eye(n)
+        A = np.column_stack([transforms.to_1d(eye[:, j]) for j in range(n)])
+        B = np.zeros((n, n))
+        for j in range(n - 1):
+            B[:, j] = transforms.pressure(eye[:, j], model.dt)
+        model._normal_ops = (A, B)
+    return model._normal_ops
+
+
+def _pressure_response(model: Model, m: int, index: np.ndarray) -> np.ndarray:
+    """∂p/∂f on the nodes ``index`` (rows and columns) for the contact set 0..m.
+
+    q = E*(d − g) on 0..m; under force control d follows g by
+    ∂d/∂g_i = w_i / Σ w (the discrete Eq. 12 with the force held), under depth
+    control d is held.
+    """
+    A, B = _normal_operators(model)
+    Bs = B[index, :m + 1]
+    As = A[:m + 1, index]
+    P = -(Bs @ As)
+    if model.force is not None:
+        w = model.weights[:m + 1]
+        P += np.outer(Bs.sum(axis=1), w @ As) / w.sum()
+    return model.E_star * P
 
 
 def _settle_springs(model, st):
