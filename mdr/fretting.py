@@ -27,16 +27,20 @@ elastic indentation of one grid cell) past WEAR_NUMBER_LIMIT, the explicit
 wear's stability limit (docs/fretting.md §5): the increments per cycle do
 not resolve the wear, and the error names the number that would.
 
-Cycle jumping: one cycle (+U -> -U -> +U) is simulated increment by
-increment, giving the profile change per cycle W_k; the profile is then
-extrapolated over n_k cycles, f += n_k W_k (forward Euler in the cycle
-number). The next simulated cycle gives W_{k+1}; the jump's local error is
-about (n_k/2) |W_{k+1} - W_k|, so a jump is accepted when the wear per cycle
-changed by at most 2·tol relative (max norm) across it, else it is undone and
-retried shorter. The next jump is sized from the change measured (at most
-doubling). ``tol = 0`` simulates every cycle. The jump puts the springs on
-the limits its wear lowered without wear: the slip by which they followed
-their limits down is the jumped cycles', and in W already.
+Cycle jumping (:mod:`numerics.cycle_jumping`): the wear per cycle W(f), one
+cycle (+U -> -U -> +U) simulated increment by increment, is the rate of an
+ODE in the cycle count, integrated by L-stable ROS2 steps whose Jacobian is
+the stiff part of ∂W/∂f, the wear's response to the pressure (wear per unit
+pressure (k/σ0) μ s, s the 3D slip per cycle, times the normal contact's
+∂p/∂f on the sliding nodes), computed from the normal contact alone. Each
+step simulates two cycles (its stage and the cycle from its end, which is
+recorded); the steps grow geometrically as the rate decays to Popov's limit.
+The global error against the run that simulates every cycle is estimated and
+held at ``fretting.jump_tolerance`` of the largest wear (``info
+["cycle_jumping"]``, meta.json); ``tol = 0`` simulates every cycle. A step
+puts the springs on the limits its wear lowered without wear: the slip by
+which they followed their limits down is the jumped cycles', and in W
+already (docs/fretting.md §4).
 """
 
 from __future__ import annotations
@@ -55,6 +59,9 @@ from . import contact, linalg, resolution, tangential, transforms
 
 #: most simulated cycles a run may take (runaway guard)
 MAX_SIMULATED_CYCLES = 200_000
+#: wear per cycle, relative to the node that wears most, below which a node is
+#: left out of the cycle jumps' Jacobian
+WORN = 1e-9
 #: wear (relative to the depth) after which the normal contact is solved again
 #: within a cycle; below it the pressure lags by that fraction of p0
 NORMAL_RESOLVE = 1e-7
@@ -95,6 +102,8 @@ class Model:
     amplitude: float | None         # tangential displacement amplitude U [m]
     force_amplitude: float | None   # tangential force amplitude Q* [N]
     increments: int = 40            # per cycle, a multiple of 4
+    #: the normal transforms as matrices (:func:`_normal_operators`, built once)
+    normal_operators: tuple | None = field(default=None, repr=False)
 
     def __post_init__(self):
         self.t = self.x**2
@@ -302,6 +311,10 @@ class Cycles(cycle_jumping.Problem):
     def advance(self, point, increment, cycles, cycle):
         model = self.model
         st = point.st.copy()
+        # wear only removes material: every cycle's wear is >= 0 at every node, so
+        # a step's negative entries (round-off of the solves, or an overshoot) are
+        # errors, and clipping them only brings the step nearer the every-cycle run
+        increment = np.maximum(increment, 0.0)
         st.f = st.f + increment
         totals = dict(point.totals)
         if cycles:
@@ -338,7 +351,10 @@ class Cycles(cycle_jumping.Problem):
         """
         model, st, acc = self.model, cycle.state.st, cycle.record
         m = st.normal["m"]
-        index = np.flatnonzero(acc["slid"][:m + 1] > 0.0)
+        # the sliding nodes that wear: the stick zone's round-off wear (1e-17 of
+        # the annulus's) stays out, its increments those of Heun's rule
+        W = acc["wear"][:m + 1]
+        index = np.flatnonzero((acc["slid"][:m + 1] > 0.0) & (W > WORN * np.max(W)))
         if not len(index):
             return None
         P = _pressure_response(model, m, index)
@@ -522,15 +538,15 @@ def _normal_operators(model: Model) -> tuple[np.ndarray, np.ndarray]:
     """The MDR's normal transforms as matrices on the grid (once per model): A with
     g = A f (paper Eq. 2, :func:`transforms.to_1d`) and B with p = B q (paper
     Eq. 13, :func:`transforms.pressure`), both linear."""
-    if getattr(model, "_normal_ops", None) is None:
+    if model.normal_operators is None:
         n = len(model.x)
         eye = np.eye(n)
         A = np.column_stack([transforms.to_1d(eye[:, j]) for j in range(n)])
         B = np.zeros((n, n))
         for j in range(n - 1):
             B[:, j] = transforms.pressure(eye[:, j], model.dt)
-        model._normal_ops = (A, B)
-    return model._normal_ops
+        model.normal_operators = (A, B)
+    return model.normal_operators
 
 
 def _pressure_response(model: Model, m: int, index: np.ndarray) -> np.ndarray:
