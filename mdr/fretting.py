@@ -341,6 +341,15 @@ class Cycles(cycle_jumping.Problem):
     def variable(self, point):
         return point.st.f
 
+    def admissible(self, before, after):
+        """Wear only removes material: the depth does not fall under force control,
+        the force does not rise under depth control (the check every recorded
+        cycle passes, :func:`_check_monotone`). An L-stable step near the limit
+        can break it by a spike of its increment at one node (to_1d's grid
+        weights are not all positive); the step is retried shorter instead."""
+        return not _moved_against_wear(self.model, before.state.st.normal,
+                                       after.state.st.normal)
+
     def jacobian(self, cycle):
         """The wear's response to the pressure, the stiff part of ∂W/∂f.
 
@@ -526,16 +535,23 @@ def _check_monotone(model, hist, normal, cycle):
     """
     if model.force is not None:
         prev, now, what = hist["depth"][-1], normal["depth"], "depth fell"
-        bad = now < prev * (1.0 - MONOTONE_TOLERANCE)
     else:
         prev, now, what = hist["force"][-1], normal["force"], "force rose"
-        bad = now > prev * (1.0 + MONOTONE_TOLERANCE)
-    if bad:
+    if _moved_against_wear(model, dict(depth=hist["depth"][-1], force=hist["force"][-1]),
+                           normal):
         raise SolverError(
             f"the fretting run became unstable at cycle {cycle}: the {what} by "
             f"{abs(now / prev - 1):.2g} (relative) while wear can only remove material; "
             "raise fretting.increments, or lower fretting.jump_tolerance, wear.k or "
             "mdr.elements")
+
+
+def _moved_against_wear(model, before: dict, after: dict) -> bool:
+    """Whether the normal load moved against the wear from ``before`` to ``after``
+    (normal contact dicts) by more than MONOTONE_TOLERANCE."""
+    if model.force is not None:
+        return after["depth"] < before["depth"] * (1.0 - MONOTONE_TOLERANCE)
+    return after["force"] > before["force"] * (1.0 + MONOTONE_TOLERANCE)
 
 
 def _normal_operators(model: Model) -> tuple[np.ndarray, np.ndarray]:

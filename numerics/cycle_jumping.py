@@ -104,6 +104,12 @@ class Problem:
         """The integrated variable y of ``state``."""
         raise NotImplementedError
 
+    def admissible(self, before: Cycle, after: Cycle) -> bool:
+        """Whether the kept cycle ``after`` (from a step's end) may follow the kept
+        cycle ``before`` (from its start): a step whose end breaks a law of the
+        process is retried at half the length, whatever its error estimate."""
+        return True
+
     def jacobian(self, cycle: Cycle) -> tuple[np.ndarray, np.ndarray] | None:
         """(index, J): an approximation of ∂F/∂y on the entries ``index`` near the
         state of ``cycle`` (zero elsewhere), or None (explicit steps, Heun's)."""
@@ -199,6 +205,7 @@ class Outcome:
     stage_cycles: int = 0          # of them: ROS2 stages
     steps: int = 0
     rejected_steps: int = 0
+    inadmissible_steps: int = 0    # of them: rejected by Problem.admissible
     largest_step: int = 0          # cycles covered by a step
     error_sum: float = 0.0         # Σ max|est| of the accepted steps
     propagated_error: float = 0.0  # max|e| at the end
@@ -220,7 +227,8 @@ class Outcome:
                     scheme="ROS2 (L-stable Rosenbrock W-method, order 2)",
                     simulated_cycles=self.simulated, recorded_cycles=self.rows,
                     stage_cycles=self.stage_cycles, steps=self.steps,
-                    rejected_steps=self.rejected_steps, largest_step=self.largest_step)
+                    rejected_steps=self.rejected_steps,
+                    inadmissible_steps=self.inadmissible_steps, largest_step=self.largest_step)
 
 
 def _factor(err: float, allowed: float) -> float:
@@ -281,6 +289,9 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
             return None, None, None, None
         new = problem.advance(origin, increment, h, cyc)
         check = simulate(new, n_origin + h + 1)
+        if not problem.admissible(cyc, check):
+            out.inadmissible_steps += 1
+            return increment, new, check, None
         est = increment - 0.5 * h * (F0 + check.rate)
         if jac is not None:
             est = jac.filter(GAMMA * h, est)
@@ -314,7 +325,10 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
                 accepted = True
                 break
             out.rejected_steps += 1
-            h = min(int(h * _factor(err, allowed)), h - 1)
+            if est is None:
+                h = h // 2
+            else:
+                h = min(int(h * _factor(err, allowed)), h - 1)
             h_ctrl = max(2.0, h)
         if not accepted:
             # one cycle as simulated: its error is nil, the carried error unchanged
