@@ -145,8 +145,10 @@ def test_long_runs_reach_popovs_limit_at_a_cost_in_the_logarithm_of_the_cycles()
     # cycle simulated), and above it in the continuum by 5e-5: the window is
     # -3.5e-3 .. +1e-4. The stick radius within the closed-form bounds c0 <= c
     # <= c_max (docs/fretting.md §2.1). From 10⁶ to 10⁸ cycles the rate has
-    # vanished and the steps grow geometrically: at most 50 more cycles
-    # simulated (measured 14), where the forward-Euler jumps took 6400 more.
+    # vanished and the steps grow geometrically: at most 300 more cycles
+    # simulated (measured 148, some steps retried at half length by the
+    # monotone-load check), where the forward-Euler jumps took 6400 more (9258
+    # at N = 800, benchmarks/bench_fretting_cycles.py).
     runs = {}
     for cycles in (10**6, 10**8):
         case, _, _ = make(N=N, amplitude=0.5, cycles=cycles, k=K, jump_tolerance=0.02,
@@ -161,4 +163,4 @@ def test_long_runs_reach_popovs_limit_at_a_cost_in_the_logarithm_of_the_cycles()
         assert -3.5e-3 <= popov <= 1e-4, f"{cycles} cycles: d/d∞(c) - 1 = {popov:.3g}"
         assert res.info["cycle_jumping"]["error_estimate"] <= 0.02
     more = runs[10**8].info["simulated_cycles"] - runs[10**6].info["simulated_cycles"]
-    assert more <= 50
+    assert more <= 300
