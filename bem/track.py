@@ -74,6 +74,15 @@ class TrackOperator:
             u += self.sigma_flat * np.sum(p, axis=0)[None, :]
         return u
 
+    def single(self, p: np.ndarray) -> np.ndarray:
+        """:meth:`__call__` with the half-space's transforms in single precision
+        (:meth:`HalfSpace.single`, whose error bound the contact solve carries); the
+        groove's column sums stay in double."""
+        u = self.op.single(p)
+        if self.sigma_flat:
+            u = u + self.sigma_flat * np.sum(p, axis=0)[None, :]
+        return u
+
     def preconditioner(self, sigma: float = 0.0):
         """v -> C⁻¹ v, C the n-periodic circulant of G + σI + σ_flat B.
 
