@@ -156,3 +156,15 @@ def test_the_other_csv_writers_write_no_preamble(name):
                                                           [[0.0, 1e-7]])}[name]()
     table = pd.read_csv(io.StringIO(text))
     assert len(table) >= 1 and not text.startswith("#")
+
+
+def test_verify_results_history_loads_with_a_comma_in_a_file_name(tmp_path):
+    """results/history.csv names each row's origin, a file name that may hold a comma."""
+    from wearcheck.comparisons.studies.verify import write_results
+    hist = dict(s=[0.0, 1.0], force=[2.0, 1.0], origin=["run 1, final.csv row 2",
+                                                         'say "hi".csv row 3'])
+    write_results(tmp_path, hist, [], per_m=2.0)
+    table = pd.read_csv(tmp_path / "history.csv")
+    assert list(table.columns) == ["s", "s_hat", "force", "origin"]
+    assert list(table["origin"]) == hist["origin"] and list(table["s_hat"]) == [0.0, 2.0]
+    assert len(pd.read_csv(tmp_path / "stages.csv")) == 0
