@@ -217,7 +217,7 @@ def sweep(case: cases.Case, vary: Mapping[str, Iterable], solver: str, out, *,
         # read again: a sweep into the directory may have ended since this one began
         earlier = earlier_rows(out, solver, case)
         record_study(out, f"sweep-{solver}", case, prov, dict(solver=solver, vary=values))
-        text = table_text(earlier, rows, solver, case, prov)
+        text = table_text(earlier, rows, case)
         keys = [k for k in csv_metadata.header(text) if "." in k]
         write_table(out, "sweep.csv", text, title=f"wearcheck sweep, solver {solver}",
                     command=prov["command"], notes=table_notes(earlier, keys, solver, prov),
@@ -266,7 +266,7 @@ def earlier_rows(out: Path, solver: str, case) -> list[dict]:
     return csv_metadata.read_rows(path)
 
 
-def table_text(earlier: list[dict], rows: list[dict], solver: str, case, prov) -> str:
+def table_text(earlier: list[dict], rows: list[dict], case) -> str:
     """sweep.csv: the rows of earlier sweeps into the study (as they were written), then
     this sweep's; a run of both appears once, as this sweep wrote it. A key an earlier
     sweep did not vary holds the base case's value in its rows, and vice versa."""
