@@ -28,6 +28,8 @@ def studies(out: Path) -> list[dict]:
     """The refinement summaries in ``out``, MDR first."""
     found = []
     for path in sorted(Path(out).glob("refinement-*.json")):
+        if path.name.endswith(".csv-metadata.json"):   # a CSV's sidecar, not a summary
+            continue
         found.append(json.loads(path.read_text(encoding="utf-8")))
     order = {n: i for i, n in enumerate(registry.names())}
     return sorted(found, key=lambda s: order.get(s["solver"], len(order)))
