@@ -19,6 +19,7 @@ from typing import Callable
 
 import numpy as np
 
+from wearcheck import extras
 from wearcheck.cases import Case, CaseError, RunResult, SolverError
 from wearcheck.comparisons.layout import Item
 
@@ -72,14 +73,22 @@ class Solver:
     default: bool = True
 
     def _package(self):
-        return importlib.import_module(self.module)
+        try:
+            return importlib.import_module(self.module)
+        except ModuleNotFoundError as exc:
+            # an optional module the solver needs (the FEM's scikit-fem): one line
+            # naming the extra, which supports() gives as its reason
+            found = extras.missing(f"the {self.title}", exc)
+            if found is None:
+                raise
+            raise found from None
 
     def solve(self, case: Case, progress=None) -> RunResult:
         """Run this solver on ``case`` (refused with a CaseError when unsupported)."""
+        fn = self.solve_function or self._package().solve   # a missing extra said first
         reason = self.supports(case)
         if reason is not None:
             raise CaseError(f"solver '{self.name}' cannot run this case: {reason}")
-        fn = self.solve_function or self._package().solve
         try:
             result = fn(case, progress=progress)
         except (ArithmeticError, np.linalg.LinAlgError) as exc:
@@ -100,7 +109,10 @@ class Solver:
         """None when this solver can run ``case``, else the reason it cannot."""
         fn = self.supports_function
         if fn is None and self.module is not None:
-            fn = getattr(self._package(), "supports", None)
+            try:
+                fn = getattr(self._package(), "supports", None)
+            except extras.MissingExtra as exc:
+                return str(exc)
         return fn(case) if fn is not None else None
 
 

@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from wearcheck.extras import need
+
 from wearcheck.cases import reference_fretting as rf
 from wearcheck.comparisons.present import report
 
@@ -70,7 +72,7 @@ def unworn_checks(case, result) -> dict:
 
 
 def _figures(directory: Path, case, result, checks) -> list[str]:
-    import matplotlib
+    matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from wearcheck.comparisons.rundir import Run, atomic_directory
+from wearcheck.extras import need
 from wearcheck.comparisons.present.vtk import (SURFACE_SEGMENTS, VTK_QUADRATIC_TRIANGLE,
                   VTK_TRIANGLE, check_fields, grid, nice_factor, orient_triangles, revolve_curve, section_data, unworn_profile)
 
@@ -35,7 +36,7 @@ def _plotter():
     """An off-screen plotter through VTK's EGL window (no X server)."""
     # read when the render window is created; must precede any window
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-    import pyvista as pv
+    pv = need("pyvista", "rendering")
     pv.OFF_SCREEN = True
     plotter = pv.Plotter(off_screen=True, window_size=list(WINDOW_SIZE))
     plotter.set_background("white")
@@ -139,6 +140,7 @@ def render_run(run_dir) -> list[Path]:
 
     A run that stored no stage has nothing to draw: no directory, no paths.
     """
+    need("pyvista", "rendering")
     run = Run(run_dir)
     target = run.path / "render"
     if not len(run.stages["s"]):

@@ -27,6 +27,7 @@ from wearcheck import cases
 from wearcheck.cases import reference
 from wearcheck.comparisons import layout, registry, rundir
 from wearcheck.comparisons.analysis import diagnosis, edge_peak, metrics
+from wearcheck.extras import need
 
 #: how a solver is run; tests replace it with analytic stand-ins
 solve_case = registry.solve
@@ -353,6 +354,7 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
     from wearcheck.comparisons.studies import edge_study as edge_mod
     from wearcheck.comparisons.studies import sphere_sweep as sphere_mod
     t0 = time.perf_counter()
+    need("matplotlib", "compare (its figures)")    # said before the solves
     solve = solve or solve_case
     ref, names = choose_solvers(case, solvers, reference_solver)
     from wearcheck.comparisons.outputs import check_output
