@@ -28,6 +28,7 @@ MODULES = {
     "xarray": ("xarray", "xarray"),
     "ipywidgets": ("ipywidgets", "notebook"),
     "pyfftw": ("pyfftw", "fftw"),
+    "psutil": ("psutil", "dask"),       # distributed's; a study's memory watch uses it
 }
 
 
