@@ -118,6 +118,26 @@ def test_the_core_runs_the_mdr_and_the_bem_and_says_what_the_others_need(blocked
         assert not (tmp_path / nothing).exists()
 
 
+def test_run_reports_without_their_figures_say_which_extra(blocked, tmp_path):
+    """The MDR's fretting report and the BEM's both-bodies report draw figures and
+    write ParaView files; on the core they are written without them, saying why."""
+    fretting, track = tmp_path / "fretting", tmp_path / "track"
+    outcomes = _commands(
+        blocked,
+        ["run", "fretting", "--solver", "mdr", "--set", "mdr.elements=100",
+         "--set", "fretting.cycles=10", "--quiet", "--out", str(fretting)],
+        ["run", "ball_on_flat_steel", "--solver", "bem", "--set", "bem.grid=32",
+         "--set", "sliding.until=distance", "--set", "sliding.distance=1e-3", "--quiet",
+         "--out", str(track)])
+    assert outcomes == [[0, ""], [0, ""]]
+    said = (fretting / "report.md").read_text(encoding="utf-8")
+    assert 'No figures: drawing figures needs matplotlib: pip install "wearcheck[plot]"' in said
+    said = (track / "report.md").read_text(encoding="utf-8")
+    assert 'needs pyvista: pip install "wearcheck[vtk]"' in said
+    assert 'needs matplotlib: pip install "wearcheck[plot]"' in said
+    assert (track / "track_profile.csv").is_file()
+
+
 def test_a_solver_without_its_extra_is_listed_as_skipped_with_the_reason(blocked):
     code = ("import json, wearcheck\n"
             "from wearcheck.comparisons import registry\n"

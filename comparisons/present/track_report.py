@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wearcheck.extras import need
+from wearcheck.extras import MissingExtra, need
 from wearcheck.cases import both_bodies
 from wearcheck.comparisons.analysis import track as analysis
 from wearcheck.comparisons.present import report
@@ -152,12 +152,18 @@ def write(directory, case, result) -> list[Path]:
     csv.write_text(profile_csv_text(result.stage_s, cycles, result.fields["y"],
                                     result.fields["track_depth"]), encoding="utf-8")
     written = [csv]
+    content = blocks(case, result)
     if len(result.stage_s):
-        written.append(write_flat_map(directory, case, result))
-        figure = _figure(directory, result, cycles)
-        written.append(directory / figure)
-        content = blocks(case, result) + [report.image(figure, "track cross-sections")]
-    else:
-        content = blocks(case, result)
+        # the core install has neither pyvista nor matplotlib: the report says so
+        try:
+            written.append(write_flat_map(directory, case, result))
+        except MissingExtra as exc:
+            content.append(report.para(f"No ParaView files of the counterface: {exc}."))
+        try:
+            figure = _figure(directory, result, cycles)
+            written.append(directory / figure)
+            content.append(report.image(figure, "track cross-sections"))
+        except MissingExtra as exc:
+            content.append(report.para(f"No figure: {exc}."))
     md, html = report.write(directory, content, f"wearcheck both bodies: {Path(case.source).name}")
     return [md, html] + written
