@@ -105,8 +105,9 @@ def test_the_core_runs_the_mdr_and_the_bem_and_says_what_the_others_need(blocked
     for run in (mdr, bem):   # complete run directories, recording the missing versions
         meta = json.loads((run / "meta.json").read_text(encoding="utf-8"))
         assert (run / "history.csv").is_file() and (run / "stages.npz").is_file()
-        versions = meta["provenance"]["versions"] if "provenance" in meta else meta["versions"]
-        assert versions["numpy"] and "scikit-fem" in versions
+        # every optional package's version recorded (None where not installed; here
+        # hidden from import only, so its metadata still gives one)
+        assert meta["versions"]["numpy"] and "scikit-fem" in meta["versions"]
     assert "the FEM needs scikit-fem" in _one_line(fem, "fem")
     # compare draws figures: said before any solve
     assert "matplotlib" in _one_line(compare, "plot")
