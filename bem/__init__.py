@@ -38,6 +38,10 @@ strokes when sliding.stroke is given (docs/bem-tangential.md §6).
 Not modelled: wear.tangential_correction.
 """
 
-from .solver import solve, supports
+from wearcheck.registry import lazy_attributes
 
 __all__ = ["solve", "supports"]
+
+# solve, supports and the submodules are imported on first use: the registry imports
+# this package for its registration.py, which must not pull in the numerics
+__getattr__ = lazy_attributes(__name__, {"solve": ".solver", "supports": ".solver"})

@@ -36,11 +36,26 @@ from wearcheck.cases import SolverError
 MAX_DIRECT = 32
 #: iterations between fresh convolutions of the whole pressure (rounding drift)
 REFRESH = 50
+#: relative error of a single-precision operator application (measured
+#: 3.2e-7-3.9e-7 of max |G t|, :meth:`HalfSpace.single`), times 5: the bound
+#: on what each single-precision search direction adds to the displacement's error
+SINGLE_ERROR = 2e-6
+#: single-precision directions only for tolerances from this up (the
+#: iteration stagnates near 2e-7 with them), and only while the residual
+#: halves at least once in SINGLE_STALL iterations; then double precision
+SINGLE_MIN_TOL = 1e-7
+SINGLE_STALL = 6
 
 
 @dataclass
 class Contact:
-    """A converged contact: pressure [Pa], gap [m], approach d [m], force [N]."""
+    """A converged contact: pressure [Pa], gap [m], approach d [m], force [N].
+
+    ``displacement`` is G p (without the wear compliance) as the solve
+    tracked it, within ``displacement_error`` [m]: a later solve that starts
+    from this pressure (or from a combination of such) needs no convolution
+    to start.
+    """
 
     pressure: np.ndarray
     gap: np.ndarray
@@ -48,6 +63,8 @@ class Contact:
     force: float
     iterations: int
     residual: float
+    displacement: np.ndarray | None = None
+    displacement_error: float = 0.0
 
 
 def complementarity_residual(p, gap, p_scale, g_scale) -> float:
@@ -91,7 +108,8 @@ def _mirror_index(i: np.ndarray, n: int) -> np.ndarray:
 
 def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
           g_scale=1.0, tol=1e-8, maxiter=5000, precondition=True,
-          stroke_mean=False) -> Contact:
+          stroke_mean=False, single=True, displacement=None,
+          displacement_error=0.0) -> Contact:
     """Constrained CG contact solve (Polonsky–Keer), warm-started from ``p_init``.
 
     Parameters
@@ -118,6 +136,19 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
     p_scale, g_scale : pressure and gap scales of the residual [Pa], [m].
     tol : complementarity tolerance (see module docstring).
     precondition : use the Fourier preconditioner (False: plain PK).
+    single : the search directions' displacements in single precision
+        (:meth:`HalfSpace.single`), the displacement of the pressure itself in
+        double: each single-precision increment adds at most
+        :data:`SINGLE_ERROR` of its size to the displacement's error, and
+        the solve ends only when the residual plus that bound (over
+        ``g_scale``) is below ``tol``, else the displacement is recomputed in
+        double and the solve continues in double precision (as it does when
+        the residual stops falling, and throughout for ``tol`` below
+        :data:`SINGLE_MIN_TOL`).
+    displacement, displacement_error : G p_init when known (a returned
+        :class:`Contact`'s, or a linear combination of them) and the bound
+        on its error [m]: the solve starts from it instead of a convolution;
+        the error bound is carried on as the single-precision one.
 
     Raises
     ------
@@ -132,10 +163,14 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
     sigma = np.asarray(sigma, dtype=float) if per_pixel else float(sigma)
     if p_init is None or not np.any(p_init > 0):
         p = initial_pressure(h, depth, force)
+        displacement = None
     else:
         p = np.maximum(np.asarray(p_init, dtype=float), 0.0)
     if force is not None:
-        p = p * (force / (area * np.sum(p)))
+        scale = force / (area * np.sum(p))
+        p = p * scale
+        if displacement is not None:
+            displacement, displacement_error = scale * displacement, scale * displacement_error
     sigma_bar = float(np.mean(sigma[p > 0])) if per_pixel else sigma
     precond = op.preconditioner(sigma_bar) if precondition else None
 
@@ -149,9 +184,16 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
     d = depth
     res = np.inf
     u = None
+    drift = 0.0          # bound on the error single-precision increments left in u [m]
+    single = single and tol >= SINGLE_MIN_TOL
+    best, since = np.inf, 0
+    if displacement is not None:
+        u = displacement + compliance(p)
+        drift = displacement_error
     for it in range(1, maxiter + 1):
         if u is None or it % REFRESH == 0:
             u = op(p) + compliance(p)
+            drift = 0.0
         on = p > 0.0
         if force is not None:
             # the approach: the mean of h + u over the contact (zero gap there)
@@ -159,8 +201,23 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
         gap = h - d + u
         res = complementarity_residual(p, gap, p_scale, g_scale)
         if res < tol:
-            return Contact(pressure=p, gap=gap, depth=float(d), force=float(area * np.sum(p)),
-                           iterations=it - 1, residual=res)
+            if res + 2.0 * drift / g_scale < tol:
+                return Contact(pressure=p, gap=gap, depth=float(d),
+                               force=float(area * np.sum(p)), iterations=it - 1, residual=res,
+                               displacement=u - compliance(p), displacement_error=drift)
+            # the single-precision increments may hide a residual above tol
+            # (2·drift: the approach under force control is a mean of u too)
+            u, single = None, False
+            continue
+        if single:
+            if res < 0.5 * best:
+                best, since = res, 0
+            else:
+                since += 1
+                if since >= SINGLE_STALL:
+                    # stagnating at single precision's resolution: on in double
+                    u, single = None, False
+                    continue
         # the free pixels of the bound-constrained problem: loaded, or
         # unloaded and overlapping (their gradient points into p > 0)
         free = on | (gap < 0.0)
@@ -182,7 +239,7 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
         else:
             t = z + (gz / gz_old) * t
         free_old, gz_old = free, gz
-        r = op(t) + compliance(t)
+        r = (op.single(t) if single else op(t)) + compliance(t)
         rt = float(np.sum(r * t))
         if not rt > 0.0:
             raise SolverError("contact solve: the search direction has no positive curvature "
@@ -190,6 +247,8 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
         tau = gz / rt
         p = p - tau * t
         u -= tau * r
+        if single:
+            drift += SINGLE_ERROR * abs(tau) * float(np.max(np.abs(r)))
         # the projection onto p >= 0: its (few) pixels enter u by direct sum
         clipped = np.nonzero(p < 0.0)
         if len(clipped[0]) > MAX_DIRECT:
@@ -214,6 +273,7 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
             p *= force / total
             if u is not None:
                 u *= force / total
+                drift *= force / total
     raise SolverError(f"contact solve did not converge: complementarity residual {res:.3g} "
                       f"after {maxiter} iterations (tolerance {tol:g}); raise bem.tolerance "
                       "or check the case")
@@ -227,7 +287,8 @@ COUPLED_CHECK_AFTER = 4
 
 def solve_coupled(op, shear, h, traction_factor, *, depth=None, force=None, sigma=0.0,
                   p_init=None, p_scale=1.0, g_scale=1.0, tol=1e-8, maxiter=5000,
-                  precondition=True, stroke_mean=False) -> Contact:
+                  precondition=True, stroke_mean=False, displacement=None,
+                  displacement_error=0.0) -> Contact:
     """The contact in gross slip with the friction traction moving the surface normally.
 
     Solves p >= 0, gap >= 0, p·gap = 0 with
@@ -245,8 +306,8 @@ def solve_coupled(op, shear, h, traction_factor, *, depth=None, force=None, sigm
     when the complementarity residual of the coupled problem, with the gap
     recomputed from the new pressure (and, under force control, the approach
     shifted by the mean change over the contact), is below ``tol``.
-    ``sigma`` and ``stroke_mean`` as :func:`solve` (the wear compliance is
-    implicit in each sweep, only the coupling is lagged).
+    ``sigma``, ``stroke_mean``, ``displacement`` as :func:`solve` (the wear
+    compliance is implicit in each sweep, only the coupling is lagged).
 
     Returns the :class:`Contact`, its ``iterations`` summed over the sweeps.
 
@@ -263,7 +324,9 @@ def solve_coupled(op, shear, h, traction_factor, *, depth=None, force=None, sigm
     for sweep in range(1, COUPLED_MAX_SWEEPS + 1):
         c = solve(op, h + u_c, depth=depth, force=force, sigma=sigma, p_init=p,
                   p_scale=p_scale, g_scale=g_scale, tol=tol, maxiter=maxiter,
-                  precondition=precondition, stroke_mean=stroke_mean)
+                  precondition=precondition, stroke_mean=stroke_mean,
+                  displacement=displacement, displacement_error=displacement_error)
+        displacement, displacement_error = c.displacement, c.displacement_error
         iterations += c.iterations
         u_new = shear(traction_factor * c.pressure)
         change = u_new - u_c
@@ -277,7 +340,8 @@ def solve_coupled(op, shear, h, traction_factor, *, depth=None, force=None, sigm
         res = complementarity_residual(c.pressure, gap, p_scale, g_scale)
         if res < tol:
             return Contact(pressure=c.pressure, gap=gap, depth=float(d), force=c.force,
-                           iterations=iterations, residual=res)
+                           iterations=iterations, residual=res, displacement=displacement,
+                           displacement_error=displacement_error)
         history.append(res)
         if sweep > COUPLED_CHECK_AFTER and res >= history[0]:
             break

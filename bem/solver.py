@@ -259,6 +259,7 @@ def solve(case, progress=None) -> RunResult:
     counters = out["counters"]
     counters.pop("F_start")
     info.update(counters, operator_applications=op.applications,
+                single_precision_applications=op.single_applications,
                 max_complementarity_residual=float(np.max(hist["complementarity_residual"])))
     if progress is not None:
         progress(1.0, "done")

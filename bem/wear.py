@@ -101,6 +101,8 @@ class State:
     iterations: int
     residual: float
     stats: dict = field(default_factory=dict)
+    displacement: np.ndarray | None = None   # G p, within displacement_error [m]
+    displacement_error: float = 0.0
 
 
 def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
@@ -145,18 +147,21 @@ def check_edge(p: np.ndarray) -> None:
 
 
 def contact_state(model: Model, base: np.ndarray, sigma: float = 0.0,
-                  p_init=None) -> State:
+                  p_init=None, displacement=None) -> State:
     """Contact of the profile ``base`` (+ wear compliance σ) under the model's load.
 
     The returned profile is base + σ p (the worn profile of an implicit step),
     base + σ·(stroke mean of p) when reciprocating with coupling: the +x
     stroke's contact is solved with the wear compliance on the stroke mean,
     so p is the +x stroke's pressure on the returned profile, which stays
-    exactly symmetric in x (σ must be symmetric in x).
+    exactly symmetric in x (σ must be symmetric in x). ``displacement`` =
+    (G p_init, its error bound) when known (:func:`contact.solve`).
     """
+    u, error = displacement if displacement is not None else (None, 0.0)
     kw = dict(depth=model.depth, force=model.force, sigma=sigma, p_init=p_init,
               p_scale=model.p_scale, g_scale=model.g_scale, tol=model.tol,
-              maxiter=model.maxiter, stroke_mean=reciprocating(model))
+              maxiter=model.maxiter, stroke_mean=reciprocating(model),
+              displacement=u, displacement_error=error)
     if model.coupling is None:
         c = contact.solve(model.op, base, **kw)
     else:
@@ -164,7 +169,8 @@ def contact_state(model: Model, base: np.ndarray, sigma: float = 0.0,
     check_edge(c.pressure)
     f = base + stroke_mean(model, sigma * c.pressure) if np.any(sigma) else base
     return State(f=f, p=c.pressure, gap=c.gap, depth=c.depth, force=c.force,
-                 iterations=c.iterations, residual=c.residual)
+                 iterations=c.iterations, residual=c.residual, displacement=c.displacement,
+                 displacement_error=c.displacement_error)
 
 
 #: Newton iteration of a pressure exponent n != 1 (as the MDR's,
@@ -179,7 +185,8 @@ NEWTON_STALL = 1e-5
 NEWTON_STALL_AFTER = 4
 
 
-def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> State:
+def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None,
+                   displacement=None) -> State:
     """One implicit step: the contact of ``base`` + eff·(wear speed at its end).
 
     eff is the step times the scheme's factor (h for backward Euler, c h for
@@ -188,11 +195,12 @@ def implicit_state(model: Model, base: np.ndarray, eff: float, p_guess=None) -> 
     compliance eff K n (p_k/σ0)^(n-1), base shifted by eff (r(p_k) - r'(p_k)
     p_k)) until p settles; the profile is then base + eff r(p) (reciprocating
     with coupling: r(p) and its linearisation averaged over the two strokes,
-    as :func:`contact_state`).
+    as :func:`contact_state`). ``displacement``: (G p_guess, its error
+    bound) when known.
     """
     K = model.wear_rate
     if model.exponent == 1.0:
-        return contact_state(model, base, eff * K, p_guess)
+        return contact_state(model, base, eff * K, p_guess, displacement)
     p_k = contact_state(model, base, 0.0, p_guess).p if p_guess is None else p_guess
     tol = max(NEWTON_TOL, 10.0 * model.tol)
     iterations, changes = 0, []
@@ -231,31 +239,52 @@ class Wear(stepping.Problem):
     Each contact solve starts from the pressure extrapolated linearly in s
     from the last two accepted states (the second half of a doubled step:
     from the first half's); ``cg_iterations`` counts every solve's iterations.
+    The guess's displacement G p is the same combination of the states'
+    displacements (the pixels the extrapolation clips to zero added by
+    direct sums), so a solve starts without a convolution.
     """
 
     def __init__(self, model: Model, start: State):
         self.model = model
-        self.last = None          # (p, step) one accepted state back, for the extrapolation
+        self.last = None          # one accepted state back, and the step to it
         self.cg_iterations = start.iterations
 
     def _guess(self, state, h):
-        """The pressure extrapolated linearly in s over h from ``state``."""
+        """The pressure extrapolated linearly in s over h from ``state``, and (G p, error)."""
+        known = displacement_of(state)
         if self.last is None:
-            return state.p
-        guess = np.maximum(state.p + (h / self.last[1]) * (state.p - self.last[0]), 0.0)
-        return guess if np.any(guess > 0) else state.p
+            return state.p, known
+        last, step = self.last
+        ratio = h / step
+        linear = state.p + ratio * (state.p - last.p)
+        guess = np.maximum(linear, 0.0)
+        if not np.any(guess > 0):
+            return state.p, known
+        before = displacement_of(last)
+        clipped = np.nonzero(linear < 0.0)
+        if known is None or before is None or len(clipped[0]) > contact.MAX_DIRECT:
+            return guess, None
+        u = (1.0 + ratio) * known[0] - ratio * before[0]
+        self.model.op.add_point_loads(u, clipped, -linear[clipped])
+        return guess, (u, (1.0 + ratio) * known[1] + ratio * before[1])
 
     def implicit(self, origin, base, h, c, sub):
         # a doubled step's halves: the first from the whole step's guess
-        # (extrapolated over the whole step), the second from the first
-        p_guess = origin.p if sub.kind == "second" else self._guess(sub.start, sub.length)
-        new = implicit_state(self.model, base, c * h, p_guess)
+        # (extrapolated over the whole step), the second from the first; not
+        # from the whole step's solution, which would pull the two towards
+        # each other and bias the step doubling's error estimate, their
+        # difference (docs/performance.md, BEM)
+        if sub.kind == "second":
+            p_guess, known = origin.p, displacement_of(origin)
+        else:
+            p_guess, known = self._guess(sub.start, sub.length)
+        new = implicit_state(self.model, base, c * h, p_guess, known)
         self.cg_iterations += new.iterations
         return new
 
     def explicit(self, state, h, sub):
         new = contact_state(self.model, state.f + h * wear_speed(self.model, state.p), 0.0,
-                            state.p)
+                            state.p, displacement_of(state))
         self.cg_iterations += new.iterations
         return new
 
@@ -267,7 +296,14 @@ class Wear(stepping.Problem):
         return state.force, state.depth, state.f[i0, j0] - self.model.f0[i0, j0]
 
     def accepted(self, old, new, h):
-        self.last = (old.p, h)
+        self.last = (old, h)
+
+
+def displacement_of(state: State) -> tuple | None:
+    """(G p, its error bound) of a state, when its solve returned them."""
+    if state.displacement is None:
+        return None
+    return state.displacement, state.displacement_error
 
 
 def run(model: Model, plan: stepping.Plan, progress=None, *, ring: tuple | None = None,

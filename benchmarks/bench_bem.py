@@ -22,48 +22,31 @@ whatever load there was, printed with the load average.
 from __future__ import annotations
 
 import argparse
-import json
 import math
-import os
-import subprocess
-import sys
 import time
 
 import numpy as np
 
-CHILD = r"""
-import json, sys, time
-import numpy as np
+import harness
+from harness import load
 
-
-def peak_mb():
-    # VmHWM: this process's peak resident memory (ru_maxrss would carry the
-    # parent's over the fork + exec)
-    for line in open("/proc/self/status"):
-        if line.startswith("VmHWM:"):
-            return int(line.split()[1]) / 1024
-
-from wearcheck import cases, bem
-from wearcheck.cases import reference
-grid = int(sys.argv[1])
-case = cases.load(cases.shipped("paper"), [f"bem.grid={grid}"])
-res = bem.solve(case)
-sc = reference.scales(case)
-h = res.history
-out = dict(grid=grid, solve_seconds=res.solve_seconds, steps=res.info["steps"],
-           cg_iterations=res.info["cg_iterations"],
-           applications=res.info["operator_applications"],
-           peak_rss_mb=peak_mb(),
-           s_hat_end=float(h["s_hat"][-1]), F_end=float(h["force"][-1] / sc["F0"]),
-           stage_s_hat=[float(s * sc["s_hat_per_m"]) for s in res.stage_s],
-           stage_F=[float(np.interp(s, h["s"], h["force"]) / sc["F0"]) for s in res.stage_s],
-           pixel_over_a0=res.info["pixel"] / sc["a0"])
-print("JSON" + json.dumps(out))
-"""
-
-
-def load() -> str:
-    return "load average %.2f %.2f %.2f" % os.getloadavg()
+def paper_run(grid: int) -> dict:
+    """cases/paper.toml on a BEM grid of ``grid``², run in a fresh process by
+    :func:`paper_runs` (its peak memory is the harness's)."""
+    from wearcheck import bem, cases
+    from wearcheck.cases import reference
+    case = cases.load(cases.shipped("paper"), [f"bem.grid={grid}"])
+    res = bem.solve(case)
+    sc = reference.scales(case)
+    h = res.history
+    return dict(grid=grid, solve_seconds=res.solve_seconds, steps=res.info["steps"],
+                cg_iterations=res.info["cg_iterations"],
+                applications=res.info["operator_applications"],
+                s_hat_end=float(h["s_hat"][-1]), F_end=float(h["force"][-1] / sc["F0"]),
+                stage_s_hat=[float(s * sc["s_hat_per_m"]) for s in res.stage_s],
+                stage_F=[float(np.interp(s, h["s"], h["force"]) / sc["F0"])
+                         for s in res.stage_s],
+                pixel_over_a0=res.info["pixel"] / sc["a0"])
 
 
 def operator_table(grids):
@@ -112,9 +95,8 @@ def paper_runs(grids):
           "ŝ at end | max |F−F_MDR|/F0 at stages |")
     print("|---|---|---|---|---|---|---|---|---|")
     for n in grids:
-        out = subprocess.run([sys.executable, "-c", CHILD, str(n)], capture_output=True,
-                             text=True, check=True).stdout
-        r = json.loads(out.split("JSON", 1)[1])
+        r, run = harness.call(f"{__file__}:paper_run", n)
+        r["peak_rss_mb"] = run.peak_mb
         r["load"] = load()
         dF = max(abs(a - b) for a, b in zip(r["stage_F"], Fm))
         rows.append(r)

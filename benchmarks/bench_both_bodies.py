@@ -22,42 +22,40 @@ whatever load there was, printed with the load average.
 from __future__ import annotations
 
 import argparse
-import json
-import os
-import subprocess
-import sys
 
-CHILD = r"""
-import json, sys, time, warnings
-warnings.simplefilter("ignore")
-from wearcheck import bem, cases
-name, mode, cycles = sys.argv[1], sys.argv[2], float(sys.argv[3])
-case = cases.load(cases.shipped(name))
-if mode == "ball_only":
-    case = case.derive({"counterface.wears": False})
-shipped_pixel = None
-if mode == "moving":
-    from wearcheck.bem import track
-    from wearcheck.cases import reference
-    shipped_pixel = track.setup(case, reference.scales(case))[0].op.spacing
-    end = case.end_distance
-    case = case.derive({"bem.track_model": "moving", "sliding.cycles": cycles,
-                        "stages.cycles": [0.0, cycles]})
-t = time.perf_counter()
-res = bem.solve(case)
-seconds = time.perf_counter() - t
-out = dict(seconds=seconds, steps=res.info.get("steps"), moves=res.info.get("moves"),
-           cg=res.info.get("cg_iterations"), pixel=res.info["pixel"])
-if mode == "moving":
-    out["shipped_moves"] = end / shipped_pixel
-print(json.dumps(out))
-"""
+import harness
+
+def solve(name: str, mode: str, cycles: float = 0.0) -> dict:
+    """One BEM run of the shipped case ``name`` (``mode``: both, ball_only or
+    moving), run in a fresh process by :func:`child`: its solve time and counts."""
+    import time
+    import warnings
+
+    warnings.simplefilter("ignore")
+    from wearcheck import bem, cases
+    case = cases.load(cases.shipped(name))
+    if mode == "ball_only":
+        case = case.derive({"counterface.wears": False})
+    shipped_pixel = None
+    if mode == "moving":
+        from wearcheck.bem import track
+        from wearcheck.cases import reference
+        shipped_pixel = track.setup(case, reference.scales(case))[0].op.spacing
+        end = case.end_distance
+        case = case.derive({"bem.track_model": "moving", "sliding.cycles": cycles,
+                            "stages.cycles": [0.0, cycles]})
+    t = time.perf_counter()
+    res = bem.solve(case)
+    seconds = time.perf_counter() - t
+    out = dict(seconds=seconds, steps=res.info.get("steps"), moves=res.info.get("moves"),
+               cg=res.info.get("cg_iterations"), pixel=res.info["pixel"])
+    if mode == "moving":
+        out["shipped_moves"] = end / shipped_pixel
+    return out
 
 
 def child(name, mode, cycles=0.0):
-    text = subprocess.run([sys.executable, "-c", CHILD, name, mode, str(cycles)],
-                          check=True, capture_output=True, text=True).stdout
-    return json.loads(text.strip().splitlines()[-1])
+    return harness.call(f"{__file__}:solve", name, mode, float(cycles))[0]
 
 
 def main(argv=None):
@@ -65,7 +63,7 @@ def main(argv=None):
     ap.add_argument("--cases", default="ball_on_flat_steel,pin_on_disc")
     ap.add_argument("--moving-cycles", type=float, default=1.0)
     args = ap.parse_args(argv)
-    print(f"load average {os.getloadavg()}")
+    print(harness.load())
     print("| case | long-stroke [s] | steps | CG its | ball only [s] | ratio | moving: s/move "
           "| moves of the shipped run | moving, shipped run [h] |")
     print("|---|---|---|---|---|---|---|---|---|")
@@ -78,7 +76,7 @@ def main(argv=None):
               f"{ball['seconds']:.1f} | {both['seconds'] / ball['seconds']:.2f} | "
               f"{per_move * 1e3:.2f} ms | {mov['shipped_moves']:.3g} | "
               f"{per_move * mov['shipped_moves'] / 3600:.3g} |")
-    print(f"load average {os.getloadavg()}")
+    print(harness.load())
 
 
 if __name__ == "__main__":

@@ -18,13 +18,14 @@ test: the numbers depend on the machine and its load (printed with the tables).
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+import harness
+from harness import load
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "cases" / "paper.toml"
@@ -104,20 +105,9 @@ def paper(solver_name: str, n: int, changes: dict | None = None) -> dict:
 
 def child(function: str, *args, cache: str) -> dict:
     """Run ``function(*args)`` of this file in a fresh process with the given cache."""
-    code = (f"import json, sys; sys.path.insert(0, {str(Path(__file__).parent)!r}); "
-            f"import bench_ccx as b; print(json.dumps(b.{function}(*{args!r})))")
-    env = dict(os.environ, WEARCHECK_CACHE=cache)
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          env=env)
-    if done.returncode != 0:
-        raise SystemExit(f"{function}{args!r} failed:\n{done.stderr}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
-
-
-def load() -> str:
-    """The machine's load averages (uptime's) and its cores."""
-    one, five, fifteen = os.getloadavg()
-    return f"load {one:.2f} {five:.2f} {fifteen:.2f} (1, 5, 15 min), {os.cpu_count()} cores"
+    result, _ = harness.call(f"{__file__}:{function}", *args,
+                             env=dict(os.environ, WEARCHECK_CACHE=cache))
+    return result
 
 
 def main(argv=None) -> None:

@@ -14,12 +14,12 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import resource
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+import harness
 
 ROOT = Path(__file__).resolve().parents[1]
 PAPER = ROOT / "cases" / "paper.toml"
@@ -90,7 +90,6 @@ def one_size(n: int) -> dict:
     r = fem.solve(cases.load(PAPER, [f"fem.contact_nodes={n}", "sliding.scheme=bdf2"]))
     out["paper_run_bdf2"] = time.perf_counter() - t
     out["steps_bdf2"] = r.info["steps"]
-    out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return out
 
 
@@ -123,14 +122,15 @@ def factorisation_options(n: int) -> list[dict]:
 
 
 def child(what: str, n: int):
-    env = dict(os.environ)
+    """``what`` at n contact nodes in a fresh process with an empty mesh cache;
+    a dict result gets the process's peak memory (the harness's) as peak_rss_mb."""
     with tempfile.TemporaryDirectory() as cache:
-        env["WEARCHECK_CACHE"] = cache
-        proc = subprocess.run([sys.executable, __file__, "--child", what, str(n)], env=env,
-                              capture_output=True, text=True, check=False)
-    if proc.returncode != 0:
-        raise RuntimeError(proc.stderr)
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+        run = harness.measure([sys.executable, __file__, "--child", what, str(n)],
+                              env=dict(os.environ, WEARCHECK_CACHE=cache))
+    out = json.loads(run.stdout.strip().splitlines()[-1])
+    if isinstance(out, dict):
+        out["peak_rss_mb"] = run.peak_mb
+    return out
 
 
 #: time-step table: schemes and steps Δŝ (paper case, default mesh)
@@ -217,11 +217,10 @@ def cli_run():
     with tempfile.TemporaryDirectory() as tmp:
         env = dict(os.environ, WEARCHECK_CACHE=str(Path(tmp) / "cache"))
         for label in ("cold mesh cache", "warm mesh cache"):
-            t = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "wearcheck", "run", str(PAPER),
-                            "--solver", "fem", "--out", str(Path(tmp) / "run"), "--quiet"],
-                           cwd=ROOT, env=env, check=True)
-            rows.append((label, time.perf_counter() - t))
+            run = harness.measure([sys.executable, "-m", "wearcheck", "run", str(PAPER),
+                                   "--solver", "fem", "--out", str(Path(tmp) / "run"),
+                                   "--quiet"], cwd=ROOT, env=env)
+            rows.append((label, run.wall))
     return rows
 
 

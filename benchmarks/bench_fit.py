@@ -14,40 +14,41 @@ times, their ratios to the baseline, and the forward runs' own times.
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-CHILD = """
-import json, sys, time, warnings
-warnings.simplefilter("ignore")
-t0 = time.perf_counter()
-import wearcheck
-mode, sheet, elements, exponents, workers = sys.argv[1:6]
-case = wearcheck.load_case("ball_on_flat", {"mdr.elements": int(elements)})
-if mode == "baseline":
-    from wearcheck.comparisons.studies import fit as F
-    from wearcheck.cases import reference
-    data, _, _ = F.read_measurements(sheet, case)
-    sc = reference.scales(case)
-    start, top = F.plan(case, data, sc["E_star"] / sc["a0"], 1.0)
-    r = wearcheck.solve(case.derive(F.forward_changes(case, 1.0, top, start)))
-    out = dict(steps=r.info["steps"])
-else:
-    keys = ["wear.specific_rate"] + (["wear.pressure_exponent"] if mode == "free" else [])
-    ex = [float(v) for v in exponents.split(",")] if exponents else None
-    res = wearcheck.fit(case, sheet, keys, exponents=ex, workers=int(workers))
-    out = dict(parameters=res.parameters, runs=res.model["runs"],
-               resolution=res.model["resolution"])
-out["wall"] = time.perf_counter() - t0
-print(json.dumps(out))
-"""
+import harness
+
+def fit_run(mode: str, sheet: str, elements: int, exponents: str, workers: int) -> dict:
+    """One timed job in a fresh process (run by :func:`child`): ``mode`` baseline
+    (one MDR run of the fit's length), fixed (n fixed) or free (n free); its
+    ``wall`` includes importing wearcheck, as a user meets it."""
+    import time
+    import warnings
+    warnings.simplefilter("ignore")
+    t0 = time.perf_counter()
+    import wearcheck
+    case = wearcheck.load_case("ball_on_flat", {"mdr.elements": int(elements)})
+    if mode == "baseline":
+        from wearcheck.cases import reference
+        from wearcheck.comparisons.studies import fit as F
+        data, _, _ = F.read_measurements(sheet, case)
+        sc = reference.scales(case)
+        start, top = F.plan(case, data, sc["E_star"] / sc["a0"], 1.0)
+        r = wearcheck.solve(case.derive(F.forward_changes(case, 1.0, top, start)))
+        out = dict(steps=r.info["steps"])
+    else:
+        keys = ["wear.specific_rate"] + (["wear.pressure_exponent"] if mode == "free" else [])
+        ex = [float(v) for v in exponents.split(",")] if exponents else None
+        res = wearcheck.fit(case, sheet, keys, exponents=ex, workers=int(workers))
+        out = dict(parameters=res.parameters, runs=res.model["runs"],
+                   resolution=res.model["resolution"])
+    out["wall"] = time.perf_counter() - t0
+    return out
 
 
 def sheet(directory: Path, elements: int) -> Path:
@@ -70,12 +71,9 @@ def sheet(directory: Path, elements: int) -> Path:
 
 
 def child(mode, path, args) -> dict:
-    done = subprocess.run([sys.executable, "-c", CHILD, mode, str(path), str(args.elements),
-                           args.exponents or "", str(args.workers)],
-                          capture_output=True, text=True, env=dict(os.environ, MPLBACKEND="Agg"))
-    if done.returncode:
-        raise SystemExit(done.stderr[-2000:])
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return harness.call(f"{__file__}:fit_run", mode, str(path), args.elements,
+                        args.exponents or "", args.workers,
+                        env=dict(os.environ, MPLBACKEND="Agg"))[0]
 
 
 def main():
@@ -85,8 +83,7 @@ def main():
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--skip-free", action="store_true")
     args = ap.parse_args()
-    print(f"load: {os.getloadavg()[0]:.2f} (1 min), {os.cpu_count()} cores; "
-          f"mdr.elements = {args.elements}")
+    print(f"{harness.load()}; mdr.elements = {args.elements}")
     with tempfile.TemporaryDirectory() as tmp:
         path = sheet(Path(tmp), args.elements)
         base = child("baseline", path, args)

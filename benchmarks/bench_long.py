@@ -32,12 +32,12 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
-import subprocess
 import sys
 import time
 
 import numpy as np
+
+import harness
 
 from wearcheck import cases, fem, mdr
 from wearcheck.cases import reference
@@ -105,12 +105,11 @@ def child_big(N, python=sys.executable, precision=None, fft=None):
     force = f"transforms.FFT = {fft!r}; " if fft else ""
     keys = [f"mdr.elements={N}", "stages.s_hat=[0.0]"] + \
         ([f"mdr.krylov_precision={precision}"] if precision else [])
-    code = ("import json, resource, sys; from wearcheck import cases, mdr; "
+    code = ("import json, sys; from wearcheck import cases, mdr; "
             "from wearcheck.mdr import transforms; " + force +
             f"c = cases.load(cases.shipped('paper'), {keys!r}); "
             "r = mdr.solve(c); h = r.history; "
             "print(json.dumps(dict(solve=r.solve_seconds, steps=r.info['steps'], "
-            "rss=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "
             "gmres=r.info['gmres_iterations'], contact=r.info['contact_iterations'], "
             "f32=r.info.get('gmres_float32_iterations'), "
             "fallbacks=r.info.get('gmres_float64_fallbacks'), "
@@ -118,11 +117,10 @@ def child_big(N, python=sys.executable, precision=None, fft=None):
             "s_hat=r.history['s_hat'][-1], fft=getattr(transforms, 'FFT', 'pocketfft'), "
             "s=h['s'].tolist(), force=h['force'].tolist(), "
             "wear_center=h['wear_center'].tolist())))")
-    out = subprocess.run([python, "-c", code], capture_output=True, text=True,
-                         timeout=3600, cwd="/")
-    if out.returncode:
-        return dict(error=out.stderr.strip().splitlines()[-1])
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    run = harness.measure([python, "-c", code], cwd="/", check=False)
+    if run.returncode:
+        return dict(error=run.stderr.strip().splitlines()[-1])
+    return dict(json.loads(run.stdout.strip().splitlines()[-1]), rss=run.peak_mb)
 
 
 def agreement(a, b):
@@ -220,11 +218,8 @@ def child_speed(python, rounds=5):
             "    t = time.process_time(); r = mdr.solve(c)\n"
             "    out.append((r.solve_seconds, time.process_time() - t))\n"
             "print(*out[0], min(w for w, _ in out[1:]), min(c for _, c in out[1:]))")
-    out = subprocess.run([python, "-c", code], capture_output=True, text=True, timeout=600,
-                         cwd="/")
-    if out.returncode:
-        raise RuntimeError(out.stderr.strip().splitlines()[-1])
-    return [float(v) for v in out.stdout.split()]
+    return [float(v) for v in harness.measure([python, "-c", code], cwd="/",
+                                              timeout=600).stdout.split()]
 
 
 def table_speed(baseline=None, alternations=6):
@@ -310,8 +305,8 @@ def main():
                     help="comma-separated tables to run (1, 1b, 2, 3, 4); default all")
     args = ap.parse_args()
     only = set(args.only.split(",")) if args.only else {"1", "1b", "2", "3", "4"}
-    print(f"# bench_long ({time.strftime('%Y-%m-%d %H:%M')}, load average "
-          f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores: a shared machine)")
+    print(f"# bench_long ({time.strftime('%Y-%m-%d %H:%M')}, {harness.load()}: "
+          "a shared machine)")
     if "1" in only:
         table_paper_mdr((1e-2, 1e-3, 1e-4) if args.quick else (3e-2, 1e-2, 1e-3, 1e-4, 1e-5))
     if "1b" in only:

@@ -30,13 +30,14 @@ import argparse
 import json
 import math
 import os
-import subprocess
 import sys
 import time
 from pathlib import Path
 
 import numpy as np  # noqa: E402
 from threadpoolctl import threadpool_info, threadpool_limits  # noqa: E402
+
+import harness  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -71,11 +72,12 @@ def one(N: int, scheme: str, step: str, extra=()) -> dict:
 
 
 def run_child(N, scheme, step="auto", extra=(), timeout=3600):
+    """:func:`one` in a fresh process; its peak_mb is the process's (the harness's)."""
     cmd = [sys.executable, __file__, "--one", str(N), scheme, str(step), *extra]
-    out = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
-    if out.returncode != 0:
-        return dict(N=N, scheme=scheme, error=out.stderr.strip().splitlines()[-1])
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    run = harness.measure(cmd, timeout=timeout, check=False)
+    if run.returncode != 0:
+        return dict(N=N, scheme=scheme, error=run.stderr.strip().splitlines()[-1])
+    return dict(json.loads(run.stdout.strip().splitlines()[-1]), peak_mb=run.peak_mb)
 
 
 # -- the paper's scheme in plain numpy -----------------------------------------

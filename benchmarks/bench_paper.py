@@ -31,7 +31,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-import fresh
+import harness
 
 HERE = Path(__file__).resolve().parent
 
@@ -79,7 +79,7 @@ def main():
         solve_child()
         return
     py = sys.executable
-    wc = fresh.wearcheck_command()
+    wc = harness.wearcheck_command()
     out = Path(tempfile.mkdtemp(prefix="bench-paper-"))
     run_dir = out / "paper-mdr"
 
@@ -104,11 +104,11 @@ def main():
             meta = json.loads((other_dir / "meta.json").read_text(encoding="utf-8"))
             return {"seconds": meta["solve_seconds"]}
         commands.append((f"{args.other}: wearcheck run paper --solver mdr",
-                         [*fresh.wearcheck_command(args.other), "run", "paper", "--solver",
+                         [*harness.wearcheck_command(args.other), "run", "paper", "--solver",
                           "mdr", "--quiet", "--out", str(other_dir)], other_parse))
-    print(f"# bench_paper: {fresh.load()} (before)\n")
+    print(f"# bench_paper: {harness.load()} (before)\n")
     try:
-        timed = fresh.alternate(commands, args.rounds)
+        timed = harness.alternate(commands, args.rounds)
     finally:
         shutil.rmtree(out, ignore_errors=True)
     base, run, cpu = timed[:3]
@@ -120,21 +120,21 @@ def main():
     print("|---|---|---|---|---|")
     for t, v, c in ((base, b, b_cpu), (run, r, None), (cpu, [e["seconds"] for e in cpu.extra],
                                                        r_cpu)):
-        print(f"| {t.name} | {fresh.spread(v)} | {fresh.spread(c) if c else '—'} | "
+        print(f"| {t.name} | {harness.spread(v)} | {harness.spread(c) if c else '—'} | "
               f"{statistics.median(t.wall):.3f} | {statistics.median(t.cpu):.3f} |")
     for t in timed[3:]:
         v = [e["seconds"] for e in t.extra]
-        print(f"| {t.name} | {fresh.spread(v)} | — | {statistics.median(t.wall):.3f} | "
+        print(f"| {t.name} | {harness.spread(v)} | — | {statistics.median(t.wall):.3f} | "
               f"{statistics.median(t.cpu):.3f} |")
-        print(f"\n(its solve_seconds / baseline per round: {fresh.spread(fresh.ratios(v, b))})")
+        print(f"\n(its solve_seconds / baseline per round: {harness.spread(harness.ratios(v, b))})")
     last = run.extra[-1]
-    print(f"\nsolve_seconds / baseline per round: {fresh.spread(fresh.ratios(r, b))} "
-          f"(target <= 0.1); in CPU seconds: {fresh.spread(fresh.ratios(r_cpu, b_cpu))}; "
+    print(f"\nsolve_seconds / baseline per round: {harness.spread(harness.ratios(r, b))} "
+          f"(target <= 0.1); in CPU seconds: {harness.spread(harness.ratios(r_cpu, b_cpu))}; "
           f"whole command wall / baseline computation: "
-          f"{fresh.spread(fresh.ratios(run.wall, b))}. The run: {last['steps']} steps, "
+          f"{harness.spread(harness.ratios(run.wall, b))}. The run: {last['steps']} steps, "
           f"{last['stages']} stages, {last['gmres']} GMRES iterations; the baseline "
           f"{base.extra[-1]['steps']} steps. {args.rounds} rounds after one warm-up round; "
-          f"{fresh.load()} (after).")
+          f"{harness.load()} (after).")
 
 
 if __name__ == "__main__":

@@ -20,14 +20,14 @@ import sys
 import tempfile
 from pathlib import Path
 
-import fresh
+import harness
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=9)
     args = ap.parse_args()
-    py, wc = sys.executable, fresh.wearcheck_command()
+    py, wc = sys.executable, harness.wearcheck_command()
     out = Path(tempfile.mkdtemp(prefix="bench-startup-"))
     commands = [
         ("floor", [py, "-c", "import numpy, scipy.sparse, scipy.linalg"], None),
@@ -37,14 +37,14 @@ def main():
         ("wearcheck run hertz --solver mdr", [*wc, "run", "hertz", "--solver", "mdr",
                                               "--quiet", "--out", str(out / "hertz")], None),
     ]
-    print(f"# bench_startup: {fresh.load()} (before)\n")
+    print(f"# bench_startup: {harness.load()} (before)\n")
     try:
-        timed = fresh.alternate(commands, args.rounds)
+        timed = harness.alternate(commands, args.rounds)
     finally:
         shutil.rmtree(out, ignore_errors=True)
-    print(fresh.table(timed, commands[0][0]))
+    print(harness.table(timed, commands[0][0]))
     print(f"\nfloor: python -c \"import numpy, scipy.sparse, scipy.linalg\". {args.rounds} "
-          f"rounds after one warm-up round; {fresh.load()} (after). Targets: wearcheck "
+          f"rounds after one warm-up round; {harness.load()} (after). Targets: wearcheck "
           "--help <= 1x, run hertz <= 2x the floor.")
 
 

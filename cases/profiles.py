@@ -21,7 +21,8 @@ def equivalent_radius(indenter: Indenter) -> float:
 
 #: PCHIP interpolants of the tables seen last, by the identity of their radius
 #: array (a case's table is built once and never changed): building one per
-#: evaluation cost ~4 ms, which every recorded step of a run pays (cases/validity.py)
+#: evaluation is a cost every recorded step of a run would pay (cases/validity.py;
+#: docs/performance.md, "Measurements behind the code")
 _INTERPOLANTS: dict = {}
 
 

@@ -136,12 +136,6 @@ def hertz_elliptical(E_star, R1, R2, depth=None, force=None):
                 eccentricity_squared=e2, contact_radius=math.sqrt(a * b))
 
 
-def hertz_elliptical_pressure(x, y, p_max, semi_axis_x, semi_axis_y):
-    """p0 √(1 - x²/a_x² - y²/a_y²) inside the ellipse, 0 outside."""
-    q = 1.0 - (np.asarray(x) / semi_axis_x) ** 2 - (np.asarray(y) / semi_axis_y) ** 2
-    return p_max * np.sqrt(np.clip(q, 0.0, None))
-
-
 # -- other profiles --------------------------------------------------------
 
 def sphere(E_star, R, depth=None, force=None):
@@ -199,8 +193,8 @@ def mdr_transform_quad(indenter, x, table=None):
 @functools.lru_cache(maxsize=4)
 def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Gauss–Legendre nodes and weights on [-1, 1], computed once per n (an n x n
-    eigenproblem: 0.2-1.4 s for n = 800, and every reference.scales of a table
-    case needs it)."""
+    eigenproblem, slow for n = 800, and every reference.scales of a table case
+    needs it; docs/performance.md, "Measurements behind the code")."""
     x, w = np.polynomial.legendre.leggauss(n)
     x.flags.writeable = w.flags.writeable = False
     return x, w

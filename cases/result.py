@@ -33,8 +33,33 @@ def scar_radius(r, wear_depth, threshold: float = SCAR_THRESHOLD) -> float:
     return float(r[i] + frac * (r[i + 1] - r[i]))
 
 
-#: history columns every solver provides, in this order (SI units)
-HISTORY_COLUMNS = ("s", "force", "depth", "contact_radius", "wear_center", "wear_volume")
+@dataclass(frozen=True)
+class Item:
+    """One output file, column, array or field: its name, unit ("" when
+    dimensionless) and meaning (``comparisons.layout`` and the solvers'
+    registrations describe their outputs with it)."""
+
+    name: str
+    unit: str
+    meaning: str
+
+    def as_dict(self) -> dict:
+        return dict(unit=self.unit, meaning=self.meaning)
+
+
+#: the history columns every solver provides, in this order: the one declaration
+#: (``RunResult`` checks them, ``rundir`` writes them first, ``comparisons.layout``
+#: documents them; a solver declares its extra columns in its own registration)
+HISTORY = (
+    Item("s", "m", "sliding distance"),
+    Item("force", "N", "normal force F"),
+    Item("depth", "m", "indentation depth d (approach of the unworn profile's tip)"),
+    Item("contact_radius", "m", "contact radius a (BEM: radius of the circle of equal area)"),
+    Item("wear_center", "m", "wear depth at r = 0"),
+    Item("wear_volume", "m^3", "worn volume"),
+)
+#: their names
+HISTORY_COLUMNS = tuple(i.name for i in HISTORY)
 #: arrays of stages.npz that every run has
 STAGE_KEYS = ("s", "s_hat", "r", "f", "p")
 

@@ -25,6 +25,10 @@ text), :mod:`ccx.run` (running CalculiX, failures, the decks kept),
 its pitfalls and the decks.
 """
 
-from .solver import solve, supports
+from wearcheck.registry import lazy_attributes
 
 __all__ = ["solve", "supports"]
+
+# solve, supports and the submodules are imported on first use: the registry imports
+# this package for its registration.py, which must not pull in the numerics
+__getattr__ = lazy_attributes(__name__, {"solve": ".solver", "supports": ".solver"})

@@ -24,7 +24,8 @@ IMPLICIT_AUTO_STEP_HAT = 0.02
 BDF2_AUTO_STEP_HAT = 0.01
 #: fewest arc nodes required inside the unworn contact radius
 MIN_NODES_IN_CONTACT = 5
-#: most CalculiX jobs an in-loop run may take (one per step, 1-8 s each)
+#: most CalculiX jobs an in-loop run may take (one per step, each seconds long:
+#: docs/performance.md, "Measurements behind the code")
 MAX_IN_LOOP_STEPS = 2000
 #: largest Poisson ratio before volumetric locking shows (as the FEM's quadratic elements)
 MAX_POISSON_RATIO = 0.495

@@ -5,28 +5,15 @@ This is the one definition. ``rundir`` writes and reads by it, every
 ``meta.json`` carries the part that applies to its run (``data_dictionary``),
 ``metrics.json`` carries the comparison's, and the output tables of the
 documentation (``docs/outputs.md``) are generated from it at every docs build
-(:func:`doc_tables`). A solver documents its own extra history
-columns and ``fields.npz`` arrays in its registry entry.
+(:func:`doc_tables`). The history columns every solver writes are declared
+once, in ``cases.result.HISTORY``; a solver declares its own extra history
+columns and ``fields.npz`` arrays in its package's registration
+(``mdr/registration.py``, ...).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-from wearcheck.cases.result import HISTORY_COLUMNS
-
-
-@dataclass(frozen=True)
-class Item:
-    """One file, column, array or field: its name, unit ("" when dimensionless) and meaning."""
-
-    name: str
-    unit: str
-    meaning: str
-
-    def as_dict(self) -> dict:
-        return dict(unit=self.unit, meaning=self.meaning)
-
+from wearcheck.cases.result import HISTORY, Item  # noqa: F401  (HISTORY: part of the layout)
 
 #: files of a run directory (``wearcheck run``, and each solver's folder of a comparison)
 RUN_FILES = (
@@ -54,16 +41,9 @@ RUN_FILES = (
                                      "stage, ImageData counterface_wear_KKK.vti"),
 )
 
-#: history.csv columns every solver writes, in this order
-HISTORY = (
-    Item("s", "m", "sliding distance"),
-    Item("force", "N", "normal force F"),
-    Item("depth", "m", "indentation depth d (approach of the unworn profile's tip)"),
-    Item("contact_radius", "m", "contact radius a (BEM: radius of the circle of equal area)"),
-    Item("wear_center", "m", "wear depth at r = 0"),
-    Item("wear_volume", "m^3", "worn volume"),
-)
-assert tuple(i.name for i in HISTORY) == HISTORY_COLUMNS  # cases.result names them for solvers
+#: history.csv columns every solver writes, in this order: ``HISTORY``, declared
+#: once in ``cases.result`` (solvers name them there); each solver's extra columns
+#: are declared by its registration (``mdr/registration.py``, ...)
 
 #: stages.npz arrays
 STAGES = (
@@ -204,6 +184,58 @@ STAGE_METRICS = (
 )
 
 
+#: files of a verification directory (``wearcheck verify``)
+VERIFICATION_FILES = (
+    Item("reference/", "", "the reference at the judged stages, a run directory (solver "
+                           "'reference' with meta.json reference: band, method, provenance; or "
+                           "the fresh run of --reference-solver)"),
+    Item("results/history.csv", "", "the user's history as read, in SI: s [m], s_hat, the "
+                                    "quantities given, and the origin (file and row) of each "
+                                    "row"),
+    Item("results/stages.csv", "", "the user's stages as read, long form, in SI: s, s_hat, r, "
+                                   "f, p (NaN: not given)"),
+    Item("fig_profiles.png/.pdf", "", "f/d against r/a0: the reference (lines), the results "
+                                      "(markers), at each judged stage with a profile"),
+    Item("fig_pressure.png/.pdf", "", "p/p0 against r/a0, the same"),
+    Item("history.png/.pdf", "", "F/F0, a/a0, w(0)/d and V/(π a0² d) against ŝ"),
+    Item("metrics.json", "", "the verdict: the keys of VERIFICATION_METRICS"),
+    Item("report.md/.html", "", "verdict, what was read, the reference and its band, the "
+                                "checks, per-stage metrics, figures, provenance"),
+    Item("case.toml", "", "the resolved case"),
+)
+
+#: metrics.json keys of a verification
+VERIFICATION_METRICS = (
+    Item("passed", "", "the verdict: every check of every judged stage within its tolerance"),
+    Item("reference", "", "'reference' (certified) or the solver of --reference-solver"),
+    Item("reference_title", "", "the reference in words"),
+    Item("reference_band", "", "name, method, orders, provenance of the certified reference "
+                               "and the largest share of a tolerance its band uses; or the "
+                               "fresh run's time-error estimate"),
+    Item("pairs", "", "results: stages (each with s, s_hat_reference, origin, reference and "
+                      "results values [SI], the differences of STAGE_METRICS and of the wear "
+                      "checks, stage_scales, checks, band (the reference's error relative to "
+                      "each check's scale), passed), worst, checks_used, not_given, "
+                      "not_judged (stages beyond the reference, stages without a history "
+                      "row), history (largest differences over all rows), passed"),
+    Item("checks", "", "the checks made (those of compare and wear_center, wear_volume, "
+                       "depth, where given)"),
+    Item("results", "", "source, format, distance (s, s_hat or cycles), given, not_given, "
+                        "history_rows, stages, mapping, notes (what the reader decided)"),
+    Item("distance_factor", "", "factor (the λ on the user's distances that fits the "
+                                "reference best), misfit, misfit_at_one, quantities"),
+    Item("diagnosis", "", "null, or on a FAIL explained by the distance factor: factor, "
+                          "reason"),
+    Item("scales", "", "as in meta.json"),
+    Item("profile_scale_depth", "m", "the depth d profiles are measured in"),
+    Item("tolerances", "", "the [compare] keys"),
+    Item("stages_compared", "", "stages judged"),
+    Item("case_source", "", "the case file"),
+    Item("seconds_total", "s", "wall time"),
+    Item("provenance", "", "command, cwd, git revision, versions, time, host"),
+    Item("data_dictionary", "", "units and meanings of every file and key"),
+)
+
 #: files of a fit directory (``wearcheck fit --out``)
 FIT_FILES = (
     Item("case.toml", "", "the resolved case as given"),
@@ -237,7 +269,7 @@ def _table(items) -> dict:
     return {i.name: i.as_dict() for i in items}
 
 
-UNDECLARED = "not declared by the solver's registry entry"
+UNDECLARED = "not declared by the solver's registration"
 
 
 def run_dictionary(solver=None, history_names=(), field_names=(), stage_names=(),
@@ -279,6 +311,12 @@ def comparison_dictionary() -> dict:
                 stage_metrics=_table(STAGE_METRICS))
 
 
+def verification_dictionary() -> dict:
+    """The data dictionary of a verification directory (written into metrics.json)."""
+    return dict(files=_table(VERIFICATION_FILES), metrics_json=_table(VERIFICATION_METRICS),
+                stage_metrics=_table(STAGE_METRICS))
+
+
 def fit_dictionary() -> dict:
     """The data dictionary of a fit directory (written into its meta.json)."""
     return dict(files=_table(FIT_FILES), measurements_csv=_table(FIT_COLUMNS))
@@ -302,6 +340,8 @@ def doc_tables() -> dict[str, str]:
         "comparison-files": markdown(COMPARISON_FILES, "file"),
         "metrics": markdown(METRICS, "key"),
         "stage-metrics": markdown(STAGE_METRICS, "key"),
+        "verification-files": markdown(VERIFICATION_FILES, "file"),
+        "verification-metrics": markdown(VERIFICATION_METRICS, "key"),
         "fit-files": markdown(FIT_FILES, "file"),
         "fit-columns": markdown(FIT_COLUMNS, "column"),
     }

@@ -1,14 +1,19 @@
-"""The solver registry: everything wearcheck knows about each solver, in one place.
+"""The solver registry: what wearcheck knows about each solver, asked by name.
 
 A solver is a package that exports ``solve(case, progress=None) -> RunResult``
 and ``supports(case) -> str | None`` (None when it can run the case, else the
-reason it cannot). It is registered once, here, with a :class:`Solver` entry;
-``run``, ``compare``, ``refine``, ``sweep`` and the studies ask the registry
-and never name a solver. Adding a solver is: a new top-level package, its
-case section in ``cases/schema.py``, one ``register(Solver(...))`` call.
+reason it cannot). It describes itself in its own package, as meshio's formats
+do: its ``registration.py`` holds ``SOLVER = Solver(...)`` with its case
+section, resolution key, history columns and fields, and the registry registers
+it. ``run``, ``compare``, ``refine``,
+``sweep`` and the studies ask the registry and never name a solver. The
+history columns every solver writes are declared once, ``cases.result.HISTORY``.
 
-Solver packages are imported only when a solver is used, so ``import
-wearcheck`` stays light and a broken optional solver cannot break the others.
+The built-in registrations (:data:`BUILT_IN`) are imported at the registry's
+first use, not at ``import wearcheck``; they import no numerics (``module`` is
+imported when the solver is used), so listing the solvers stays light and a
+broken solver cannot break the others. A notebook or a third-party package
+calls :func:`register` itself (``wearcheck.registry``).
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ import numpy as np
 
 from wearcheck import extras
 from wearcheck.cases import Case, CaseError, RunResult, SolverError
-from wearcheck.comparisons.layout import Item
+from wearcheck.cases.result import Item  # noqa: F401  (registrations import it from here)
 
 
 @dataclass(frozen=True)
@@ -47,8 +52,9 @@ class Solver:
         pressure and surface series only.
     run_report : "module:function" that adds a report to its run directories,
         ``function(directory, case, result) -> list[Path]`` (it may write nothing).
-    history_columns : its extra ``history.csv`` columns, ``layout.Item`` each.
-    fields : its ``fields.npz`` arrays, ``layout.Item`` each.
+    history_columns : its extra ``history.csv`` columns (beyond ``cases.result.HISTORY``),
+        an :class:`Item` each.
+    fields : its ``fields.npz`` arrays, an :class:`Item` each.
     solve_function, supports_function : for solvers that are not packages
         (tests, notebooks): callables used instead of ``module``.
     default : whether ``compare`` runs it when no solvers are named; False for
@@ -116,7 +122,44 @@ class Solver:
         return fn(case) if fn is not None else None
 
 
+def lazy_attributes(package: str, attributes: dict[str, str]) -> Callable:
+    """A solver package's module ``__getattr__`` that imports on first use.
+
+    ``attributes`` maps a name to the submodule that defines it (``{"solve":
+    ".solver"}``); any other name is the package's submodule of that name. The
+    registry imports the package for its ``registration.py``, so its
+    ``__init__`` must not import its numerics; ``package.solve`` and
+    ``package.model`` still work as if it did.
+    """
+    def __getattr__(name: str):
+        if name in attributes:
+            return getattr(importlib.import_module(attributes[name], package), name)
+        try:
+            return importlib.import_module(f".{name}", package)
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{package}.{name}":
+                raise  # the submodule exists and failed to import: say so
+            raise AttributeError(f"module {package!r} has no attribute {name!r}") from None
+    return __getattr__
+
+
+#: the registration modules of the solvers shipped with wearcheck, in the order
+#: of ``names()``; each holds ``SOLVER``, registered at the registry's first use
+BUILT_IN = ("wearcheck.mdr.registration", "wearcheck.fem.registration",
+            "wearcheck.bem.registration", "wearcheck.ccx.registration")
+
 _REGISTRY: dict[str, Solver] = {}
+_loaded = False
+
+
+def _load_built_in() -> None:
+    """Register the built-in solvers, once, before anything else."""
+    global _loaded
+    if _loaded:
+        return
+    _loaded = True  # first: register() below comes back here
+    for module in BUILT_IN:
+        register(importlib.import_module(module).SOLVER)
 
 
 def register(solver: Solver, *, replace: bool = False) -> Solver:
@@ -135,6 +178,7 @@ def register(solver: Solver, *, replace: bool = False) -> Solver:
     if solver.section is not None and solver.section not in SECTIONS:
         raise ValueError(f"solver '{solver.name}': section '{solver.section}' is not declared "
                          "in cases/schema.py (SECTIONS); a notebook solver has none")
+    _load_built_in()
     if solver.name in _REGISTRY and not replace:
         raise ValueError(f"a solver named '{solver.name}' is registered already")
     if solver.module is None and solver.solve_function is None:
@@ -145,16 +189,19 @@ def register(solver: Solver, *, replace: bool = False) -> Solver:
 
 def unregister(name: str) -> None:
     """Remove a solver (tests and notebooks that registered their own)."""
+    _load_built_in()
     _REGISTRY.pop(name, None)
 
 
 def names() -> tuple[str, ...]:
     """Names of the registered solvers, in registration order."""
+    _load_built_in()
     return tuple(_REGISTRY)
 
 
 def get(name: str) -> Solver:
     """The registered solver ``name``; a CaseError naming the choices otherwise."""
+    _load_built_in()
     try:
         return _REGISTRY[name]
     except KeyError:
@@ -163,138 +210,10 @@ def get(name: str) -> Solver:
 
 def supporting(case: Case) -> tuple[str, ...]:
     """Names of the solvers that can run ``case``."""
+    _load_built_in()
     return tuple(n for n, s in _REGISTRY.items() if s.supports(case) is None)
 
 
 def solve(case: Case, solver: str, progress=None) -> RunResult:
     """Run the registered solver named ``solver`` on ``case``."""
     return get(solver).solve(case, progress=progress)
-
-
-# -- the built-in solvers ----------------------------------------------------
-
-register(Solver(
-    name="mdr", title="MDR", module="wearcheck.mdr", section="mdr",
-    run_report="wearcheck.comparisons.present.fretting_report:write",
-    resolution_key="mdr.elements", default_levels=(100, 200, 400, 800, 1600, 3200),
-    resolution_label="N",
-    description="Method of Dimensionality Reduction: 1D springs, exact for axisymmetric "
-                "half-space contact",
-    style=dict(ls="-", lw=1.4),
-    history_columns=(Item("scar_radius", "m", "outer radius of the worn region: the largest r "
-                                              "with wear >= 1e-3 of the largest wear"),
-                     Item("max_pressure", "Pa", "largest contact pressure"),
-                     Item("s_hat", "", "dimensionless sliding ŝ"),
-                     Item("cycles", "", "gross slip: reciprocating cycles s/(2·sliding.stroke), "
-                                        "NaN without a stroke; fretting: cycles done (0: after "
-                                        "the first quarter cycle)"),
-                     # fretting runs ([fretting]): one row per simulated cycle
-                     Item("tangential_force_amplitude", "N", "fretting: largest |Q| in the "
-                                                             "cycle"),
-                     Item("displacement_amplitude", "m", "fretting: half the indenter's "
-                                                         "tangential travel in the cycle"),
-                     Item("stick_radius", "m", "fretting: radius of the zone that did not "
-                                               "slip in the cycle's last stroke"),
-                     Item("dissipated_energy", "J", "fretting: energy dissipated by friction "
-                                                    "so far, ∫|τ||Δslip| dA"),
-                     Item("dissipated_energy_1d", "J", "fretting: the same from the 1D "
-                                                       "springs, Σ|q_x||Δw|"),
-                     Item("energy_per_cycle", "J", "fretting: energy dissipated in the "
-                                                   "simulated cycle")),
-    fields=(Item("loop_cycles", "", "fretting: cycles whose loop Q(u_x) is kept (L,)"),
-            Item("loop_displacement", "m", "fretting: indenter displacement u_x along each "
-                                           "kept cycle (L, increments + 1)"),
-            Item("loop_tangential_force", "N", "fretting: tangential force Q along each kept "
-                                               "cycle (L, increments + 1)"))))
-
-register(Solver(
-    name="fem", title="FEM", module="wearcheck.fem", section="fem",
-    resolution_key="fem.contact_nodes", default_levels=(60, 125, 250, 500, 1000),
-    resolution_label="contact nodes",
-    description="axisymmetric elastic sphere (scikit-fem), condensed onto its contact nodes, "
-                "against a rigid plane",
-    style=dict(ls="none", marker="o", ms=3.5, mfc="none", mew=0.9),
-    export_vtk="wearcheck.comparisons.present.vtk:write_fem_fields",
-    history_columns=(Item("scar_radius", "m", "outer radius of the worn region: the largest r "
-                                              "with wear >= 1e-3 of the largest wear"),
-                     Item("s_hat", "", "dimensionless sliding ŝ"),
-                     Item("cycles", "", "reciprocating cycles s/(2·sliding.stroke); NaN "
-                                        "without a stroke")),
-    fields=(Item("points", "m", "r, z of the mesh nodes, undeformed (Np, 2); P2 with midside "
-                                "nodes"),
-            Item("cells", "", "triangles, counter-clockwise, meshio triangle/triangle6 order "
-                              "(Nt, 3 or 6)"),
-            Item("displacement", "m", "u_r, u_z per stage (K, Np, 2); the top face has "
-                                      "u_z = -d"),
-            Item("stress", "Pa", "σ_rr, σ_zz, σ_θθ, σ_rz per stage, L2-projected to the "
-                                 "nodes (K, Np, 4)"),
-            Item("contact_nodes", "", "indices into points of the candidate contact nodes, "
-                                      "by increasing r (Nc,)"),
-            Item("contact_pressure", "Pa", "nodal contact pressure per stage (K, Nc)"),
-            Item("wear_depth", "m", "nodal wear depth per stage (K, Nc)"))))
-
-register(Solver(
-    name="bem", title="BEM", module="wearcheck.bem", section="bem",
-    resolution_key="bem.grid", default_levels=(32, 64, 128, 256),
-    resolution_label="pixels per side",
-    description="3D boundary elements on the elastic half-space: pixel grid, DC-FFT, "
-                "constrained conjugate gradients; also non-axisymmetric indenters",
-    style=dict(ls="none", marker="s", ms=3.0, mfc="none", mew=0.8),
-    export_vtk="wearcheck.comparisons.present.vtk_image:write_bem_fields",
-    run_report="wearcheck.comparisons.present.track_report:write",
-    history_columns=(Item("max_pressure", "Pa", "largest pixel pressure"),
-                     Item("cg_iterations", "", "conjugate-gradient iterations of the step's "
-                                               "contact solve"),
-                     Item("complementarity_residual", "", "max |min(p/p0, gap/d)| at the "
-                                                          "step's converged solve"),
-                     Item("scar_radius", "m", "outer radius of the worn region: the largest r "
-                                              "with ring-averaged wear >= 1e-3 of its largest"),
-                     Item("s_hat", "", "dimensionless sliding ŝ"),
-                     Item("cycles", "", "reciprocating cycles s/(2·sliding.stroke); NaN "
-                                        "without a stroke"),
-                     # both bodies wearing (counterface.wears)
-                     Item("wear_volume_counterface", "m^3", "worn volume of the counterface"),
-                     Item("track_width", "m", "width of the track where its depth is at "
-                                              "least 1e-3 of its largest"),
-                     Item("track_depth", "m", "largest depth of the track's cross-section"),
-                     Item("track_area", "m^2", "area of the track's cross-section (middle)"),
-                     Item("scar_length", "m", "both bodies: the ball's scar along the "
-                                              "sliding (wear >= 1e-3 of its largest)"),
-                     Item("scar_width", "m", "both bodies: the ball's scar across the "
-                                             "sliding")),
-    fields=(Item("x", "m", "pixel-centre x coordinates (N,), first array axis"),
-            Item("y", "m", "pixel-centre y coordinates (N,), second array axis"),
-            Item("profile", "m", "worn profile f(x, y) per stage (K, N, N)"),
-            Item("wear_depth", "m", "wear depth per stage (K, N, N)"),
-            Item("pressure", "Pa", "pixel pressure per stage (K, N, N)"),
-            Item("gap", "m", "gap f - d + u per stage (K, N, N)"),
-            Item("track_depth", "m", "counterface.wears: the track's cross-section (depth "
-                                     "along y) per stage (K, N)"),
-            Item("flat_wear", "m", "bem.track_model = moving: the counterface's wear on its "
-                                   "own grid per stage (K, rows, N)"),
-            Item("flat_x", "m", "bem.track_model = moving: the flat grid's x along the track "
-                                "(rows,)"))))
-
-register(Solver(
-    name="ccx", title="CalculiX", module="wearcheck.ccx", section="ccx",
-    resolution_key="ccx.contact_nodes", default_levels=(60, 125, 250, 500),
-    resolution_label="contact nodes",
-    description="CalculiX (third-party FE code, external ccx 2.20+): the FEM's sphere as CAX6 "
-                "elements; its compliance drives wearcheck's wear loop, or ccx.mode = in_loop "
-                "solves gap-element contact in every explicit step",
-    style=dict(ls="none", marker="^", ms=3.5, mfc="none", mew=0.9),
-    export_vtk="wearcheck.comparisons.present.vtk:write_fem_fields",
-    run_report="wearcheck.ccx.run:write_decks",
-    history_columns=get("fem").history_columns,   # the FEM's sphere, the same columns
-    fields=(Item("points", "m", "r, z of the CAX6 mesh nodes, undeformed (Np, 2); CalculiX "
-                                "node i + 1 is row i"),
-            Item("cells", "", "CAX6 triangles, counter-clockwise, meshio triangle6 order (Nt, 6)"),
-            Item("displacement", "m", "u_r, u_z per stage from CalculiX's .frd (K, Np, 2); the "
-                                      "top face has u_z = -d"),
-            Item("stress", "Pa", "σ_rr, σ_zz, σ_θθ, σ_rz per stage, CalculiX's nodal values "
-                                 "from its .frd (K, Np, 4)"),
-            Item("contact_nodes", "", "indices into points of the candidate contact nodes, "
-                                      "by increasing r (Nc,)"),
-            Item("contact_pressure", "Pa", "nodal contact pressure per stage (K, Nc)"),
-            Item("wear_depth", "m", "nodal wear depth per stage (K, Nc)")),
-    default=False))

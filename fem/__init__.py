@@ -52,6 +52,10 @@ in the plane's frame (the top face has u_z = −d); ``stress`` (K, Np, 4) σ_rr,
 ``contact_pressure`` and ``wear_depth`` (K, Nc).
 """
 
-from .solver import solve, supports
+from wearcheck.registry import lazy_attributes
 
 __all__ = ["solve", "supports"]
+
+# solve, supports and the submodules are imported on first use: the registry imports
+# this package for its registration.py, which must not pull in the numerics
+__getattr__ = lazy_attributes(__name__, {"solve": ".solver", "supports": ".solver"})

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from skfem import BilinearForm, Functional, LinearForm
+from skfem import BilinearForm, LinearForm
 
 
 def lame(E, nu):
@@ -57,12 +57,6 @@ def boundary_weight(v, w):
 def boundary_mass(u, v, w):
     """Consistent 2πr-weighted boundary mass ∫ φ_i φ_j 2πr ds."""
     return 2.0 * math.pi * w.x[0] * u * v
-
-
-@Functional
-def weighted_measure(w):
-    """∫ 2πr ds (area of the revolved boundary) or ∫ 2πr dA (volume)."""
-    return 2.0 * math.pi * w.x[0]
 
 
 def traction_form(t_r, t_z):

@@ -85,10 +85,6 @@ class SphereModel:
     C: np.ndarray | None = None
     timings: dict = field(default_factory=dict)
 
-    @property
-    def ndofs(self) -> int:
-        return self.basis.N
-
     def stats(self) -> dict:
         return dict(vertices=int(self.mesh.p.shape[1]), elements=int(self.mesh.t.shape[1]),
                     nodes=int(self.scalar.N), dofs=int(self.basis.N),

@@ -28,13 +28,11 @@ DENSE_MATRICES = {"adaptive": 40.0, "implicit": 8.0, "bdf2": 8.0, "explicit": 8.
 def memory_bytes(case, contact_nodes: int | None = None) -> float:
     """Peak memory [bytes] of an FEM run of ``case``.
 
-    Measured (P2, paper.toml; peak RSS less the interpreter's): without
-    sliding, 250 contact nodes 51 MB, 1000: 239 MB, 2000: 589 MB, i.e. about
-    7 kB per degree of freedom (sparse factor) plus 58 bytes per (contact
-    node)²; sliding with the adaptive scheme 250: 58 MB, 1000: 406 MB, 2000:
-    1442 MB (about 315 bytes per node²), implicit 1000: 234 MB. The model: 30 MB
-    fixed, 8 kB per DOF, DENSE_MATRICES[scheme] doubles per contact node², and
-    the stored fields (displacement and stress, 48 bytes per node and stage).
+    The model, an upper bound of the peak resident memory measured less the
+    interpreter's (docs/performance.md, "Measurements behind the code"): 30 MB
+    fixed, 8 kB per DOF (the sparse factor), DENSE_MATRICES[scheme] doubles per
+    contact node², and the stored fields (displacement and stress, 48 bytes per
+    node and stage).
     """
     n = float(case.fem.contact_nodes if contact_nodes is None else contact_nodes)
     points = section_points(case, n)

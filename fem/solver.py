@@ -29,9 +29,9 @@ IMPLICIT_AUTO_STEP_HAT = 0.02
 #: bdf2 step in ŝ when sliding.step_hat = "auto", chosen for accuracy: on
 #: the same comparison it errs by 1.9e-5 F0 and 3.4e-5 d, about 1/8 of the
 #: default mesh's spatial error (251 against 1001 nodes: 1.5e-4 F0, 2.3e-4 d);
-#: 1102 steps to F < 1 % F0 (0.29 s at 251 nodes, 2.1 s at 1001; implicit
-#: at 0.02: 0.24 s, 1.65 s). Δŝ = 0.02 would err by half the spatial error,
-#: 0.005 by 1/20 at twice the steps.
+#: in a little more time than implicit Euler at 0.02 (docs/performance.md,
+#: "Measurements behind the code"). Δŝ = 0.02 would err by half the spatial
+#: error, 0.005 by 1/20 at twice the steps.
 BDF2_AUTO_STEP_HAT = 0.01
 #: fewest arc nodes required inside the unworn contact radius
 MIN_NODES_IN_CONTACT = 5
@@ -90,9 +90,9 @@ def solve(case, progress=None) -> RunResult:
     """Run the FEM superelement model on ``case``; see :mod:`fem`.
 
     Dense algebra runs on one BLAS thread (threadpoolctl; several times
-    faster here for these small matrices on a shared 2-core machine: the
-    1001-node paper case took 26 s with 2 OpenBLAS threads under load against
-    5.7 s with 1); the previous thread counts are restored on return.
+    faster for these small matrices on a shared machine: docs/performance.md,
+    "Measurements behind the code"); the previous thread counts are restored
+    on return.
     """
     with threadpool_limits(limits=1, user_api="blas"):
         return _solve(case, progress)

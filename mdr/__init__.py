@@ -25,7 +25,7 @@ A case with a [fretting] section is a partial-slip run: :mod:`mdr.fretting`
 jumping).
 """
 
-from .solver import solve
+from wearcheck.registry import lazy_attributes
 
 __all__ = ["solve", "supports"]
 
@@ -38,3 +38,8 @@ def supports(case) -> str | None:
         return ("counterface.wears = true: the MDR wears the indenter only (a wear track "
                 "on the counterface is not axisymmetric); use the BEM")
     return None
+
+
+# solve and the submodules are imported on first use: the registry imports
+# this package for its registration.py, which must not pull in the numerics
+__getattr__ = lazy_attributes(__name__, {"solve": ".solver"})

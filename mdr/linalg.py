@@ -40,8 +40,9 @@ def single_threaded_blas():
 
     The solver's dense algebra is small (factorisations of at most ~2000²,
     triangular solves, matrix-vector products); threaded OpenBLAS spins
-    against other processes on a shared machine and was measured ten times
-    slower under load. Re-entrant and thread-safe: the first user in sets the
+    against other processes on a shared machine, far slower under load
+    (docs/performance.md, "Measurements behind the code"). Re-entrant and
+    thread-safe: the first user in sets the
     limit, the last out restores the previous counts, so concurrent solves
     never restore each other's limit mid-run.
     """
@@ -268,8 +269,9 @@ INNER_CYCLES = 3
 #: if a list, every solve ended by a trusted pass appends (|r|/|b|, its Arnoldi
 #: residual |r_arnoldi|/|r|, the true residual |b - A x|/|r| by a float64
 #: product, the passes, the last pass's iterations), r the residual that pass
-#: started from: a measurement hook for benchmarks and tests, off in runs (the
-#: product costs 1.5 s of 15 at N = 102400)
+#: started from: a measurement hook for benchmarks and tests, off in runs (its
+#: float64 product costs a tenth of a large run; docs/performance.md,
+#: "Measurements behind the code")
 REFINE_AUDIT = None
 
 

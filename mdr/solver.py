@@ -19,33 +19,26 @@ from . import contact, linalg, resolution, transforms, wear
 #: implicit Euler's default step in ŝ (sliding.step_hat = "auto"); see README/report:
 #: on the paper case its time error in F/F0 is 7.7e-3 (0.077 Δŝ, first order)
 IMPLICIT_STEP_HAT = 0.1
-#: BDF2's default step in ŝ. On paper.toml at N = 800 (bench_mdr table 3, max
-#: over the history): time error 6.6e-5 in F/F0 in 0.11 s, against 2.3e-4 in
-#: 0.08 s at Δŝ = 0.1 and 2.8e-5 in 0.17 s at 0.025; the space error there is
-#: 2.3e-5. Error ≈ 0.023 Δŝ² in the bulk of the run; at finer steps the first
-#: tenths of ŝ (the Hertz start, not smooth in s) dominate and fall as Δŝ^1.2-1.5.
-#: 0.1 keeps the issue's speed targets (N = 800 within 0.1 s, N = 102400 within
-#: 30 s) at 1/30 of implicit Euler's time error; lower step_hat for more
+#: BDF2's default step in ŝ, chosen for speed: on paper.toml its time error in
+#: F/F0 is 1/30 of implicit Euler's at its default step, second order in the
+#: bulk of the run (at finer steps the first tenths of ŝ, the Hertz start, not
+#: smooth in s, dominate); lower step_hat for more accuracy. The errors and
+#: times by step: docs/performance.md, "Measurements behind the code"
 BDF2_STEP_HAT = 0.1
 #: the domain grows (t = r² doubles, the grid keeps every other node) once
 #: the contact edge passes this fraction of the nodes
 GROW_AT = 0.8
 #: the half steps' edges are guessed from the shares of the full step's edge
 #: move they took of late when it moves at least this many nodes, else as its
-#: midpoint and end (paper case: N = 800, 639 contact iterations with
-#: midpoint and end, 677 with the shares always, 635 with this rule; N =
-#: 25600, 1175 contact and 7387 GMRES iterations with midpoint and end, 870
-#: and 5637 with the shares)
+#: midpoint and end: the fewest contact and GMRES iterations of the three rules
+#: tried (docs/performance.md, "Measurements behind the code")
 SHARE_MOVE = 4
 #: iterative solves of an adaptive run: GMRES's relative residual as a share
 #: of the run's tolerance (1e-7 at the default 1e-4), between wear.ACCURATE_RTOL
 #: and ADAPTIVE_SOLVE_RTOL_MAX. The solves' error stays about 1 % of the time
-#: error the run accepts: paper case, over the steps taken alike, 1.5e-7 in F/F0
-#: and 9e-7 of the largest central wear at N = 102400 (1e-7 and 1.1e-6 at
-#: 25600), where 1e-9 took 24.4 s, 5418 GMRES and 897 contact iterations and
-#: this 17.6 s, 3228 and 975. Looser than 1e-7, the marginal edge node is
-#: decided by the solver's noise (loose passes at 1e-5 cost 2.4 times the
-#: contact iterations at N = 25600)
+#: error the run accepts, for less time than 1e-9; looser than 1e-7, the
+#: marginal edge node is decided by the solver's noise and the contact
+#: iterations multiply (docs/performance.md, "Measurements behind the code")
 ADAPTIVE_SOLVE_SHARE = 1e-3
 ADAPTIVE_SOLVE_RTOL_MAX = 1e-7
 #: the matrix-free solves' GMRES iterations done in float32 (of gmres_iterations)

@@ -90,22 +90,22 @@ _POCKETFFT = _pocketfft()
 
 
 def _has_pyfftw() -> bool:
-    # (found, not imported: importing pyFFTW takes 0.17 s, most of it
-    # dask.array for its interfaces; it is imported by the first large product)
+    # (found, not imported: importing pyFFTW is slow, most of it dask.array
+    # for its interfaces; it is imported by the first large product;
+    # docs/performance.md, "Measurements behind the code")
     import importlib.util
     return importlib.util.find_spec("pyfftw") is not None
 
 
 #: the FFT library of the larger convolutions: "fftw" (pyFFTW, installed with
 #: the ``fftw`` extra; FFTW is GPL, so it is optional) or "pocketfft" (scipy's).
-#: FFTW's real transforms (planned with FFTW_ESTIMATE) took 0.12-0.5 ms at
-#: 8·10^4-2·10^5 points where pocketfft took 0.8-1.8 ms, single-threaded;
-#: the paper case at N = 102400 took 8.5-9.0 s against 12.8-14.3 s, the same
-#: iterations and history to 6e-14 (2026-11-23)
+#: FFTW when installed: its real transforms are several times faster than
+#: pocketfft's at large sizes, for the same iterations and history to round-off
+#: (docs/performance.md, "Measurements behind the code")
 FFT = "fftw" if _has_pyfftw() else "pocketfft"
-#: FFT lengths below this stay with pocketfft: planning costs 1-4 ms a size, and
-#: the small products of coarse grids gain little (N = 800: 0.081 against 0.087 s
-#: warm, but 0.123 s cold)
+#: FFT lengths below this stay with pocketfft: FFTW's planning of each size
+#: costs more than the small products of coarse grids gain (a cold run is slower
+#: with FFTW; docs/performance.md, "Measurements behind the code")
 FFTW_FROM = 4096
 #: plans kept per thread (each holds its sizes' aligned buffers: 16 bytes a point)
 FFTW_PLANS = 8
@@ -116,7 +116,7 @@ def _fftw_size(n: int) -> int:
     """The FFT length used for at least n points: 2^k times 1, 9/8, 5/4, 3/2 or 7/4.
 
     A coarse ladder, so that a run's changing contact sets share a few plans
-    (each costs about 10 ms to make); at most 1/8 of padding beyond the
+    (each is costly to make); at most 1/8 of padding beyond the
     next size that FFTW transforms fast.
     """
     if n <= 64:
@@ -148,8 +148,8 @@ def _fftw_plan(nfft: int, single: bool = False):
         real = pyfftw.empty_aligned(nfft, dtype="float32" if single else "float64")
         spectrum = pyfftw.empty_aligned(nfft // 2 + 1,
                                         dtype="complex64" if single else "complex128")
-        # FFTW_ESTIMATE: planning in about 10 ms (FFTW_MEASURE took 0.3-3 s a size,
-        # for transforms 1.2-2x faster still)
+        # FFTW_ESTIMATE: FFTW_MEASURE's faster transforms do not repay its planning
+        # time (docs/performance.md, "Measurements behind the code")
         forward = pyfftw.FFTW(real, spectrum, flags=("FFTW_ESTIMATE",), threads=1)
         backward = pyfftw.FFTW(spectrum, real, direction="FFTW_BACKWARD",
                                flags=("FFTW_ESTIMATE", "FFTW_DESTROY_INPUT"), threads=1)
@@ -237,11 +237,11 @@ def _lower_float32(kernel: np.ndarray, x: np.ndarray, key) -> np.ndarray:
     """:func:`lower` of a float32 x by two complex FFTs of half the length.
 
     scipy's float32 real transforms (pocketfft r2c) are no faster than its
-    float64 ones inside a run (0.75 against 0.69 ms at 129600 points: it
-    vectorises across transforms, not within one), its complex transform of
-    half the length takes 0.33 ms: with the real/complex split folded into
-    the kernel's factors, a convolution costs 1.0 ms where r2c and c2r took
-    1.7 (float64: 2.0; n = 64800, docs/mixed-precision.md).
+    float64 ones inside a run (it vectorises across transforms, not within
+    one), its complex transform of half the length is: with the real/complex
+    split folded into the kernel's factors, a convolution is faster than by
+    r2c and c2r (docs/performance.md, "Measurements behind the code";
+    docs/mixed-precision.md).
     """
     n = len(x)
     if FFT == "fftw" and 2 * n >= FFTW_FROM:
@@ -251,7 +251,7 @@ def _lower_float32(kernel: np.ndarray, x: np.ndarray, key) -> np.ndarray:
         if plan is not None:
             return _fftw_convolve(plan, _spectrum32(kernel, nfft, (key, len(kernel))), x)
     # 5-smooth: the complex default admits factors 7 and 11, far slower here
-    # (n = 65000: m = 65219 = 7²·11³, a float32 product 2.5 ms; m = 65536, 1.2 ms)
+    # (docs/performance.md, "Measurements behind the code")
     m = _fft.next_fast_len(n, real=True)
     P, Q = _half_factors(kernel, m, (key, len(kernel)))
     buf = np.zeros(2 * m, np.float32)
@@ -510,8 +510,8 @@ def volume(w: np.ndarray, dt: float) -> float:
 
 
 #: up to this size the compliance matrix is the product of its two dense
-#: triangular factors (BLAS trmm; 5.7 ms against 8.5 ms by FFT at n = 632,
-#: single-threaded), beyond it the FFT's O(n² log n) wins (46 against 38 ms at 1300)
+#: triangular factors (BLAS trmm), beyond it the FFT's O(n² log n) is faster
+#: (docs/performance.md, "Measurements behind the code")
 DENSE_PRODUCT_MAX = 1000
 
 
@@ -531,8 +531,8 @@ def compliance_matrix(n: int, dt: float, E_star: float, method: str | None = Non
         from scipy.linalg.blas import dtrmm
 
         # both factors built as their transposes in C order, so that BLAS
-        # gets them in Fortran order without copies (5.5-6 ms at n = 570
-        # against 10 ms through the wrapper's copies)
+        # gets them in Fortran order without the wrapper's copies (about
+        # half the time; docs/performance.md, "Measurements behind the code")
         # P⁻¹ (upper Toeplitz): its transpose is lower
         Qt = toeplitz(B, np.zeros(n)) * (0.5 * math.pi * math.sqrt(dt))
         # T⁻¹ as a matrix: f_i = g_0 + Σ_{1<=j<=i} B[i-j] (g_j - g_0)/(2 sqrt j);

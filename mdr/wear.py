@@ -122,10 +122,8 @@ EDGE_TOL = 1e-9
 #: the floor of adaptive ones (solver.ADAPTIVE_SOLVE_SHARE; far below the
 #: spatial error: 2e-5 of F0 at N = 800, falling as N^-1.5). Each pass starts
 #: from the last iterate, so a loose pass while the set is found saves little
-#: and, deciding the marginal edge node differently, costs extra passes: paper
-#: case at N = 25600, 6388 GMRES iterations, 2166 contact iterations, 10.5 s
-#: with loose passes at 1e-5; 5228, 1396, 7.3 s at 1e-7; 5634, 887, 6.9 s with
-#: every pass at this tolerance
+#: and, deciding the marginal edge node differently, costs extra passes
+#: (docs/performance.md, "Measurements behind the code")
 ACCURATE_RTOL = 1e-9
 #: a nested LU too small for a contact set grows to at least this factor
 NESTED_GROWTH = 1.1
@@ -160,8 +158,8 @@ def compliance_block(model: Model, n: int) -> np.ndarray:
     is built once and shared by every grid a growing domain passes through and
     every step size of an adaptive run: building it costs as much as
     factorising. It is built twice as large as asked (at most the whole grid),
-    since contacts grow: the paper case at N = 800 built it three times
-    (350, 525, 788 nodes; 70 ms) where one build of 700 takes 20 ms.
+    since contacts grow: built at the size asked, a growing contact rebuilt
+    it several times (docs/performance.md, "Measurements behind the code").
     """
     unit = _UNIT_COMPLIANCE.get("C")
     if unit is None or len(unit) < n:
@@ -247,8 +245,8 @@ class ImplicitSystem:
         The coarse grid spans the contact (Δt_c = n Δt / nc) and the matrix
         scales as sqrt(Δt)/E*, so every contact set and step size is the
         unit matrix A1 scaled and shifted: solved through A1's eigenvectors,
-        computed once (an LU per contact set and step took 0.34 s of the
-        paper case at N = 102400, 705 of them).
+        computed once (an LU per contact set and step was a noticeable share
+        of a large run; docs/performance.md, "Measurements behind the code").
         """
         lam, V, Vinv = self._eigen
         scale = math.sqrt(n * self.dt / self.nc) / self.E
@@ -263,9 +261,9 @@ class ImplicitSystem:
         ends, the sparse interpolation matrix P (built directly in compressed
         form) and the first fine node of each cell (None when a cell is empty,
         n < nc), which makes the transpose Pᵀ r two segment sums
-        (np.add.reduceat): building Pᵀ as a matrix took 0.18 s of conversions
-        in the paper case at N = 102400, forming both with bincounts per
-        GMRES iteration 1.3 ms of each preconditioning. Cached per contact set.
+        (np.add.reduceat), cheaper than building Pᵀ as a matrix or forming
+        both with bincounts per GMRES iteration (docs/performance.md,
+        "Measurements behind the code"). Cached per contact set.
         """
         cache = _TRANSFERS
         nc = self.nc
@@ -285,7 +283,8 @@ class ImplicitSystem:
             starts = np.searchsorted(j, np.arange(nc)) if n >= nc else None
             if len(cache) >= 4:
                 # the contact set of one GMRES solve is fixed; a few suffice, and
-                # each holds 6n numbers (kept per system, they took 250 MB at N = 102400)
+                # each holds 6n numbers (kept per system, they grew without bound:
+                # docs/performance.md, "Measurements behind the code")
                 cache.clear()     # (atomic: solves may run in threads)
             out = cache[(n, nc)] = (j, w0, w1, P, starts)
         return out
@@ -435,10 +434,9 @@ class FarGap:
 
     When g_ref less that bound leaves every node beyond the window out of
     contact, no full transform is needed; otherwise the profile's own g is
-    computed on the whole grid and becomes the reference. Paper case at
-    N = 102400: the full transforms of every contact iteration took 2.2 s of
-    the convolutions' 11; with the reference, three in a run, and 1.3 s for
-    the windows and bounds.
+    computed on the whole grid and becomes the reference: a few full
+    transforms a run instead of one per contact iteration (docs/performance.md,
+    "Measurements behind the code").
     """
 
     def __init__(self):

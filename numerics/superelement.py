@@ -24,7 +24,6 @@ implicit step of wear compliance c·h is one LCP with M = C + diag(K c h/A)
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -294,9 +293,9 @@ class Superelement(stepping.Problem):
         """Factor of C + rate·eff/A (eff: the step times the scheme's c; 0: C).
 
         A new factor is needed only when c·Δs changes: constant steps share one;
-        a stage off the step grid adds a few. Measured: one factor costs 1 ms at
-        251 nodes, 12 ms at 1001 (benchmarks/bench_fem.py), against 0.06-0.5 ms
-        per step. A step equal to a factored one up to round-off (a landing
+        a stage off the step grid adds a few; a factor costs many steps
+        (docs/performance.md, "Measurements behind the code"). A step equal
+        to a factored one up to round-off (a landing
         on a stage one regular step away) uses its factor. Least recently used
         out: the running step's factor is used every step and must survive a
         landing's.

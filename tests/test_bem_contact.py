@@ -162,3 +162,70 @@ def test_bad_settings_are_case_errors():
         cases.load(cases.shipped("hertz"), ["bem.box=2.0"])
     with pytest.raises(CaseError, match="bem.tolerance"):
         cases.load(cases.shipped("hertz"), ["bem.tolerance=0"])
+
+
+def _worn(n):
+    """A worn paraboloid with a ripple (as the Tamaas test) on n² pixels."""
+    X, Y, op, a0 = _paraboloid_grid(n)
+    d = 1e-6
+    f = np.maximum((X**2 + Y**2) / 0.02, 0.3 * d) \
+        + 0.05 * d * np.cos(7 * X / a0) * np.exp(-(X**2 + Y**2) / a0**2)
+    return X, Y, op, f, d
+
+
+def test_single_precision_operator():
+    # G t with float32 transforms against float64: within 1e-6 of max |G t|
+    # (measured 3-4e-7, the bound contact.SINGLE_ERROR = 2e-6 takes 5x that),
+    # and really single precision (above 1e-9)
+    rng = np.random.default_rng(1)
+    X, Y, op, f, d = _worn(64)
+    for t in (rng.standard_normal((64, 64)), np.sqrt(np.maximum(1 - (X**2 + Y**2) / 1e-8, 0))):
+        exact = op(t)
+        err = np.max(np.abs(op.single(t) - exact)) / np.max(np.abs(exact))
+        assert 1e-9 < err < 1e-6
+        assert err < contact.SINGLE_ERROR
+
+
+@pytest.mark.parametrize("control", ["depth", "force"])
+@pytest.mark.parametrize("tol", [1e-6, 2e-7, 1e-9])
+def test_single_precision_directions_keep_the_tolerance(control, tol):
+    # The solve with single-precision search directions ends only where the
+    # residual recomputed from scratch in double precision is below tol: at
+    # 1e-6 (the default bem.tolerance) and 2e-7 by its error bound (going on
+    # in double where the bound is too large or the residual stalls); below
+    # contact.SINGLE_MIN_TOL (1e-9) in double only. Its pressure is the
+    # double-precision solve's to 50·tol of the peak (two solutions of
+    # residual < tol; measured 4.5e-8 and 4.8e-8 of the peak at 1e-6 and
+    # 2e-7). The returned displacement is G p within its stated error bound.
+    X, Y, op, f, d = _worn(64)
+    load = dict(depth=0.8 * d) if control == "depth" else dict(force=10.0)
+    kw = dict(p_scale=1e9, g_scale=d, tol=tol, **load)
+    fast = contact.solve(op, f, **kw)
+    slow = contact.solve(op, f, single=False, **kw)
+    assert (op.single_applications > 0) == (tol >= contact.SINGLE_MIN_TOL)
+    gap = f - fast.depth + op(fast.pressure)
+    assert contact.complementarity_residual(fast.pressure, gap, 1e9, d) < tol
+    assert np.max(np.abs(fast.pressure - slow.pressure)) < 50 * tol * slow.pressure.max()
+    true = op(fast.pressure)
+    assert np.max(np.abs(fast.displacement - true)) <= fast.displacement_error \
+        + 1e-12 * np.max(true)
+
+
+def test_a_known_displacement_replaces_the_first_convolution():
+    # A second solve on a slightly worn profile, started from the first's
+    # pressure with its displacement: no double-precision convolution at all
+    # (the first's displacement is carried with its error bound), the same
+    # solution as a start without it (to 50·tol of the peak)
+    X, Y, op, f, d = _worn(64)
+    kw = dict(depth=0.8 * d, p_scale=1e9, g_scale=d, tol=1e-6)
+    first = contact.solve(op, f, **kw)
+    worn = f + 1e-3 * d * np.exp(-(X**2 + Y**2) / (0.5 * np.max(X))**2)
+    before = op.applications
+    again = contact.solve(op, worn, p_init=first.pressure, displacement=first.displacement,
+                          displacement_error=first.displacement_error, **kw)
+    assert op.applications == before
+    plain = contact.solve(op, worn, p_init=first.pressure, **kw)
+    assert op.applications == before + 1
+    assert np.max(np.abs(again.pressure - plain.pressure)) < 50 * 1e-6 * plain.pressure.max()
+    gap = worn - again.depth + op(again.pressure)
+    assert contact.complementarity_residual(again.pressure, gap, 1e9, d) < 1e-6

@@ -90,7 +90,9 @@ def _one_line(outcome, extra):
 
 def test_the_core_runs_the_mdr_and_the_bem_and_says_what_the_others_need(blocked, tmp_path):
     mdr, bem = tmp_path / "mdr", tmp_path / "bem"
-    ran_mdr, ran_bem, fem, compare, render, export, vtk, sweep, mesh = _commands(
+    vtu = tmp_path / "elsewhere.vtu"
+    vtu.write_text("<VTKFile/>", encoding="utf-8")
+    ran_mdr, ran_bem, fem, compare, render, export, vtk, sweep, mesh, verify = _commands(
         blocked,
         ["run", "paper", "--solver", "mdr", "--set", "mdr.elements=200", *SHORT, "--out", str(mdr)],
         ["run", "paper", "--solver", "bem", "--set", "bem.grid=32", *SHORT, "--out", str(bem)],
@@ -100,7 +102,7 @@ def test_the_core_runs_the_mdr_and_the_bem_and_says_what_the_others_need(blocked
         ["run", "paper", "--solver", "mdr", "--vtk", "--out", str(tmp_path / "v")],
         ["sweep", "paper", "--vary", "wear.mu=0.2,0.3", "--solver", "mdr",
          "--out", str(tmp_path / "s")],
-        ["mesh", "paper"])
+        ["mesh", "paper"], ["verify", "paper", str(vtu), "--out", str(tmp_path / "w")])
     assert ran_mdr == [0, ""] and ran_bem == [0, ""]
     for run in (mdr, bem):   # complete run directories, recording the missing versions
         meta = json.loads((run / "meta.json").read_text(encoding="utf-8"))
@@ -115,7 +117,8 @@ def test_the_core_runs_the_mdr_and_the_bem_and_says_what_the_others_need(blocked
         assert "pyvista" in _one_line(said, "vtk")
     assert "distributed" in _one_line(sweep, "dask")
     assert "scikit-fem" in _one_line(mesh, "fem")
-    for nothing in ("fem", "c", "v", "s"):   # refused before anything was written
+    assert "meshio" in _one_line(verify, "vtk")
+    for nothing in ("fem", "c", "v", "s", "w"):   # refused before anything was written
         assert not (tmp_path / nothing).exists()
 
 
@@ -191,10 +194,6 @@ def test_pyproject_core_is_the_four_and_every_extra_is_declared():
     assert core == CORE
     declared = PYPROJECT["project"]["optional-dependencies"]
     for module in OPTIONAL:
-        if module == "meshio":        # imported by the tests only (a second VTU reader)
-            assert "meshio" in _extra_requirements("test")
-            assert module not in extras.MODULES
-            continue
         distribution, extra = extras.MODULES[module]
         assert extra in declared, (module, extra)
         if module == "vtk":           # pyvista's dependency: named for a broken pyvista
@@ -247,4 +246,4 @@ def test_every_dependency_earns_its_place_by_an_import():
     assert third_party - set(import_names.values()) <= set(extras.MODULES), \
         {n: imports[n] for n in third_party - set(import_names.values()) - set(extras.MODULES)}
     assert set(extras.MODULES) - {"vtk", "ipywidgets"} <= third_party
-    assert "meshio" not in third_party
+    assert "meshio" in third_party      # wearcheck verify reads VTU series through it

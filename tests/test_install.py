@@ -76,3 +76,18 @@ def test_command_line_from_another_directory(installed, tmp_path):
                    "--out", "hertz-run", "--quiet")
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "hertz-run" / "meta.json").is_file()
+
+
+def test_certified_references_ship_and_load(installed, tmp_path):
+    wheel, target, _ = installed
+    names = zipfile.ZipFile(wheel).namelist()
+    shipped = sorted(n for n in names if n.startswith("wearcheck/references/data/"))
+    assert [n.rsplit("/", 1)[1] for n in shipped] == sorted(
+        f"{c}.npz" for c in ("ball_on_flat", "ellipsoid", "fretting", "hertz", "paper",
+                             "truncated"))
+    code = ("import wearcheck\n"
+            "r = wearcheck.reference('hertz')\n"
+            "print(r.certified.name, r.history['force'][0] > 0)\n")
+    done = _python(target, tmp_path, "-c", code)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["hertz", "True"]

@@ -20,11 +20,12 @@ from typing import Callable, Iterable, Mapping
 import numpy as np
 
 from wearcheck import cases
-from wearcheck.cases import ArgumentError, Case, CaseError, RunResult, reference
+from wearcheck.cases import ArgumentError, Case, CaseError, RunResult
+from wearcheck.cases import reference as closed_forms
 from wearcheck.comparisons import registry, rundir
 
 __all__ = ["load_case", "shipped_cases", "solvers", "solve", "Result", "read_run", "compare",
-           "refine", "sweep", "fit", "export_vtk"]
+           "refine", "sweep", "fit", "export_vtk", "reference", "verify"]
 
 
 # -- cases -------------------------------------------------------------------
@@ -76,8 +77,12 @@ class Result:
     info : what the solver reports about its run (steps, step size, grid, ...).
     solve_seconds : time in the solver proper.
     path : the run directory, once written or when read from one.
-    meta : its meta.json (provenance, scales, data dictionary), when read from one.
+    meta : its meta.json (provenance, scales, data dictionary), when read from one;
+        for a certified reference (:func:`reference`), how it was made.
     warnings : remarks on the case and the run (e.g. stages the run did not reach).
+    certified : for a certified reference, the reference itself: its history and
+        stages at any distance (``history_at(s)``, ``stage_at(s, r)``) and its error
+        band (``band_at(s)``, ``band_table()``); else None.
     """
 
     case: Case
@@ -90,6 +95,7 @@ class Result:
     path: Path | None = None
     meta: dict | None = None
     warnings: list = field(default_factory=list)
+    certified: object | None = field(default=None, repr=False)
     _run: RunResult | None = field(default=None, repr=False)
 
     def __repr__(self) -> str:
@@ -136,7 +142,7 @@ class Result:
     @property
     def scales(self) -> dict:
         """E*, G*, a0, d0, F0, p0 of the unworn contact and ŝ per metre of sliding."""
-        return reference.scales(self.case)
+        return closed_forms.scales(self.case)
 
     def history_frame(self):
         """The history as a pandas DataFrame indexed by the sliding distance s [m];
@@ -162,7 +168,14 @@ class Result:
         if self._run is None:
             raise CaseError("this result was read from a run directory; it is written already "
                             f"at {self.path}")
-        self.path = rundir.write_run(out, self.case, self._run, self.solver)
+        extra = None
+        if self.certified is not None:
+            extra = {"reference": dict(name=self.certified.name, band=self.info.get("band"),
+                                       method=self.meta.get("method"),
+                                       orders=self.meta.get("orders"),
+                                       spread=self.meta.get("spread"),
+                                       provenance=self.meta.get("provenance"))}
+        self.path = rundir.write_run(out, self.case, self._run, self.solver, extra_meta=extra)
         return self.path
 
     def export_vtk(self, revolve: int = 0) -> Path:
@@ -218,7 +231,7 @@ def solve(case: str | Path | Case, solver: str = "mdr", *,
         notes.append(text)
         warnings.warn(text, stacklevel=2)
     stages = dict(s=np.asarray(run.stage_s, float),
-                  s_hat=np.asarray(run.stage_s, float) * reference.scales(case)["s_hat_per_m"],
+                  s_hat=np.asarray(run.stage_s, float) * closed_forms.scales(case)["s_hat_per_m"],
                   r=np.asarray(run.r, float), f=np.asarray(run.f, float),
                   p=np.asarray(run.p, float))
     return Result(case=case, solver=solver, history=dict(run.history), stages=stages,
@@ -235,6 +248,51 @@ def read_run(path: str | Path) -> Result:
                   fields=run.fields, info=run.meta.get("info", {}),
                   solve_seconds=run.meta.get("solve_seconds", float("nan")), path=run.path,
                   meta=run.meta, warnings=list(run.meta.get("warnings", [])))
+
+
+def reference(name: str) -> Result:
+    """The certified reference solution of a shipped benchmark, as a :class:`Result`.
+
+    ``name``: hertz, truncated, paper, ellipsoid, ball_on_flat or fretting. The
+    stages are the case's; ``result.certified`` evaluates the reference at any
+    distance within its stored stages (``history_at``, ``stage_at``) and gives its
+    error band (``band_at``, ``band_table``); ``result.meta`` says how it was made
+    (method, levels, observed orders, the other solvers' spread, provenance).
+    ``result.write(path)`` writes it as a run directory.
+    """
+    from wearcheck.references import certified
+    ref = certified.load(name)
+    run = ref.run_result()
+    sc = ref.scales
+    stages = dict(s=np.asarray(run.stage_s, float),
+                  s_hat=np.asarray(run.stage_s, float) * sc["s_hat_per_m"],
+                  r=np.asarray(run.r, float), f=np.asarray(run.f, float),
+                  p=np.asarray(run.p, float))
+    info = dict(run.info, band=ref.band_table(),
+                band_units="SI: profile and lengths [m], force [N], pressure [Pa], "
+                           "volume [m³]")
+    return Result(case=ref.case, solver="reference", history=dict(run.history),
+                  stages=stages, fields=None, info=info, solve_seconds=0.0,
+                  meta=dict(ref.meta), certified=ref, _run=run)
+
+
+def verify(case: str | Path | Case, results: str | Path, out: str | Path, *,
+           mapping: Mapping[str, str] | Iterable[str] | None = None,
+           reference_solver: str | None = None, quiet: bool = True) -> dict:
+    """Judge results produced elsewhere against the certified reference of the case (or
+    a fresh run of ``reference_solver``); write figures, metrics and a report to ``out``.
+
+    ``results``: a directory with history.csv (and stages.csv), a .pvd/.vtu file, or
+    CalculiX output; ``mapping``: ``{"p [MPa]": "CONTACT.CPRESS"}`` or
+    ``["p [MPa]=CONTACT.CPRESS"]`` as ``--map``. Returns the metrics as in
+    ``metrics.json``; ``["passed"]`` is the verdict.
+    """
+    from wearcheck.comparisons.external import parse_mapping
+    from wearcheck.comparisons.studies.verify import verify as _verify
+    if mapping is not None and not isinstance(mapping, Mapping):
+        mapping = parse_mapping([mapping] if isinstance(mapping, str) else list(mapping))
+    return _verify(load_case(case), results, out, mapping=dict(mapping or {}),
+                   reference_solver=reference_solver, quiet=quiet)
 
 
 # -- studies -----------------------------------------------------------------

@@ -20,6 +20,7 @@ MODULES = {
     "skfem": ("scikit-fem", "fem"),
     "gmsh": ("gmsh", "fem"),
     "pyvista": ("pyvista", "vtk"),
+    "meshio": ("meshio", "vtk"),        # wearcheck verify reading .pvd/.vtu series
     "vtk": ("vtk", "vtk"),              # pyvista's own dependency
     "dask": ("dask", "dask"),
     "distributed": ("distributed", "dask"),

@@ -77,6 +77,18 @@ def points_across(r, a) -> float:
     return a / h
 
 
+def step_hat_used(result, s_hat_per_m) -> float:
+    """The median sliding step of a run, in ŝ (NaN when it did not slide)."""
+    ds = np.diff(np.asarray(result.history["s"], float))
+    ds = ds[ds > 0]
+    return float(np.median(ds) * s_hat_per_m) if ds.size else math.nan
+
+
+def grid_spacing(result, a0) -> float:
+    """Median spacing of a result's radii, relative to a0."""
+    return float(np.median(np.diff(np.asarray(result.r, float))) / a0)
+
+
 def worst_failure(stages) -> dict | None:
     """The failed check of a pair's stages that uses the largest share of its tolerance.
 

@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from . import metrics
+
 #: the outer part of the contact searched for a peak, r/a >= OUTER
 OUTER = 0.5
 #: a local maximum counts as a peak when its prominence exceeds this fraction of max p
@@ -131,3 +133,13 @@ def assess(levels: list[dict], *, position_tol=0.02, prominence_tol=0.2) -> list
                                   f"prominence within {100 * spread_prom:.0f}%")
         out.append(row)
     return out
+
+
+def peaks_of(result, sc) -> list[dict]:
+    """The edge peak of each stage of one run (contact radius from its history)."""
+    a = metrics.at_stages(result.history["s"], result.history["contact_radius"],
+                          result.stage_s)
+    peaks = stage_peaks(result.r, np.asarray(result.p), a)
+    for q, s in zip(peaks, result.stage_s):
+        q["s_hat"] = float(s * sc["s_hat_per_m"])
+    return peaks

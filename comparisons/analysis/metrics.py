@@ -54,8 +54,19 @@ CHECKS = (
     Check("contact_radius", "contact_radius_tolerance", "contact_radius_floor", "a0",
           "the reference's contact radius at the stage", "contact radius", "|Δa|"),
 )
+#: the wear checks ``wearcheck verify`` adds where a user's history gives the quantity
+#: (a solver's run is judged by CHECKS alone): lengths against the stage's own
+#: value like the profile, the worn volume in V = π a0² d
+WEAR_CHECKS = (
+    Check("wear_center", "profile_tolerance", "profile_floor", "d",
+          "the reference's central wear at the stage", "central wear", "|Δw(0)|"),
+    Check("wear_volume", "profile_tolerance", "profile_floor", "V",
+          "the reference's worn volume at the stage (V = π a0² d)", "worn volume", "|ΔV|"),
+    Check("depth", "profile_tolerance", "profile_floor", "d",
+          "the reference's depth at the stage", "depth", "|Δd|"),
+)
 #: the checks by their column
-CHECK_BY_COLUMN = {c.column: c for c in CHECKS}
+CHECK_BY_COLUMN = {c.column: c for c in CHECKS + WEAR_CHECKS}
 
 
 def to_grid(r_src, y_src, r_dst) -> np.ndarray:
@@ -137,7 +148,7 @@ def stage_scale(own, floor) -> tuple[float, str]:
     return float(floor), "floor"
 
 
-def verdict(stage: dict, tolerances: dict) -> dict:
+def verdict(stage: dict, tolerances: dict, checks=CHECKS) -> dict:
     """Each check of one stage against its tolerance, relative to the stage's own scale.
 
     ``stage`` holds the differences in unworn units (the columns of :data:`CHECKS`)
@@ -145,10 +156,11 @@ def verdict(stage: dict, tolerances: dict) -> dict:
     {column: {value, tolerance, scale, scale_from, unit, unworn, passed}}: value =
     unworn / scale, scale = max(the stage's magnitude, the floor), unworn the
     difference in the unworn unit. A NaN value (nothing to compare) fails: a check
-    that compared nothing passes nothing.
+    that compared nothing passes nothing. ``checks``: the checks to make (default
+    :data:`CHECKS`).
     """
     out = {}
-    for c in CHECKS:
+    for c in checks:
         column = float(stage[c.column])
         scale, source = stage_scale(stage["stage_scales"][c.column], tolerances[c.floor])
         value = column / scale
@@ -238,16 +250,17 @@ def compare_results(ref, other, *, s_hat_per_m, a0, F0, p0, depth, tolerances, e
                 passed=bool(K > 0 and all(st["passed"] for st in stages)))
 
 
-def worst(stages) -> dict:
+def worst(stages, checks=CHECKS) -> dict:
     """Per check, the stage using the largest fraction of its tolerance.
 
     {column: {stage, value, tolerance, used}} with used = value / tolerance (NaN
-    if none); value is relative to that stage's scale, as in its check.
+    if none); value is relative to that stage's scale, as in its check. A stage
+    without a check (not judged there) is skipped.
     """
     out = {}
-    for c in CHECKS:
+    for c in checks:
         rows = [(st["checks"][c.column]["value"], st["checks"][c.column]["tolerance"],
-                 st["index"]) for st in stages]
+                 st["index"]) for st in stages if c.column in st["checks"]]
         rows = [r for r in rows if np.isfinite(r[0])]
         if not rows:
             out[c.column] = dict(stage=None, value=math.nan, tolerance=math.nan, used=math.nan)

@@ -55,6 +55,8 @@ SUBCOMMANDS = {
     "cases": "list the shipped cases, or print one",
     "compare": "run every solver that supports a case and compare them",
     "export": "write ParaView files (VTU/PVD) of a run directory",
+    "fit": "fit K (and n) of a ball to measured scars, volumes or depths, with 95 %% "
+           "intervals",
     "fretting-map": "running-condition map of a fretting case (partial/gross slip, "
                     "wear per cycle), on Dask",
     "mesh": "generate (or fetch from the cache) the FEM mesh of a case",
@@ -76,6 +78,10 @@ EXAMPLES = {
                  "two solvers, one key changed")],
     "export": [("wearcheck export runs/paper-fem --revolve 36",
                 "ParaView files, the FEM fields revolved into a 3D solid")],
+    "fit": [("wearcheck fit ball_on_flat scars.csv --fit wear.specific_rate",
+             "K with its 95 % interval from a sheet of cycles and scar diameters"),
+            ("wearcheck fit ball_on_flat scars.csv --fit wear.specific_rate --out runs/fit "
+             "--json", "the same as JSON, and a fit directory with the figure")],
     "fretting-map": [("wearcheck fretting-map fretting --vary fretting.amplitude=0.1e-6,0.3e-6,"
                       "1e-6 --set fretting.cycles=1000", "partial or gross slip, and the wear "
                       "per cycle, at three amplitudes")],
@@ -125,9 +131,9 @@ def _unlisted() -> list[str]:
 
 def _load(command: str):
     # imported when the command runs, not with the parser: importing every
-    # subcommand's module took `wearcheck --help` 1.2-1.4 s against 0.65 s for
-    # numpy, scipy.sparse and scipy.linalg (the studies load scipy.optimize,
-    # asyncio; docs/performance.md, "Start-up")
+    # subcommand's module made `wearcheck --help` slower than loading numpy and
+    # scipy (the studies load scipy.optimize, asyncio; docs/performance.md,
+    # "Start-up")
     return importlib.import_module(module_name(command))
 
 

@@ -1,4 +1,6 @@
-"""The comparison's figures (matplotlib, Agg backend, imported only when drawing).
+"""Drawing primitives that the figures of every output share (matplotlib, Agg
+backend, imported only when drawing); which figures an output has is decided
+by its own module (``compare_figures``, ``study_figures``, ...).
 
 Every function takes dimensionless arrays and writes the files it is given.
 Each solver is drawn in the style of its registry entry (MDR lines, FEM

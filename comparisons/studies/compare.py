@@ -26,18 +26,22 @@ import numpy as np
 from wearcheck import cases
 from wearcheck.cases import reference
 from wearcheck.comparisons import layout, registry, rundir
-from wearcheck.comparisons.analysis import diagnosis, edge_peak, metrics
+from wearcheck.comparisons.analysis import diagnosis, metrics, scar
+from wearcheck.comparisons.analysis.diagnosis import grid_spacing, step_hat_used
+from wearcheck.comparisons.analysis.edge_peak import peaks_of
+from wearcheck.comparisons.outputs import check_output
+from wearcheck.comparisons.present import compare_figures, compare_report, report
+from wearcheck.comparisons.present.progress import ProgressBar
+from wearcheck.comparisons.present.scar_figure import scar_figure
+from wearcheck.comparisons.resources import check_memory
+from wearcheck.comparisons.studies import edge_study as edge_mod
+from wearcheck.comparisons.studies import sphere_sweep as sphere_mod
 from wearcheck.extras import need
 
 #: how a solver is run; tests replace it with analytic stand-ins
 solve_case = registry.solve
 #: the default reference solver (exact for axisymmetric half-space contact)
 DEFAULT_REFERENCE = "mdr"
-
-
-def _progress(label, quiet):
-    from wearcheck.comparisons.present.progress import ProgressBar
-    return ProgressBar(label, quiet=quiet)
 
 
 def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tuple[str, ...]]:
@@ -76,7 +80,7 @@ def run_solvers(case, names, *, solve=None, quiet=True, label="") -> dict:
     solve = solve or solve_case
     out = {}
     for name in names:
-        bar = _progress(f"{name}{label}", quiet)
+        bar = ProgressBar(f"{name}{label}", quiet=quiet)
         try:
             out[name] = solve(case, name, progress=bar)
         finally:
@@ -89,18 +93,6 @@ def profile_scale(case, scales) -> float:
     if case.loading.control == "depth":
         return case.loading.depth
     return scales["d0"]
-
-
-def step_hat_used(result, s_hat_per_m) -> float:
-    """The median sliding step of a run, in ŝ (NaN when it did not slide)."""
-    ds = np.diff(np.asarray(result.history["s"], float))
-    ds = ds[ds > 0]
-    return float(np.median(ds) * s_hat_per_m) if ds.size else math.nan
-
-
-def grid_spacing(result, a0) -> float:
-    """Median spacing of a result's radii, relative to a0."""
-    return float(np.median(np.diff(np.asarray(result.r, float))) / a0)
 
 
 # -- analysis --------------------------------------------------------------
@@ -312,7 +304,6 @@ def diagnose(case, results, m) -> None:
 def scar_tables(case, results) -> dict:
     """Scar diameter, central wear and volume per solver for a ball that wears
     long enough to have a scar (a sphere or paraboloid that slides), else {}."""
-    from wearcheck.comparisons.analysis import scar
     if case.indenter.profile not in ("sphere", "paraboloid") or not case.indenter.radius:
         return {}
     out = {}
@@ -323,43 +314,35 @@ def scar_tables(case, results) -> dict:
     return out
 
 
-def peaks_of(result, sc) -> list[dict]:
-    """The edge peak of each stage of one run (contact radius from its history)."""
-    a = metrics.at_stages(result.history["s"], result.history["contact_radius"],
-                          result.stage_s)
-    peaks = edge_peak.stage_peaks(result.r, np.asarray(result.p), a)
-    for q, s in zip(peaks, result.stage_s):
-        q["s_hat"] = float(s * sc["s_hat_per_m"])
-    return peaks
-
-
 # -- the whole comparison ---------------------------------------------------
 
-def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=False,
-            sphere=False, sphere_ratios=None, solve=None, quiet=True, render=True) -> dict:
-    """Run the solvers on ``case`` and write the comparison directory ``out`` atomically.
+@dataclasses.dataclass
+class Runs:
+    """What the solvers computed for one comparison: the output of :func:`run`.
 
-    Parameters
-    ----------
-    case : a loaded :class:`wearcheck.Case`.
-    out : the comparison directory (replaced only if it is a wearcheck output).
-    solvers : names of the solvers to compare (default: every registered solver
-        that supports the case); reference_solver : the one the others are
-        compared with (default "mdr").
-    edge, sphere : also run the edge-peak study and the finite-sphere sweep.
-
-    Returns the metrics (as in metrics.json); ``passed`` is the verdict.
+    ``results`` maps solver names to results, the reference first;
+    ``switched`` is (default reference, reference used) when the default
+    reference solved an approximation of the case; ``edge_study`` and
+    ``sphere_sweep`` are the sub-studies (None when not asked for), the edge
+    study's extra runs in ``edge_runs`` (label -> (solver, case, result)).
     """
-    from wearcheck.comparisons.present import compare_figures, compare_report, report
-    from wearcheck.comparisons.studies import edge_study as edge_mod
-    from wearcheck.comparisons.studies import sphere_sweep as sphere_mod
-    t0 = time.perf_counter()
-    need("matplotlib", "compare (its figures)")    # said before the solves
+
+    reference: str
+    results: dict
+    switched: tuple | None = None
+    edge_study: dict | None = None
+    edge_runs: dict = dataclasses.field(default_factory=dict)
+    sphere_sweep: dict | None = None
+
+
+def run(case, *, solvers=None, reference_solver=None, edge=False, sphere=False,
+        sphere_ratios=None, solve=None, quiet=True) -> Runs:
+    """Step 1: run the chosen solvers on ``case`` (and the sub-studies asked for).
+
+    Checks each solver's memory need first; nothing is written.
+    """
     solve = solve or solve_case
     ref, names = choose_solvers(case, solvers, reference_solver)
-    from wearcheck.comparisons.outputs import check_output
-    from wearcheck.comparisons.resources import check_memory
-    check_output(out, "comparison")  # before the solves: a path we may not write
     for name in names:
         check_memory(case, name)
     results = run_solvers(case, names, solve=solve, quiet=quiet)
@@ -372,49 +355,75 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
             switched = (ref, exact[0])
             ref = exact[0]
             results = {ref: results[ref], **{n: r for n, r in results.items() if n != ref}}
-    m = analyse(case, results, ref)
-    m["skipped"] = skipped_solvers(case, names)
-    if switched:
-        m["reference_note"] = (f"{registry.get(switched[0]).title} solved an approximation "
-                               f"of this case, so {registry.get(switched[1]).title} is the "
-                               "reference")
-    scars = scar_tables(case, results)
-    if scars:
-        from wearcheck.comparisons.analysis import scar
-        m["scar"] = {n: scar.summary(t) for n, t in scars.items()}
-    study = None
+    runs = Runs(reference=ref, results=results, switched=switched)
     if edge:
-        study = edge_mod.edge_study(case, results, solve=solve, quiet=quiet)
-    sweep = None
+        runs.edge_study = edge_mod.edge_study(case, results, solve=solve, quiet=quiet)
+        runs.edge_runs = runs.edge_study.pop("runs")
     if sphere:
-        sweep = sphere_mod.sphere_sweep(case, sphere_ratios or sphere_mod.SPHERE_RATIOS,
-                                        solve=solve, quiet=quiet)
+        runs.sphere_sweep = sphere_mod.sphere_sweep(
+            case, sphere_ratios or sphere_mod.SPHERE_RATIOS, solve=solve, quiet=quiet)
+    return runs
+
+
+def analyse_runs(case, runs: Runs) -> dict:
+    """Step 2: the comparison's metrics from its runs (pure: no files, no figures).
+
+    :func:`analyse` of the results, with the solvers left out and why, the
+    reference's switch, the scar summary and the sub-studies' results.
+    """
+    m = analyse(case, runs.results, runs.reference)
+    m["skipped"] = skipped_solvers(case, tuple(runs.results))
+    if runs.switched:
+        old, new = runs.switched
+        m["reference_note"] = (f"{registry.get(old).title} solved an approximation "
+                               f"of this case, so {registry.get(new).title} is the "
+                               "reference")
+    scars = scar_tables(case, runs.results)
+    if scars:
+        m["scar"] = {n: scar.summary(t) for n, t in scars.items()}
+    if runs.edge_study is not None:
+        m["edge_study"] = dict(runs.edge_study)
+    if runs.sphere_sweep is not None:
+        m["sphere_sweep"] = dict(runs.sphere_sweep)
+    return m
+
+
+def write(out, case, runs: Runs, m: dict, *, argv=None, render=True, started=None) -> dict:
+    """Step 3: write the comparison directory ``out`` atomically: each solver's
+    run directory, the figures, metrics.json, case.toml and the report.
+
+    Returns the metrics as written: ``m`` (from :func:`analyse_runs`, not
+    changed) with the figures' names, the renders, the provenance and the
+    total time (``started``: the ``time.perf_counter()`` of the comparison's
+    start) added.
+    """
+    need("matplotlib", "compare (its figures)")
+    m = dict(m)
+    names = list(runs.results)
     prov = rundir.provenance(argv)
-    out = Path(out)
-    with rundir.atomic_directory(out, "comparison") as tmp:
-        for name, res in results.items():
+    with rundir.atomic_directory(Path(out), "comparison") as tmp:
+        for name, res in runs.results.items():
             (tmp / name).mkdir()
             rundir.write_run_files(tmp / name, case, res, name, argv)
-        figure_names = compare_figures.draw_figures(tmp, case, results, m)
-        if study is not None:
-            runs = study.pop("runs")
+        figure_names = compare_figures.draw_figures(tmp, case, runs.results, m)
+        if "edge_study" in m:
+            m["edge_study"] = study = dict(m["edge_study"])
             (tmp / "edge_study").mkdir()
-            for sub, (name, c, res) in runs.items():
+            for sub, (name, c, res) in runs.edge_runs.items():
                 (tmp / "edge_study" / sub).mkdir()
                 rundir.write_run_files(tmp / "edge_study" / sub, c,
                                        dataclasses.replace(res, fields=None), name, argv)
             curves = []
             for n in study["solvers"]:
-                curves.append((f"{registry.get(n).title} case", n, results[n]))
+                curves.append((f"{registry.get(n).title} case", n, runs.results[n]))
                 curves += [(f"{registry.get(name).title} {sub.split('-', 1)[1]}", name, res)
-                           for sub, (name, c, res) in runs.items() if name == n]
+                           for sub, (name, c, res) in runs.edge_runs.items() if name == n]
             study["figure"] = compare_figures.draw_edge_study(tmp, curves, m["scales"])
-            m["edge_study"] = study
-        if sweep is not None:
+        if "sphere_sweep" in m:
+            m["sphere_sweep"] = sweep = dict(m["sphere_sweep"])
             sweep["figure"] = compare_figures.draw_sphere_sweep(tmp, sweep)
-            m["sphere_sweep"] = sweep
+        scars = scar_tables(case, runs.results)
         if scars:
-            from wearcheck.comparisons.present.scar_figure import scar_figure
             scar_figure(tmp / "scar.png", {registry.get(n).title: t for n, t in scars.items()},
                         title="scar diameter and worn volume")
             figure_names.append("scar.png")
@@ -424,10 +433,36 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
         m["render_notes"] = notes
         m["provenance"] = prov
         m["case_source"] = case.source
-        m["seconds_total"] = time.perf_counter() - t0
+        if started is not None:
+            m["seconds_total"] = time.perf_counter() - started
         m["data_dictionary"] = layout.comparison_dictionary()
         rundir.write_json(tmp / "metrics.json", m)
         (tmp / "case.toml").write_text(cases.to_toml(case), encoding="utf-8")
         blocks = compare_report.build_report(case, m, figure_names, renders, notes, prov)
         report.write(tmp, blocks, f"wearcheck compare: {Path(case.source).name}")
     return m
+
+
+def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=False,
+            sphere=False, sphere_ratios=None, solve=None, quiet=True, render=True) -> dict:
+    """Run the solvers on ``case`` and write the comparison directory ``out`` atomically:
+    :func:`run`, :func:`analyse_runs`, :func:`write`.
+
+    Parameters
+    ----------
+    case : a loaded :class:`wearcheck.Case`.
+    out : the comparison directory (replaced only if it is a wearcheck output).
+    solvers : names of the solvers to compare (default: every registered solver
+        that supports the case); reference_solver : the one the others are
+        compared with (default "mdr").
+    edge, sphere : also run the edge-peak study and the finite-sphere sweep.
+
+    Returns the metrics (as in metrics.json); ``passed`` is the verdict.
+    """
+    started = time.perf_counter()
+    check_output(out, "comparison")  # before the solves: a path we may not write
+    need("matplotlib", "compare (its figures)")    # and an extra it will need
+    runs = run(case, solvers=solvers, reference_solver=reference_solver, edge=edge,
+               sphere=sphere, sphere_ratios=sphere_ratios, solve=solve, quiet=quiet)
+    return write(out, case, runs, analyse_runs(case, runs), argv=argv, render=render,
+                 started=started)

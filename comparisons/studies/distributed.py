@@ -9,9 +9,9 @@ solver error, a crashed worker) comes back as an error outcome; the others go on
 
 By default the tasks run on an embedded ``LocalCluster`` bound to 127.0.0.1
 without a dashboard: one single-threaded worker process per core. Processes,
-not threads: on 2 cores (``benchmarks/bench_refine.py``, a loaded machine) the
-default MDR study took 4.6 s on two processes against 53 s on two threads, FEM
-at 60-500 nodes 2.4 s against 3.0 s; and a process of its own is what makes
+not threads: an MDR study on threads took more than ten times as long, an
+FEM one a little longer (docs/performance.md, "Measurements behind the
+code"); and a process of its own is what makes
 the peak memory of a task measurable. ``scheduler=ADDRESS`` uses an existing cluster
 instead; its workers need wearcheck importable (``pip install .``) and, for a
 tabulated profile, the table file at the same path.
@@ -160,13 +160,14 @@ def execute(base: cases.Case, changes: dict, solver: str, name: str,
     """Build the case (``base`` with ``changes``), solve it; never raises. Runs inside a
     worker.
 
-    ``solve(case, solver, progress)`` defaults to ``comparisons.solvers.solve``.
+    ``solve(case, solver, progress)`` defaults to ``comparisons.registry.solve``.
     """
     if solve is None:
         from wearcheck.comparisons import registry
         from wearcheck.comparisons.registry import solve
         try:  # a worker's first import of the solver is not part of its cost
-            importlib.import_module(registry.get(solver).module)
+            # (a solver package imports its numerics with its solve, on first use)
+            getattr(importlib.import_module(registry.get(solver).module), "solve")
         except Exception:
             pass  # solve() meets the same failure below and reports it
     out = dict(ok=False, message="", case=None, result=None, traceback="")

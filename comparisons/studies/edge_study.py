@@ -14,8 +14,8 @@ from wearcheck import cases
 from wearcheck.cases import reference
 from wearcheck.comparisons import registry
 from wearcheck.comparisons.analysis import edge_peak
-from wearcheck.comparisons.studies import compare
-from wearcheck.comparisons.studies.compare import _progress, grid_spacing, peaks_of, step_hat_used
+from wearcheck.comparisons.analysis.diagnosis import grid_spacing, step_hat_used
+from wearcheck.comparisons.present.progress import ProgressBar
 
 #: grid refinement factors of the edge study, relative to the case
 EDGE_GRID_FACTORS = (0.5, 2.0)
@@ -55,18 +55,18 @@ def edge_study(case, results, *, solve=None, quiet=True) -> dict:
     Returns the study as written to metrics.json, with the extra runs under
     ``runs`` (label -> (solver, case, RunResult or error text)).
     """
-    solve = solve or compare.solve_case
+    solve = solve or registry.solve
     sc = reference.scales(case)
     out = dict(solvers={}, runs={})
     for name, levels in edge_levels(case, results, sc).items():
         lv = [dict(label="case", changes={}, spacing=grid_spacing(results[name], sc["a0"]),
                    step_hat=step_hat_used(results[name], sc["s_hat_per_m"]),
                    seconds=float(results[name].solve_seconds),
-                   peaks=peaks_of(results[name], sc))]
+                   peaks=edge_peak.peaks_of(results[name], sc))]
         failed = []
         for label, changes in levels:
             c = case.derive(changes)
-            bar = _progress(f"edge {name} {label}", quiet)
+            bar = ProgressBar(f"edge {name} {label}", quiet=quiet)
             try:
                 res = solve(c, name, progress=bar)
             except cases.SolverError as exc:
@@ -78,7 +78,8 @@ def edge_study(case, results, *, solve=None, quiet=True) -> dict:
             lv.append(dict(label=label, changes=changes,
                            spacing=grid_spacing(res, sc["a0"]),
                            step_hat=step_hat_used(res, sc["s_hat_per_m"]),
-                           seconds=float(res.solve_seconds), peaks=peaks_of(res, sc)))
+                           seconds=float(res.solve_seconds),
+                           peaks=edge_peak.peaks_of(res, sc)))
         out["solvers"][name] = dict(levels=[{k: v for k, v in d.items() if k != "peaks"}
                                             for d in lv],
                                     failed=failed, stages=edge_peak.assess(lv))

@@ -13,8 +13,8 @@ import numpy as np
 
 from wearcheck import cases
 from wearcheck.cases import reference
-from wearcheck.comparisons.studies import compare
-from wearcheck.comparisons.studies.compare import _progress
+from wearcheck.comparisons import registry
+from wearcheck.comparisons.present.progress import ProgressBar
 
 #: a0/R of the finite-sphere sweep
 SPHERE_RATIOS = (0.005, 0.01, 0.02, 0.05, 0.1)
@@ -37,12 +37,12 @@ def sphere_case(case, ratio):
 def sphere_sweep(case, ratios=SPHERE_RATIOS, *, solver="fem", solve=None, quiet=True) -> dict:
     """A finite-body solver's force and contact radius at given approach against the
     half-space values (default: the FEM sphere)."""
-    solve = solve or compare.solve_case
+    solve = solve or registry.solve
     rows = []
     for ratio in ratios:
         c = sphere_case(case, ratio)
         hs = reference.unworn_contact(c)
-        bar = _progress(f"sphere a0/R={ratio:g}", quiet)
+        bar = ProgressBar(f"sphere a0/R={ratio:g}", quiet=quiet)
         try:
             res = solve(c, solver, progress=bar)
         except cases.SolverError as exc:
