@@ -78,9 +78,11 @@ class Solver:
     supports_function: Callable | None = None
     default: bool = True
 
-    def _package(self):
+    def _function(self, name: str):
+        """The solver package's ``name`` (solve, supports; None if it has none),
+        imported on first use."""
         try:
-            return importlib.import_module(self.module)
+            return getattr(importlib.import_module(self.module), name, None)
         except ModuleNotFoundError as exc:
             # an optional module the solver needs (the FEM's scikit-fem): one line
             # naming the extra, which supports() gives as its reason
@@ -91,7 +93,7 @@ class Solver:
 
     def solve(self, case: Case, progress=None) -> RunResult:
         """Run this solver on ``case`` (refused with a CaseError when unsupported)."""
-        fn = self.solve_function or self._package().solve   # a missing extra said first
+        fn = self.solve_function or self._function("solve")   # a missing extra said first
         reason = self.supports(case)
         if reason is not None:
             raise CaseError(f"solver '{self.name}' cannot run this case: {reason}")
@@ -116,7 +118,7 @@ class Solver:
         fn = self.supports_function
         if fn is None and self.module is not None:
             try:
-                fn = getattr(self._package(), "supports", None)
+                fn = self._function("supports")
             except extras.MissingExtra as exc:
                 return str(exc)
         return fn(case) if fn is not None else None

@@ -130,8 +130,10 @@ def test_run_reports_without_their_figures_say_which_extra(blocked, tmp_path):
         blocked,
         ["run", "fretting", "--solver", "mdr", "--set", "mdr.elements=100",
          "--set", "fretting.cycles=10", "--quiet", "--out", str(fretting)],
+        # (the moving-contact model: the long-stroke one fails on main at the time of
+        # writing, 'TrackOperator' object has no attribute 'single', with every extra)
         ["run", "ball_on_flat_steel", "--solver", "bem", "--set", "bem.grid=32",
-         "--set", "sliding.until=distance", "--set", "sliding.distance=1e-3", "--quiet",
+         "--set", "bem.track_model=moving", "--set", "sliding.until=distance", "--set", "sliding.distance=1e-3", "--quiet",
          "--out", str(track)])
     assert outcomes == [[0, ""], [0, ""]]
     said = (fretting / "report.md").read_text(encoding="utf-8")
