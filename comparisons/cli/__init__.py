@@ -61,9 +61,12 @@ SUBCOMMANDS = {
                     "wear per cycle), on Dask",
     "mesh": "generate (or fetch from the cache) the FEM mesh of a case",
     "refine": "refinement study: one solver at several resolutions",
+    "reference": "write a certified reference solution as a run directory",
     "render": "render PNG pictures of a run directory (no display needed)",
     "run": "run one solver on a case and write a run directory",
     "sweep": "one run per value of one or more case keys, on Dask",
+    "verify": "judge results produced elsewhere against the certified reference (or a "
+              "fresh run)",
 }
 
 
@@ -88,12 +91,19 @@ EXAMPLES = {
     "mesh": [("wearcheck mesh paper", "the FEM mesh of the paper's case (cached)")],
     "refine": [("wearcheck refine paper --solver mdr --levels 200,400,800",
                 "three MDR grids: orders and converged level")],
+    "reference": [("wearcheck reference --list", "the certified references shipped"),
+                  ("wearcheck reference paper --out runs/paper-reference",
+                   "the paper case's reference as a run directory")],
     "render": [("wearcheck render runs/paper-mdr", "PNG pictures of a run directory")],
     "run": [("wearcheck run paper --solver mdr", "the MDR on the paper's case, into "
              "runs/paper-mdr"),
             ("wearcheck run my_case.toml --solver fem --set wear.mu=0.5 --out runs/mu-0.5",
              "a case file of your own, one key changed"),
             ("wearcheck run hertz --solver mdr --json", "a summary on stdout as JSON")],
+    "verify": [("wearcheck verify paper my_results.csv",
+                "your model's history and stages against the paper case's reference"),
+               ("wearcheck verify paper export.csv --map 's [mm]=Time' --out runs/verify",
+                "an FE export whose column names and units are given, with a report")],
     "sweep": [("wearcheck sweep paper --vary wear.mu=0.2,0.3,0.5 --solver mdr",
                "one run per value, summarised in sweep.csv")],
 }
