@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from . import rules
+from .loader_checks import special_file
 from .errors import ArgumentError, CaseError
 from .schema import (BEMSettings, CCXSettings, did_you_mean, OPTIONAL_SECTIONS, REQUIRED_SECTIONS,
                      SECTIONS, CompareSettings, Counterface, FEMSettings, Fretting, Indenter,
@@ -309,6 +310,11 @@ def read_raw(path: str | Path) -> dict:
     path = Path(path)
     if path.is_dir():
         raise CaseError(f"case file '{path}' is a directory, not a TOML file")
+    what = special_file(path)
+    if what:
+        raise CaseError(f"case file '{path}' is {what}, not a file: wearcheck reads a case "
+                        "from a file (more than once, and finds a profile table beside it); "
+                        "save it first, e.g. 'cat > case.toml', and give that")
     if not path.is_file():
         raise CaseError(f"case file '{path}' does not exist")
     try:

@@ -73,6 +73,9 @@ def resolve(name_or_path: str | Path) -> Path:
     available = shipped_cases()
     listing = ", ".join(available)
     looks_like_a_name = text and path.name == text and not text.startswith(".")
+    if text == "-":
+        raise CaseError("case '-': wearcheck does not read a case from standard input; save "
+                        f"it to a file and give its path, or name a shipped case: {listing}")
     if not looks_like_a_name:
         raise CaseError(f"case file '{text}' does not exist (shipped cases, by name: {listing})")
     found = _by_name(text)

@@ -12,6 +12,7 @@ import csv
 import hashlib
 import io
 import math
+import os
 from dataclasses import replace
 from pathlib import Path
 
@@ -39,11 +40,32 @@ def profile_table(case):
                    table_file=table_file)
 
 
+def special_file(path: Path) -> str | None:
+    """What ``path`` is when it exists but is no regular file nor directory: "a pipe"
+    (``/dev/stdin`` fed by ``|``, ``<(...)``), "a character device" (``/dev/null``),
+    "a socket", "a block device"; None otherwise. Such a path exists, but a case or
+    a table cannot be read from it as from a file (more than once, beside its
+    other files), which "does not exist" would hide."""
+    import stat
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return None
+    for test, what in ((stat.S_ISFIFO, "a pipe"), (stat.S_ISCHR, "a character device"),
+                       (stat.S_ISSOCK, "a socket"), (stat.S_ISBLK, "a block device")):
+        if test(mode):
+            return what
+    return None
+
+
 def read_profile_table(file: Path) -> tuple[tuple[np.ndarray, np.ndarray], str]:
     """Read a tabulated profile: two columns r, f in metres; and the SHA-256 of the file."""
     name = "indenter.file"
     if file.is_dir():
         raise CaseError(f"key '{name}' = \"{file}\": is a directory, not a CSV file")
+    if special_file(file):
+        raise CaseError(f"key '{name}' = \"{file}\": is {special_file(file)}, not a file; "
+                        "save the table to a CSV file and name that")
     if not file.is_file():
         raise CaseError(f"key '{name}' = \"{file}\": file does not exist")
     rows = []

@@ -6,9 +6,12 @@ Every output directory wearcheck writes carries a marker file,
 ``wearcheck mesh --out``), whether it is complete, and the writing process
 (pid, host). Only that marker makes an existing path replaceable, and only by
 an output of the same kind; anything else is refused with one line and never
-deleted. Directories are built in a hidden ``.NAME.partial-*`` sibling and
-renamed into place when complete; a partial directory whose writer has died
-(same host, pid gone) is removed on the next write to the same path.
+deleted. Directories are built in a hidden ``.NAME.partial-*`` sibling, marked
+complete only when they are, and then exchanged with what is at the path in
+one atomic step (:func:`_install`), so that a kill at any instant leaves the
+path holding the earlier output or the new one. What a killed writer left
+beside the path (same host, pid gone) is put right by the next write to, or
+read of, that path (:func:`recover`).
 
 The CLI checks an output path with :func:`check_output` before any solve, so a
 path that cannot be written fails in a second, not after the work.
@@ -22,13 +25,23 @@ import hashlib
 import json
 import os
 import platform
+import re
 import shutil
 import stat
+import struct
+import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
 from wearcheck import cases
+from wearcheck.comparisons import renames
+
+try:
+    import fcntl
+except ImportError:       # not on Windows
+    fcntl = None
 
 #: written into every directory wearcheck creates: what may be replaced, and by what
 OUTPUT_MARKER = ".wearcheck-output"
@@ -46,12 +59,17 @@ def marker_data(kind: str, complete: bool) -> dict:
                 host=platform.node(), created=time.strftime("%Y-%m-%dT%H:%M:%S%z"))
 
 
-def write_marker(directory: Path, kind: str, complete: bool = True, files=None) -> None:
-    """Write the marker; ``files`` (from :func:`inventory`) lists what the output holds."""
+def write_marker(directory: Path, kind: str, complete: bool = True, files=None,
+                 built_in: str | None = None) -> None:
+    """Write the marker, by rename (never half written); ``files`` (from
+    :func:`inventory`) lists what the output holds, ``built_in`` names the hidden
+    ``.partial-*`` directory it was built in (see :func:`left_behind`)."""
     data = marker_data(kind, complete)
     if files is not None:
         data["files"] = files
-    (Path(directory) / OUTPUT_MARKER).write_text(json.dumps(data) + "\n", encoding="utf-8")
+    if built_in is not None:
+        data["built_in"] = built_in
+    _rewrite_marker(Path(directory), data)
 
 
 def _parse_marker(text: str) -> dict | None:
@@ -138,14 +156,13 @@ def _walk(fd: int, prefix: str, files: dict, nested: list, root_kind=None,
         entries = sorted(it, key=lambda e: e.name)
     depth = prefix.count("/") + 1
     for e in entries:
-        if not prefix and e.name == OUTPUT_MARKER:
-            continue
+        if not prefix and (e.name == OUTPUT_MARKER or e.name.startswith(OUTPUT_MARKER + ".")):
+            continue          # the marker, and a new one being written (_rewrite_marker)
         rel = prefix + e.name
         if e.is_dir(follow_symlinks=False):
             sub = os.open(e.name, os.O_RDONLY | os.O_DIRECTORY, dir_fd=fd)
             marker = _marker_at(sub)
-            if marker is not None and marker.get("complete", True) is False \
-                    and partials is not None and e.name.startswith(".") \
+            if marker is not None and partials is not None and e.name.startswith(".") \
                     and (".partial-" in e.name or ".old-" in e.name):
                 partials.append((rel, marker))
                 os.close(sub)
@@ -228,10 +245,9 @@ def _foreign(fd: int, name: str) -> str | None:
     try:
         _walk(fd, "", now, nested, marker.get("kind"), partials)
         for rel, pm in partials:
-            pid = pm.get("pid")
-            if pm.get("host") == platform.node() and isinstance(pid, int) \
-                    and not _pid_alive(pid):
+            if left_behind(rel.rpartition("/")[2], pm):
                 continue              # left by a wearcheck process that died: debris
+            pid = pm.get("pid")
             return (f"output '{name}' is being written into by wearcheck process {pid} on "
                     f"{pm.get('host')} ({_shown([rel])}); try again when it has finished")
         added = [k for k in now if k not in recorded]
@@ -331,6 +347,7 @@ def check_output(path, kind: str) -> Path:
         raise OutputError(f"output '{raw}': name a directory or file of its own, not "
                           "'.' or '..'")
     given = Path(raw).absolute()
+    _check_name_length(raw, given)
     for part in [*reversed(given.parents), given]:
         if part.is_symlink() and not part.exists():
             raise OutputError(f"output '{raw}': '{part}' is a broken symbolic link; "
@@ -348,8 +365,110 @@ def check_output(path, kind: str) -> Path:
         raise OutputError(f"output '{path}' is a mount point, which wearcheck cannot replace "
                           f"by its finished output; give a directory inside it, e.g. "
                           f"'{path / 'run'}'")
-    _check_writable_ancestor(path)
+    if not path.is_symlink() and path.exists():
+        why = _pinned(path, whole=kind != "study")
+        if why:
+            raise OutputError(why)
+    _check_writable_ancestor(path, inside=kind == "study")
     return path
+
+
+#: the longest name wearcheck writes beside an output NAME: '.NAME.partial-' and
+#: mkdtemp's 8 characters (a file's side marker '.NAME.wearcheck-output' is as long)
+_HIDDEN_EXTRA = len("..partial-") + 8
+#: the same for a file wearcheck replaces (:func:`write_file`): its temporary
+#: '.NAME.partial-PID@HOST@XXXXXXXX' (:func:`_temporary`, a pid of up to 7 digits)
+_FILE_HIDDEN_EXTRA = len("..partial-") + 7 + 1 + 8 + 1 + 8
+#: room kept below PATH_MAX for the deepest file inside an output
+#: ('<solver>/vtk/.vtk.partial-XXXXXXXX/solid_stage000.vtu' and the like)
+_INNER_PATH = 120
+
+
+def _limits(path: Path) -> tuple[int, int]:
+    """(NAME_MAX, PATH_MAX) of the file system that holds (or will hold) ``path``."""
+    ancestor = path.parent
+    while True:
+        try:
+            os.stat(ancestor)
+            break
+        except OSError:
+            if ancestor == ancestor.parent:
+                break
+            ancestor = ancestor.parent
+    try:
+        return os.pathconf(ancestor, "PC_NAME_MAX"), os.pathconf(ancestor, "PC_PATH_MAX")
+    except (OSError, ValueError):
+        return 255, 4096
+
+
+def _check_name_length(raw: str, path: Path, extra: int = _HIDDEN_EXTRA) -> None:
+    """Refuse, before any work, a name the file system would refuse only when the output
+    is written: a component, or the output's hidden sibling (``extra`` bytes longer),
+    or the whole path too long."""
+    name_max, path_max = _limits(path)
+    for part in path.parts[1:-1]:
+        if len(os.fsencode(part)) > name_max:
+            raise OutputError(f"output '{raw}': the directory name '{part[:40]}...' is "
+                              f"{len(os.fsencode(part))} bytes; this file system takes names "
+                              f"of at most {name_max}")
+    n = len(os.fsencode(path.name))
+    if n + extra > name_max:
+        raise OutputError(f"output '{raw[:60]}...': its name is {n} bytes, and wearcheck "
+                          f"writes it through a hidden '.NAME.partial-...' beside it, "
+                          f"{extra} bytes longer; this file system takes names of at "
+                          f"most {name_max} bytes: give a name of at most "
+                          f"{name_max - extra} bytes")
+    total = len(os.fsencode(str(path))) + extra + _INNER_PATH
+    if total > path_max:
+        raise OutputError(f"output '{raw[:60]}...': the path is {len(os.fsencode(str(path)))} "
+                          f"bytes, and the files inside the output would pass the system's "
+                          f"limit of {path_max} bytes for a path: give a path of at most "
+                          f"{path_max - extra - _INNER_PATH} bytes")
+
+
+#: Linux inode flags (``chattr``): the file or directory cannot be changed, or
+#: only appended to; either way it cannot be renamed or removed
+_FS_IOC_GETFLAGS = 0x80006601 | (struct.calcsize("l") << 16)
+_PINNING_FLAGS = {0x10: "immutable (chattr +i)", 0x20: "append-only (chattr +a)"}
+
+
+def _inode_flags(path) -> int:
+    """The ``chattr`` flags of a directory or regular file; 0 where unknown."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_NOFOLLOW", 0))
+    except OSError:
+        return 0
+    try:
+        return int.from_bytes(fcntl.ioctl(fd, _FS_IOC_GETFLAGS, bytes(8))[:4], sys.byteorder)
+    except (OSError, ValueError):
+        return 0          # a file system without the flags (tmpfs, NFS), or not Linux
+    finally:
+        os.close(fd)
+
+
+def _pinned(path: Path, whole: bool = True) -> str | None:
+    """Why wearcheck could not replace (``whole``: or remove the contents of) the existing
+    ``path``: it, or something in it, is immutable or append-only."""
+    if fcntl is None:
+        return None
+    todo = [path]
+    if whole and path.is_dir():
+        for root, dirs, files in os.walk(path):
+            todo += [Path(root) / n for n in dirs + files]
+    for item in todo:
+        try:
+            if item.is_symlink() or not (item.is_dir() or item.is_file()):
+                continue
+        except OSError:
+            continue
+        flags = _inode_flags(item)
+        for bit, what in _PINNING_FLAGS.items():
+            if flags & bit:
+                where = "it is" if item == path else f"'{item}' in it is"
+                return (f"output '{path}': {where} {what}, so wearcheck could not replace "
+                        f"it; clear the flag (chattr -{what[-2]} ...) or choose another "
+                        "output path")
+    return None
 
 
 def _refuse_working_directory(path: Path) -> None:
@@ -405,31 +524,226 @@ def _pid_alive(pid: int) -> bool:
     return True
 
 
-def clean_stale(parent: Path, name: str) -> list[Path]:
-    """Remove ``.NAME.partial-*`` and ``.NAME.old-*`` siblings left by dead writers.
+def left_behind(name: str, marker: dict) -> bool:
+    """Whether the hidden directory ``name`` (a ``.NAME.partial-*`` or ``.NAME.old-*``)
+    with ``marker`` is what a writer that is gone left behind.
 
-    Only directories whose marker names this host and a process that no longer
-    exists; anything else is left alone. Returns what was removed.
+    Its writer (the marker's pid) no longer runs on this host. A complete output
+    in another's place (its marker names the ``.partial-*`` it was itself built
+    in) is an earlier output that a replacement exchanged out of the path:
+    the replacing process (``aside_by``) must be gone.
     """
+    writer = marker
+    if marker.get("complete", True) and marker.get("built_in") not in (None, name):
+        writer = marker.get("aside_by")
+        if not isinstance(writer, dict):
+            return True   # killed right after the exchange, before it said whose it is
+    pid = writer.get("pid")
+    return writer.get("host") == platform.node() and isinstance(pid, int) \
+        and not _pid_alive(pid)
+
+
+def _siblings(path: Path) -> list[Path]:
+    """The ``.NAME.partial-*`` and ``.NAME.old-*`` directories beside ``path``."""
+    try:
+        entries = list(path.parent.iterdir())
+    except OSError:
+        return []
+    return sorted(e for e in entries
+                  if (e.name.startswith(f".{path.name}.partial-")
+                      or e.name.startswith(f".{path.name}.old-"))
+                  and not e.is_symlink() and e.is_dir())
+
+
+def recover(path) -> list[Path]:
+    """Put right what writers of ``path`` that were killed left beside it.
+
+    Only wearcheck's own hidden siblings are touched (a marker), and only those
+    :func:`left_behind`:
+
+    - ``.NAME.old-*`` holds the earlier output moved aside (a file system without
+      an atomic exchange, see :func:`_install`): if ``path`` is missing it goes
+      back there, otherwise it is removed;
+    - ``.NAME.partial-*``, complete or not, is removed: a new output that was
+      being written, or whose installation the kill stopped (``path`` still
+      holds the earlier one), or the earlier one exchanged out of ``path``
+      (which holds the new one).
+
+    A complete output holding a file wearcheck did not write (its inventory) is
+    left where it is. Returns the directories removed.
+    """
+    path = Path(path)
+    removed = []
+    for entry in _siblings(path):
+        marker = read_marker(entry)
+        if marker is None or not left_behind(entry.name, marker):
+            continue
+        if entry.name.startswith(f".{path.name}.old-"):
+            _settle_graveyard(entry, path)
+            if not entry.exists():
+                removed.append(entry)
+        else:
+            done = _remove_unless_foreign(entry)
+            if done == "removed":
+                removed.append(entry)
+            elif done == "foreign":
+                _keep_in_sight(entry, path)
+    return removed
+
+
+def _keep_in_sight(entry: Path, path: Path) -> Path | None:
+    """A hidden earlier output holding files that reached it while it was replaced
+    (the writer was killed before it could put it back): renamed to a visible
+    ``NAME.kept-N`` beside ``path``, for the user to take the files from."""
+    for n in range(1, 1000):
+        keep = path.with_name(f"{path.name}.kept-{n}")
+        try:
+            renames.rename_noreplace(entry, keep)
+        except FileExistsError:
+            continue
+        except OSError:
+            if os.path.lexists(keep):
+                continue
+            try:
+                os.rename(entry, keep)
+            except OSError:
+                return None
+        return keep
+    return None
+
+
+def clean_stale(parent: Path, name: str) -> list[Path]:
+    """:func:`recover` of ``parent / name`` (the name of earlier versions)."""
+    return recover(Path(parent) / name)
+
+
+def _remove_unless_foreign(directory: Path, checked: bool = False) -> str:
+    """Remove a wearcheck directory, unless it is a complete output holding files
+    wearcheck did not write (``checked``: already known not to).
+
+    Returns "removed", "foreign", or "busy" (no marker, gone meanwhile, or being
+    removed by another process, which marks it incomplete first).
+    """
+    marker = read_marker(directory)
+    if marker is None:
+        return "busy"
+    if not checked and marker.get("complete", True):
+        try:
+            why = foreign_content(directory)
+        except FileNotFoundError:
+            return "busy"
+        if why:
+            now = read_marker(directory) or {}
+            return "foreign" if now.get("complete", False) else "busy"
+    remove_tree(directory)
+    return "busy" if directory.exists() else "removed"
+
+
+def remove_tree(directory: Path) -> None:
+    """Remove ``directory``: first its marker says incomplete (this process's
+    debris), and it goes last. A removal cut short by a kill leaves a directory
+    that says whose it is and that it is no output, which :func:`recover` removes."""
+    directory = Path(directory)
+    marker = read_marker(directory)
+    if marker is not None and marker.get("complete", True):
+        with contextlib.suppress(OSError):
+            _rewrite_marker(directory, dict(marker_data(marker.get("kind", "run"), False),
+                                            removing=True))
+    try:
+        entries = sorted(os.scandir(directory), key=lambda e: e.name)
+    except FileNotFoundError:
+        return
+    except OSError:
+        shutil.rmtree(directory, ignore_errors=True)
+        return
+    first = True
+    for e in entries:
+        if e.name == OUTPUT_MARKER:
+            continue
+        if e.is_dir(follow_symlinks=False):
+            shutil.rmtree(e.path, ignore_errors=True)
+        else:
+            with contextlib.suppress(FileNotFoundError, PermissionError):
+                os.unlink(e.path)
+        if first:
+            first = False
+            _step("retiring")
+    with contextlib.suppress(OSError):
+        os.unlink(directory / OUTPUT_MARKER)
+    with contextlib.suppress(OSError):
+        os.rmdir(directory)
+
+
+def _settle_graveyard(graveyard: Path, path: Path, restore: bool = True) -> None:
+    """Empty a ``.NAME.old-*`` directory of :func:`_install`'s fallback.
+
+    It holds the earlier occupants of ``path``, moved aside as ``0``, ``1``, ...
+    (one per attempt; concurrent writers may have installed several). With
+    ``restore`` (the new output was not installed), when ``path`` is missing
+    the last of them goes back there. The others are removed unless they hold
+    files wearcheck did not write, which are kept in sight. The directory goes
+    when it is empty.
+    """
+    held = []
+    with contextlib.suppress(OSError):
+        held = sorted((p for p in graveyard.iterdir() if p.name != OUTPUT_MARKER),
+                      key=lambda p: (len(p.name), p.name))
+    if restore and held and not os.path.lexists(path):
+        marker = read_marker(held[-1])
+        if marker is not None and marker.get("complete", True):
+            with contextlib.suppress(OSError):
+                os.rename(held[-1], path)
+    for aside in held:
+        if aside.is_dir() and not aside.is_symlink() \
+                and _remove_unless_foreign(aside) == "foreign":
+            _keep_in_sight(aside, path)
+    with contextlib.suppress(OSError):
+        if [p.name for p in graveyard.iterdir()] in ([], [OUTPUT_MARKER]):
+            remove_tree(graveyard)
+
+
+def _host_tag() -> str:
+    """8 hex digits naming this host in the name of a temporary file."""
+    return hashlib.sha256(platform.node().encode("utf-8", "replace")).hexdigest()[:8]
+
+
+#: a temporary file of :func:`_temporary`: '.NAME.partial-PID@HOST@XXXXXXXX[.suffix]'
+_TEMPORARY = re.compile(r"\.partial-(\d+)@([0-9a-f]{8})@[^@/]*$")
+
+
+def _temporary(directory: Path, name: str, suffix: str = "") -> Path:
+    """A new empty temporary file for ``name`` in ``directory`` whose name says which
+    process writes it: what a killed one left is found by :func:`remove_dead_temporaries`."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{name}.partial-{os.getpid()}@{_host_tag()}@",
+                               suffix=suffix, dir=directory)
+    os.close(fd)
+    return Path(tmp)
+
+
+def remove_dead_temporaries(directory: Path, names=None) -> list[Path]:
+    """Remove the temporary files (:func:`_temporary`) in ``directory`` (those of
+    ``names`` only, if given) that a process of this host left when it was killed;
+    those of running processes and of other hosts are left. Returns them."""
     removed = []
     try:
-        entries = list(Path(parent).iterdir())
+        entries = list(os.scandir(directory))
     except OSError:
         return removed
-    for entry in entries:
-        if not (entry.name.startswith(f".{name}.partial-")
-                or entry.name.startswith(f".{name}.old-")):
+    prefixes = None if names is None else tuple(f".{n}.partial-" for n in names)
+    for e in entries:
+        m = _TEMPORARY.search(e.name)
+        if not m or not e.name.startswith(".") or \
+                (prefixes is not None and not e.name.startswith(prefixes)):
             continue
-        if entry.is_symlink() or not entry.is_dir():
+        try:
+            if not e.is_file(follow_symlinks=False):
+                continue
+        except OSError:
             continue
-        marker = read_marker(entry)
-        if marker is None or marker.get("complete", True) is not False:
-            continue
-        pid = marker.get("pid")
-        if marker.get("host") != platform.node() or not isinstance(pid, int) or _pid_alive(pid):
-            continue
-        shutil.rmtree(entry, ignore_errors=True)
-        removed.append(entry)
+        if m.group(2) == _host_tag() and not _pid_alive(int(m.group(1))):
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(e.path)
+                removed.append(Path(e.path))
     return removed
 
 
@@ -452,56 +766,157 @@ def _umask() -> int:
     return mask
 
 
-def _install(tmp: Path, path: Path, kind: str) -> None:
-    """Rename the complete ``tmp`` onto ``path``, moving an earlier output aside.
+#: the steps of replacing an output, in the order they happen; :func:`_step` marks
+#: each, and the tests kill the writer at every one of them in turn
+REPLACE_STEPS = ("built", "checked", "complete", "installed", "exchanged", "graveyard",
+                 "aside", "retiring", "retired")
+#: the steps of replacing a file of a study directory (:func:`write_study_file`)
+STUDY_FILE_STEPS = ("study-file-listed", "study-file-replaced")
+#: the steps of replacing a single file (``mesh --out FILE``, :func:`write_file`)
+FILE_STEPS = ("file-listed", "file-replaced")
+#: called with the name of each step when set (a test's kill); None in use
+STEP_HOOK = None
+#: devices (st_dev) whose file system refused an atomic exchange: plain renames there
+_NO_EXCHANGE: set = set()
 
-    Race-free under concurrent writers to one path: each rename either lands
-    or finds ``path`` taken, in which case the occupant (checked to be a
-    replaceable output) is moved into a private ``.old-`` directory and the
-    rename retried; the last writer to rename wins. The occupant is checked
-    again once moved aside, where nobody can add to it any more: a file that
-    reached it between the first check and the move is not lost, the
-    occupant goes back (or, if another writer took the path meanwhile, stays
-    beside it under a name the error gives).
+
+def _step(name: str) -> None:
+    if STEP_HOOK is not None:
+        STEP_HOOK(name)
+
+
+def _occupant_refusal(path: Path, kind: str) -> str | None:
+    """:func:`refusal` without reading the occupant's files: the kind of what is
+    at ``path`` only (its content is checked once it is out of the way)."""
+    try:
+        st = os.lstat(path)
+    except FileNotFoundError:
+        return None
+    if not stat.S_ISDIR(st.st_mode):
+        return _refusal(path, kind)
+    marker = read_marker(path)
+    if marker is None or not marker.get("complete", True):
+        return _refusal(path, kind)
+    if marker.get("kind") == kind or (marker.get("kind") == "legacy"
+                                      and kind in ("run", "comparison")):
+        return None
+    return _refusal(path, kind)
+
+
+def _install(tmp: Path, path: Path, kind: str) -> None:
+    """Put the complete output ``tmp`` in the place of ``path``, crash-safely.
+
+    ``path`` holds the earlier output or the new one at every instant: the two
+    are swapped in one step (``renameat2(RENAME_EXCHANGE)``); the earlier one,
+    now at ``tmp``'s name, is checked for files that reached it since the
+    check before (those go back with it, in a second swap) and removed, its
+    marker last. A kill at any point leaves ``path`` whole, and the hidden
+    sibling to :func:`recover`. Concurrent writers each swap atomically: the
+    last one wins, nothing is lost, nothing fails.
+
+    Where the file system cannot exchange (NFS, CIFS, FUSE), the earlier output
+    is renamed into a private ``.NAME.old-*`` directory and the new one renamed
+    into place: between the two renames ``path`` is missing, and a kill there
+    leaves the earlier output in ``.NAME.old-*``, where :func:`recover` (the
+    next write to, or read of, ``path``) puts it back.
+
+    ``tmp`` is this function's from the call on: installed, or removed.
     """
     graveyard = None
-    kept = False
+    swapped = False       # tmp holds what was at path (after an exchange)
+    checked = False       # ... and it holds nothing wearcheck did not write
+    installed = False
     try:
         for attempt in range(100000):
             try:
-                os.rename(tmp, path)
+                os.rename(tmp, path)  # path missing, or an empty directory
+                installed = True
+                _step("installed")
                 return
             except OSError as exc:
                 if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST, errno.ENOTDIR,
                                      errno.EISDIR):
                     raise
-            why = refusal(path, kind)
+            why = _occupant_refusal(path, kind)
             if why:
                 raise OutputError(why)
+            if graveyard is None and os.stat(path.parent).st_dev not in _NO_EXCHANGE:
+                try:
+                    renames.exchange(tmp, path)
+                except FileNotFoundError:
+                    continue      # another writer moved it meanwhile
+                except renames.Unsupported:
+                    _NO_EXCHANGE.add(os.stat(path.parent).st_dev)
+                else:
+                    swapped = True
+                    _step("exchanged")
+                    _claim_aside(tmp)
+                    checked = _check_swapped(tmp, path)
+                    return
             if graveyard is None:
                 graveyard = Path(tempfile.mkdtemp(prefix=f".{path.name}.old-",
                                                   dir=path.parent))
                 write_marker(graveyard, kind, complete=False)
+                _step("graveyard")
             aside = graveyard / f"{attempt}"
             try:
                 os.rename(path, aside)
             except FileNotFoundError:
-                continue  # another writer moved it first
+                continue          # another writer moved it first
+            _step("aside")
             why = foreign_content(aside)
             if why:
+                # files reached it while it was being replaced: it goes back
                 try:
                     os.rename(aside, path)
                 except OSError:
                     keep = path.with_name(f"{path.name}.kept-{os.getpid()}-{attempt}")
                     os.rename(aside, keep)
-                    kept = True
                     raise OutputError(f"output '{path}': files reached it while it was being "
                                       f"replaced; it was kept as '{keep}'") from None
                 raise OutputError(why.replace(str(aside), str(path)))
         raise OSError(errno.EBUSY, f"could not install '{path}': too many concurrent writers")
     finally:
-        if graveyard is not None and not kept:
-            shutil.rmtree(graveyard, ignore_errors=True)
+        if swapped:
+            _remove_unless_foreign(tmp, checked=checked)
+            _step("retired")
+        elif tmp.exists():
+            remove_tree(tmp)  # not installed: this process's own directory
+        if graveyard is not None:
+            _settle_graveyard(graveyard, path, restore=not installed)
+            _step("retired")
+
+
+def _claim_aside(aside: Path) -> None:
+    """Say in the marker of the earlier output, just exchanged out of its path, which
+    process moved it: :func:`recover` of another leaves it to that one while it runs."""
+    marker = read_marker(aside)
+    if marker is not None and marker.get("complete", True):
+        with contextlib.suppress(OSError):
+            _rewrite_marker(aside, dict(marker, aside_by=dict(pid=os.getpid(),
+                                                              host=platform.node())))
+
+
+def _check_swapped(aside: Path, path: Path) -> bool:
+    """After the exchange: True if the earlier output, now at ``aside``, holds only what
+    wearcheck wrote; otherwise swap it back into ``path`` and refuse (OutputError)."""
+    try:
+        why = foreign_content(aside)
+    except FileNotFoundError:
+        why, gone = None, True
+    else:
+        gone = not (read_marker(aside) or {}).get("complete", False)
+    if gone:
+        # another writer's recover() is removing it (remove_tree marks it
+        # incomplete first, and it removes only an output holding nothing foreign)
+        return False
+    if not why:
+        return True
+    try:
+        renames.exchange(aside, path)
+    except FileNotFoundError:
+        os.rename(aside, path)   # path went meanwhile
+    raise OutputError(why.replace(str(aside), str(path)))
 
 
 def _directory_stat(path: Path):
@@ -558,25 +973,75 @@ def atomic_directory(path, kind: str = "run"):
     if kind not in KINDS:
         raise ValueError(f"unknown output kind {kind!r}")
     path = check_output(path, kind)
-    occupant = _directory_stat(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    clean_stale(path.parent, path.name)
+    recover(path)
+    occupant = _directory_stat(path)
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
+    handed_over = False
     try:
         os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; outputs are shared like any dir
         if occupant is not None:
             # now, so that a default ACL of the directory replaced reaches the
             # files written into the new one, as it would have there
             _copy_attributes(path, tmp)
-        write_marker(tmp, kind, complete=False)
+        write_marker(tmp, kind, complete=False, built_in=tmp.name)
         yield tmp
-        write_marker(tmp, kind, complete=True, files=inventory(tmp, kind))
+        _step("built")
+        # the occupant's files are read (hashed) while this output still says it is
+        # incomplete: a kill during the check leaves nothing that looks complete
+        why = refusal(path, kind)
+        if why:
+            raise OutputError(why)
+        _step("checked")
+        occupant = _directory_stat(path)
         if occupant is not None:
             _take_permissions(tmp, occupant, path)
+        write_marker(tmp, kind, complete=True, files=inventory(tmp, kind), built_in=tmp.name)
+        _step("complete")
+        handed_over = True
         _install(tmp, path, kind)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if not handed_over:
+            remove_tree(tmp)
         raise
+
+
+#: the study directories this process holds locked: {real path: [descriptor, depth]}
+_STUDY_LOCKS: dict = {}
+_STUDY_LOCKS_GUARD = threading.RLock()
+
+
+@contextlib.contextmanager
+def study_lock(study):
+    """Hold the study directory ``study`` for this process alone (``flock`` of the
+    directory; re-entrant within the process).
+
+    Studies write into their directory in place, reading what is there first (the
+    marker's list of files, ``meta.json``, an earlier ``sweep.csv``): two studies
+    into one directory at once would each write what it read plus its own, and
+    the last would drop the other's. Under the lock each reads what the other
+    wrote. Where the file system has no locks (some NFS) it goes unlocked.
+    """
+    key = os.path.realpath(study)
+    with _STUDY_LOCKS_GUARD:
+        held = _STUDY_LOCKS.get(key)
+        if held is not None:
+            held[1] += 1
+    if held is None:
+        fd = os.open(key, os.O_RDONLY | os.O_DIRECTORY)
+        if fcntl is not None:
+            with contextlib.suppress(OSError):
+                fcntl.flock(fd, fcntl.LOCK_EX)
+        with _STUDY_LOCKS_GUARD:
+            _STUDY_LOCKS[key] = held = [fd, 1]
+    try:
+        yield
+    finally:
+        with _STUDY_LOCKS_GUARD:
+            held[1] -= 1
+            if held[1] == 0:
+                del _STUDY_LOCKS[key]
+                os.close(held[0])       # releases the flock
 
 
 def study_directory(path, runs=(), files=()) -> Path:
@@ -591,6 +1056,8 @@ def study_directory(path, runs=(), files=()) -> Path:
     inside, each atomically.
     """
     path = check_output(path, "study")
+    for run in runs:      # before anything is made: a new study directory too
+        _check_name_length(str(path / run), path / run)
     path.mkdir(parents=True, exist_ok=True)
     marker = read_marker(path)
     if marker is None:
@@ -601,11 +1068,14 @@ def study_directory(path, runs=(), files=()) -> Path:
         raise OutputError(f"study '{path}' was written by an older wearcheck that kept no list "
                           "of its files, so it cannot tell whether you changed any; remove it "
                           "yourself or choose another output path")
+    # the study's files (and its marker) half written by a study that was killed
+    remove_dead_temporaries(path)
     for name in sorted({*recorded, *files}):
         if (path / name).exists() or (path / name).is_symlink():
-            _check_study_file(path, name, recorded)
+            _check_study_file(path, name, recorded, marker)
     for run in runs:
-        why = refusal(path / run, "run")
+        why = refusal(path / run, "run") or (
+            _pinned(path / run) if (path / run).is_dir() else None)
         if why:
             raise OutputError(why)
     return path
@@ -619,11 +1089,18 @@ def _path_fingerprint(path: Path) -> list:
         os.close(fd)
 
 
-def _check_study_file(study: Path, name: str, recorded: dict) -> None:
-    """``study/name`` exists: it must be a file the studies wrote there, unchanged since."""
+def _check_study_file(study: Path, name: str, recorded: dict, marker=None) -> None:
+    """``study/name`` exists: it must be a file the studies wrote there, unchanged since
+    (or the one a write killed half-way was replacing: the marker's ``replacing``)."""
     path = study / name
-    if path.is_symlink() or not path.is_file() or name not in recorded \
-            or not _same(_path_fingerprint(path), recorded[name]):
+    before = ((marker or {}).get("replacing") or {}).get(name) \
+        if isinstance((marker or {}).get("replacing"), dict) else None
+    if path.is_symlink() or not path.is_file() or name not in recorded:
+        ok = False
+    else:
+        now = _path_fingerprint(path)
+        ok = _same(now, recorded[name]) or (before is not None and _same(now, before))
+    if not ok:
         raise OutputError(f"'{path}' is not a file wearcheck wrote into this study, or it "
                           "changed since; move it out (or rename it) and run again")
 
@@ -635,23 +1112,46 @@ def write_study_file(study, name: str, write) -> Path:
     replaced; the marker then lists the new one. Never written through a link.
     """
     study = Path(study)
+    with study_lock(study):
+        return _write_study_file(study, name, write)
+
+
+def _write_study_file(study: Path, name: str, write) -> Path:
     path = study / name
-    marker = read_marker(study) or {}
+    marker = read_marker(study) or marker_data("study", True)
     recorded = marker.get("files") if isinstance(marker.get("files"), dict) else {}
+    current = None        # the fingerprint of the file this write replaces
     if path.exists() or path.is_symlink():
-        _check_study_file(study, name, recorded)
-    fd, tmp = tempfile.mkstemp(prefix=f".{name}.", suffix=Path(name).suffix, dir=study)
-    os.close(fd)
+        _check_study_file(study, name, recorded, marker)
+        current = _path_fingerprint(path)
+    # (the suffix kept: writers choose the format by it, e.g. a figure's .png)
+    tmp = _temporary(study, name, Path(name).suffix)
     try:
         write(Path(tmp))
         os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; study files are shared
+        # the marker lists the new file before it takes the old one's place, and keeps
+        # the old one's as it is replaced: a kill in between leaves a file the
+        # marker accepts (either), never one a later study refuses as not its own
+        new = _path_fingerprint(Path(tmp))
+        replacing = marker.get("replacing") if isinstance(marker.get("replacing"), dict) \
+            else {}
+        replacing.pop(name, None)
+        if current is not None:
+            # what is on disk, not what the marker listed: an earlier write that
+            # failed after listing its file left the old one in place
+            replacing[name] = current
+        _rewrite_marker(study, dict(marker, files=dict(recorded, **{name: new}),
+                                    replacing=replacing))
+        _step("study-file-listed")
         os.replace(tmp, path)
+        _step("study-file-replaced")
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
-    recorded[name] = _path_fingerprint(path)
-    _rewrite_marker(study, dict(marker or marker_data("study", True), files=recorded))
+    recorded[name] = new
+    replacing.pop(name, None)
+    _rewrite_marker(study, dict(marker, files=recorded, replacing=replacing))
     return path
 
 
@@ -663,24 +1163,31 @@ def write_study_text(study, name: str, text: str) -> Path:
 def remove_study_file(study, name: str) -> bool:
     """Remove ``study/name`` if the study wrote it and it is unchanged; else leave it."""
     study = Path(study)
+    with study_lock(study):
+        return _remove_study_file(study, name)
+
+
+def _remove_study_file(study: Path, name: str) -> bool:
     marker = read_marker(study) or {}
     recorded = marker.get("files") if isinstance(marker.get("files"), dict) else {}
     path = study / name
     if not (path.exists() or path.is_symlink()):
         return False
     try:
-        _check_study_file(study, name, recorded)
+        _check_study_file(study, name, recorded, marker)
     except OutputError:
         return False
     path.unlink()
     recorded.pop(name, None)
-    _rewrite_marker(study, dict(marker, files=recorded))
+    replacing = marker.get("replacing") if isinstance(marker.get("replacing"), dict) else {}
+    replacing.pop(name, None)
+    _rewrite_marker(study, dict(marker, files=recorded, replacing=replacing))
     return True
 
 
 def _rewrite_marker(directory: Path, data: dict) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=f"{OUTPUT_MARKER}.", dir=directory)
-    with os.fdopen(fd, "w", encoding="utf-8") as fh:
+    tmp = _temporary(Path(directory), OUTPUT_MARKER[1:])
+    with open(tmp, "w", encoding="utf-8") as fh:
         fh.write(json.dumps(data) + "\n")
     os.chmod(tmp, 0o666 & ~_umask())
     os.replace(tmp, Path(directory) / OUTPUT_MARKER)
@@ -752,8 +1259,9 @@ def check_output_file(path, kind: str = "mesh") -> Path:
         side = _sidecar(path)
         with contextlib.suppress(OSError, ValueError):
             data = json.loads(side.read_text(encoding="utf-8"))
+            # "replacing": the file a write killed half-way was replacing (write_file)
             ok = (isinstance(data, dict) and data.get("kind") == kind
-                  and data.get("sha256") == _sha256(path))
+                  and _sha256(path) in (data.get("sha256"), data.get("replacing")))
         if not ok:
             raise OutputError(f"output '{path}' exists and is not a file wearcheck wrote "
                               "(or it has changed since); choose another output path or "
@@ -769,6 +1277,11 @@ def check_output_path_common(path) -> Path:
     if not raw or Path(raw).name in ("", ".", "..") or raw.endswith(os.sep):
         raise OutputError(f"output '{raw}': name a file of its own")
     path = Path(raw).absolute()
+    _check_name_length(raw, path, _FILE_HIDDEN_EXTRA)
+    if path.is_file() and not path.is_symlink():
+        why = _pinned(path, whole=False)
+        if why:
+            raise OutputError(why)
     _check_writable_ancestor(path)
     return path
 
@@ -777,20 +1290,21 @@ def write_file(path, source: Path, kind: str = "mesh") -> Path:
     """Copy ``source`` to ``path`` atomically, with its side marker."""
     path = check_output_file(path, kind)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.partial-", dir=path.parent)
-    os.close(fd)
+    remove_dead_temporaries(path.parent, [path.name])    # of a write that was killed
+    tmp = _temporary(path.parent, path.name)
     try:
         shutil.copyfile(source, tmp)
         os.chmod(tmp, 0o666 & ~_umask())
         side = dict(marker_data(kind, True), sha256=_sha256(Path(tmp)))
+        # the side marker names the new file before it takes the old one's place, and
+        # the old one's until it has: a kill in between leaves a file it accepts
+        old = _sha256(path) if path.is_file() and not path.is_symlink() else None
+        _write_sidecar(path, dict(side, replacing=old) if old else side)
+        _step("file-listed")
         os.replace(tmp, path)
-        # the side marker by rename too: never written through a link put in its place
-        sfd, stmp = tempfile.mkstemp(prefix=f".{path.name}.marker-", dir=path.parent)
-        with os.fdopen(sfd, "w", encoding="utf-8") as fh:
-            fh.write(json.dumps(side) + "\n")
-        # mkstemp makes 0600: others sharing the file could not read that wearcheck wrote it
-        os.chmod(stmp, 0o666 & ~_umask())
-        os.replace(stmp, _sidecar(path))
+        _step("file-replaced")
+        if old:
+            _write_sidecar(path, side)
     except BaseException:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
@@ -798,9 +1312,26 @@ def write_file(path, source: Path, kind: str = "mesh") -> Path:
     return path
 
 
-def _check_writable_ancestor(path: Path) -> None:
-    """The nearest existing ancestor of ``path`` must be a directory we can write into."""
-    ancestor = path.parent
+def _write_sidecar(path: Path, data: dict) -> None:
+    """The side marker of ``path`` by rename: never half written, never written
+    through a link put in its place."""
+    stmp = _temporary(path.parent, path.name)
+    try:
+        with open(stmp, "w", encoding="utf-8") as fh:
+            fh.write(json.dumps(data) + "\n")
+        # mkstemp makes 0600: others sharing the file could not read that wearcheck wrote it
+        os.chmod(stmp, 0o666 & ~_umask())
+        os.replace(stmp, _sidecar(path))
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(stmp)
+        raise
+
+
+def _check_writable_ancestor(path: Path, inside: bool = False) -> None:
+    """The nearest existing ancestor of ``path`` must be a directory we can write into
+    (``inside``: ``path`` itself when it exists, as a study is written into)."""
+    ancestor = path if inside and path.is_dir() else path.parent
     while not ancestor.exists() and not ancestor.is_symlink():
         ancestor = ancestor.parent
     if not ancestor.is_dir():
@@ -812,8 +1343,15 @@ def _check_writable_ancestor(path: Path) -> None:
     # access() answers for the permission bits only: root passes them everywhere, and
     # /proc, /sys or a file system that refuses new entries fail only when written,
     # after the solve. A directory made and removed at once asks the file system.
+    # The probe has the name of the hidden directory the output is written through
+    # (file systems with a shorter limit on names refuse it here).
+    prefix = ".wearcheck-probe-" if ancestor == path else f".{path.name}.partial-"
     try:
-        os.rmdir(tempfile.mkdtemp(prefix=".wearcheck-probe-", dir=ancestor))
+        os.rmdir(tempfile.mkdtemp(prefix=prefix, dir=ancestor))
     except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            raise OutputError(f"output '{path}': the file system refuses the name of the "
+                              f"hidden '.{path.name[:20]}....partial-XXXXXXXX' it is written "
+                              "through; give a shorter name") from None
         raise OutputError(f"output '{path}': nothing can be created in '{ancestor}' "
                           f"({exc.strerror or exc})") from None

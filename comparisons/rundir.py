@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import json
+import math
 import os
 import platform
 import shlex
@@ -214,12 +215,15 @@ class Run:
     """A run directory read back: case, history, stages, meta."""
 
     def __init__(self, path: str | Path):
-        from wearcheck.comparisons.outputs import is_partial
+        from wearcheck.comparisons.outputs import is_partial, recover
         self.path = Path(path)
         if is_partial(self.path):
             raise cases.CaseError(f"'{self.path}' is an incomplete run directory (a .partial "
                                   "directory of a wearcheck process that was stopped or is "
                                   "still writing); use the complete run")
+        if not self.path.exists():
+            # a writer killed while it replaced the run may have left it aside
+            recover(self.path)
         if not self.path.exists():
             raise cases.CaseError(f"run directory '{self.path}' does not exist")
         if not self.path.is_dir():
@@ -232,6 +236,9 @@ class Run:
         self.meta = _read(meta, lambda p: json.loads(p.read_text(encoding="utf-8")))
         if not isinstance(self.meta, dict) or not isinstance(self.meta.get("scales"), dict):
             raise cases.CaseError(f"run directory file '{meta}' is damaged (no scales)")
+        why = meta_damage(self.meta)
+        if why:
+            raise cases.CaseError(f"run directory file '{meta}' is damaged: {why}")
         self.case = cases.load(self.path / "case.toml")
         self.history = _read(self.path / "history.csv", _read_history)
         self.stages = _read(self.path / "stages.npz", _read_npz)
@@ -239,6 +246,10 @@ class Run:
         if missing:
             raise cases.CaseError(f"run directory file '{self.path / 'stages.npz'}' is damaged: "
                                   f"no {', '.join(sorted(missing))}")
+        why = stages_damage(self.stages)
+        if why:
+            raise cases.CaseError(f"run directory file '{self.path / 'stages.npz'}' is "
+                                  f"damaged: {why}")
         fields = self.path / "fields.npz"
         self.fields = _read(fields, _read_npz) if fields.is_file() else None
 
@@ -249,6 +260,55 @@ class Run:
     @property
     def solver(self) -> str:
         return self.meta["solver"]
+
+
+#: the scales every reader of a run divides by: finite and positive
+POSITIVE_SCALES = ("E_star", "a0", "d0", "F0", "p0")
+
+
+def meta_damage(meta: dict) -> str | None:
+    """What is wrong with a run's meta.json for reading it back, or None: the solver's
+    name, and the scales (layout.META) as finite numbers, positive where divided by."""
+    if not isinstance(meta.get("solver"), str) or not meta["solver"]:
+        return "no solver name"
+    scales = meta["scales"]
+    for name in ("E_star", "G_star", "a0", "d0", "F0", "p0", "s_hat_per_m"):
+        value = scales.get(name)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) \
+                or not math.isfinite(value):
+            return f"scale '{name}' is {value!r}, not a finite number"
+        if name in POSITIVE_SCALES and value <= 0:
+            return f"scale '{name}' is {value!r}, not positive"
+    return None
+
+
+def stages_damage(stages: dict) -> str | None:
+    """What is wrong with the arrays of a stages.npz (layout.STAGES), or None.
+
+    s and s_hat are (K,), r is (M,), f, p and the optional per-stage arrays are
+    (K, M) (an empty table when no stage was stored), every value finite:
+    wearcheck never writes a run with a non-finite value (a numerical failure
+    is reported instead), so one is damage, which exporting or drawing would
+    turn into empty pictures.
+    """
+    arrays = {k: np.asarray(v) for k, v in stages.items()}
+    for name, arr in arrays.items():
+        if not np.issubdtype(arr.dtype, np.number):
+            return f"'{name}' holds {arr.dtype} values, not numbers"
+    K, M = np.shape(arrays["s"]), np.shape(arrays["r"])
+    if len(K) != 1 or len(M) != 1:
+        return f"'s' has shape {K} and 'r' {M}; both must be lists (one dimension)"
+    K, M = K[0], M[0]
+    expected = {"s": (K,), "s_hat": (K,), "r": (M,)}
+    for name, arr in arrays.items():
+        want = expected.get(name, (K, M))
+        if arr.shape != want and not (K == 0 and arr.size == 0 and name not in expected):
+            return (f"'{name}' has shape {arr.shape}, not {want} ({K} stages x {M} radii, "
+                    "as 's' and 'r' say)")
+        bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
+        if bad:
+            return f"'{name}' holds {bad} values that are not finite (NaN or infinite)"
+    return None
 
 
 def _refuse_other_output(path: Path) -> None:

@@ -197,13 +197,51 @@ def _from_arrays(arrays, params, path) -> SphereMesh:
                       path=path)
 
 
+def _file_sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def entry_checksum(arrays: dict, key: str, msh_sha256: str) -> str:
+    """SHA-256 of a cache entry: its parameters' key, the .msh file's SHA-256 and every
+    array (name, dtype, shape, bytes). Written into the .npz, checked when read."""
+    h = hashlib.sha256(f"{key}\n{msh_sha256}\n".encode())
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        h.update(f"{name} {a.dtype.str} {a.shape}\n".encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def _read_entry(npz: Path, msh: Path, params) -> dict | None:
+    """The arrays of a cache entry, or None when it is damaged: unreadable, or
+    anything in it (an array, the .msh) changed since it was written (its checksum),
+    or written by a wearcheck that kept no checksum. Such an entry would give a
+    mesh that is not the one its parameters name, and a solve failing in ways
+    that point elsewhere ("the stiffness matrix could not be factorised")."""
+    try:
+        with np.load(npz, allow_pickle=False) as z:
+            arrays = {k: z[k] for k in z.files}
+        recorded = str(arrays.pop("checksum"))
+        if recorded != entry_checksum(arrays, params.key(), _file_sha256(msh)):
+            return None
+        _from_arrays(arrays, params, msh)   # every array there
+        return arrays
+    except Exception:  # zipfile.BadZipFile, EOFError, OSError, ValueError, KeyError
+        return None
+
+
 def sphere_mesh(params: SphereMeshParameters, use_cache: bool = True) -> SphereMesh:
     """The mesh for ``params``: read from the cache, or generated and cached.
 
     The cache holds ``sphere-<hash>.msh`` (gmsh's file, for users and
     ``wearcheck mesh``) and ``sphere-<hash>.npz`` (the arrays, read back
-    without meshio); the .npz is written last, so its presence marks a
-    complete entry.
+    without meshio, and the entry's checksum); the .npz is written last, so its
+    presence marks a complete entry. A damaged entry (truncated, or changed
+    since: :func:`entry_checksum`) is generated again.
     """
     import time
 
@@ -212,11 +250,9 @@ def sphere_mesh(params: SphereMeshParameters, use_cache: bool = True) -> SphereM
     stem = f"sphere-{params.key()}"
     msh, npz = directory / f"{stem}.msh", directory / f"{stem}.npz"
     if use_cache and npz.is_file() and msh.is_file():
-        try:
-            with np.load(npz, allow_pickle=False) as z:
-                return _from_arrays({k: z[k] for k in z.files}, params, msh)
-        except Exception:  # zipfile.BadZipFile, EOFError, OSError, ValueError, KeyError
-            pass  # a damaged (e.g. truncated) entry: regenerate it
+        arrays = _read_entry(npz, msh, params)
+        if arrays is not None:
+            return _from_arrays(arrays, params, msh)
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
@@ -230,7 +266,8 @@ def sphere_mesh(params: SphereMeshParameters, use_cache: bool = True) -> SphereM
 
     atomic_save(msh, write_msh)
     seconds = time.perf_counter() - t0
-    atomic_save(npz, lambda tmp: np.savez(tmp, **arrays))
+    checksum = entry_checksum(arrays, params.key(), _file_sha256(msh))
+    atomic_save(npz, lambda tmp: np.savez(tmp, checksum=np.array(checksum), **arrays))
     mesh = _from_arrays(arrays, params, msh)
     mesh.generate_seconds = seconds
     return mesh

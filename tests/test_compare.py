@@ -235,6 +235,17 @@ def test_real_solvers_made_to_disagree_fail_with_exit_code_1(tmp_path, capsys):
     assert "Most likely fix: raise mdr.elements (now 32; try 64): MDR has" in md
 
 
+def test_a_quiet_failing_comparison_still_names_its_fix(tmp_path, capsys):
+    # --quiet drops the summary, which names the fix; the FAIL line must still carry it
+    # (the same coarse MDR as above)
+    code = cli_main(["compare", PAPER, "--out", str(tmp_path / "coarse"), "--quiet",
+                     "--no-render", "--solvers", "mdr,fem"] + SMALL
+                    + ["--set", "mdr.elements=32"])
+    assert code == 1
+    err = capsys.readouterr().err
+    assert "FAILED" in err and "most likely fix: raise mdr.elements (now 32; try 64)" in err
+
+
 def test_real_solvers_match_the_flattened_sphere_reference(tmp_path):
     # paper Fig. 3: each solver against the quadrature of paper Eqs. 13/19, away from
     # the singularity at r = b and from the edge, within the default 2 % p0 and 1 % F0

@@ -117,3 +117,66 @@ def test_render_command_needs_no_display(tmp_path):
                                          "worn_surface.png"]
     for path in printed:
         assert_picture(path)
+
+
+def _osmesa_missing() -> bool:
+    import ctypes.util
+    return ctypes.util.find_library("OSMesa") is None
+
+
+@pytest.mark.skipif(not _osmesa_missing(), reason="OSMesa is installed: the window works")
+def test_a_crashing_render_window_is_one_line_and_keeps_the_run(tmp_path):
+    """Issue 20: VTK_DEFAULT_OPENGL_WINDOW=vtkOSOpenGLRenderWindow without OSMesa
+    segfaulted ``render`` (exit 139, a .partial left). VTK now draws in a process
+    of its own: one line, exit 1, the run and its earlier pictures untouched."""
+    run, _ = cylinder_run(tmp_path / "run", s_hat=(0.0, 1.0))
+    paths = render.render_run(run.path)
+    before = {p.name: p.read_bytes() for p in paths}
+    env = dict(os.environ, VTK_DEFAULT_OPENGL_WINDOW="vtkOSOpenGLRenderWindow")
+    done = subprocess.run([sys.executable, "-m", "wearcheck", "render", str(run.path)],
+                          cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1, done.stderr
+    lines = [line for line in done.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1 and "SIGSEGV" in lines[0] and "OSMesa" in lines[0], done.stderr
+    assert "VTK_DEFAULT_OPENGL_WINDOW" in lines[0]
+    assert {p.name: p.read_bytes() for p in (run.path / "render").iterdir()
+            if p.name != OUTPUT_MARKER} == before
+    assert [p.name for p in run.path.iterdir() if p.name.startswith(".")] == [OUTPUT_MARKER]
+
+
+@pytest.mark.skipif(not _osmesa_missing(), reason="OSMesa is installed: the window works")
+def test_compare_keeps_its_results_when_the_renderer_crashes(tmp_path):
+    """The same window under ``compare``: before, exit 139 after both solvers had
+    finished, the comparison lost in a .partial. Now the comparison is written,
+    its verdict decides the exit code, and the crash is a note (stderr, report)."""
+    out = tmp_path / "cmp"
+    env = dict(os.environ, VTK_DEFAULT_OPENGL_WINDOW="vtkOSOpenGLRenderWindow")
+    done = subprocess.run([sys.executable, "-m", "wearcheck", "compare", "hertz", "--solvers",
+                           "mdr,fem", "--set", "mdr.elements=60", "--set",
+                           "fem.contact_nodes=30", "--out", str(out)],
+                          cwd=ROOT, env=env, capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    notes = [line for line in done.stderr.splitlines() if line.startswith("note: rendering")]
+    assert [n.split()[2] for n in notes] == ["mdr", "fem"]
+    assert all("SIGSEGV" in n for n in notes)
+    assert "SIGSEGV" in (out / "report.md").read_text()
+    assert Run(out / "fem").solver == "fem" and Run(out / "mdr").solver == "mdr"
+    assert [p.name for p in tmp_path.iterdir()] == ["cmp"]
+
+
+def test_a_failing_render_process_is_reported_with_vtks_reason(tmp_path, monkeypatch):
+    """The parent's reading of a failed child: its exit status and VTK's last
+    message (colour codes and the log prefix removed), in one line."""
+    run, _ = cylinder_run(tmp_path / "run", s_hat=(0.0,), with_fields=False)
+    vtk_log = ("\x1b[0m\x1b[33m2026-11-27 02:20:55.258 (   1.967s) [    7F922F442B80]"
+               "vtkXOpenGLRenderWindow.cxx:1234   ERR| bad X server connection. Exiting.\x1b[0m\n")
+
+    def failed(*args, **kwargs):
+        return subprocess.CompletedProcess(args, -6, "", vtk_log)
+    monkeypatch.setattr(render.subprocess, "run", failed)
+    monkeypatch.delenv("VTK_DEFAULT_OPENGL_WINDOW", raising=False)
+    with pytest.raises(render.RenderError) as info:
+        render.render_run(run.path)
+    assert str(info.value) == (f"rendering '{run.path}' failed: VTK's process crashed "
+                               "(SIGABRT): bad X server connection")
+    assert not (run.path / "render").exists()

@@ -619,10 +619,15 @@ def _writer(path, worker, count, queue):
         queue.put(f"{type(exc).__name__}: {exc}")
 
 
-def test_concurrent_writers_to_one_path_never_fail_nor_leave_debris(tmp_path):
+@pytest.mark.parametrize("exchange", [True, False], ids=["exchange", "rename-fallback"])
+def test_concurrent_writers_to_one_path_never_fail_nor_leave_debris(tmp_path, monkeypatch,
+                                                                     exchange):
     """4 processes x 150 atomic writes to one path: no OSError, no leftover
-    directory, and the path holds one complete write (the last to land)."""
+    directory, and the path holds one complete write (the last to land); with
+    the atomic exchange and with the renames of file systems without it."""
     from wearcheck.comparisons.rundir import OUTPUT_MARKER
+    if not exchange:
+        monkeypatch.setattr("wearcheck.comparisons.renames._RENAMEAT2", None)
     path = tmp_path / "out"
     ctx = multiprocessing.get_context("fork")
     queue = ctx.Queue()
@@ -903,12 +908,18 @@ def test_a_study_that_never_reached_its_scheduler_leaves_no_study_behind(tmp_pat
     """``sweep --scheduler`` with a bad address ended (exit 1) leaving DIR as an empty
     directory marked a study, which then refused a ``run`` there ("is a wearcheck study
     directory"). The marker, and a directory the study made, go when nothing ran."""
+    import socket
+    with socket.socket() as s:           # a port nobody listens on: refused, exit 1
+        s.bind(("127.0.0.1", 0))
+        refused = f"tcp://127.0.0.1:{s.getsockname()[1]}"
     new, empty = tmp_path / "new", tmp_path / "empty"
     empty.mkdir()
-    for out in (new, empty):
-        assert cli_main(["sweep", HERTZ, "--vary", "wear.mu=0.2", "--scheduler", "nonsense",
-                         "--out", str(out), "--quiet"]) == 1
-        assert "scheduler" in _one_error_line(capsys.readouterr().err)
+    # a malformed address is bad input (exit 2), refused before DIR is touched
+    for address, code in (("nonsense", 2), (refused, 1)):
+        for out in (new, empty):
+            assert cli_main(["sweep", HERTZ, "--vary", "wear.mu=0.2", "--scheduler", address,
+                             "--out", str(out), "--quiet"]) == code
+            assert "scheduler" in _one_error_line(capsys.readouterr().err)
     assert not new.exists()
     assert empty.is_dir() and list(empty.iterdir()) == []
     assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(empty), *SMALL]) == 0

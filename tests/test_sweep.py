@@ -188,6 +188,66 @@ def test_a_value_is_judged_with_the_other_varied_keys(tmp_path, monkeypatch):
               tmp_path / "t", quiet=True)
 
 
+def _table(out):
+    with open(out / "sweep.csv", newline="") as fh:
+        return list(csv.DictReader(line for line in fh if not line.startswith("#")))
+
+
+def test_a_second_sweep_into_a_study_keeps_the_first(cluster, tmp_path):
+    """Issue 20: a second sweep replaced the first's sweep.csv and its meta.json entry.
+    Now its runs join the first's table (more values, another key; a run done
+    again replaces its row) and meta.json keeps both commands."""
+    out = tmp_path / "s"
+    paper = cases.load(cases.shipped("paper"))
+    runs = []            # the run names of each sweep, as it returned them
+    for vary in ({"wear.k": [1e-5, 1e-4]}, {"wear.k": [1e-4, 1e-3]}, {"wear.mu": [0.2]}):
+        runs.append([r["run"] for r in sweep(paper, vary, "mdr", out, scheduler=cluster,
+                                             quiet=True, solve=fake_solve)])
+        if len(runs) == 1:
+            first = {r["run"]: r for r in _table(out)}
+    table = {r["run"]: r for r in _table(out)}
+    # wear.k = 1e-4 run twice: one row
+    assert sorted(table) == sorted({*runs[0], *runs[1], *runs[2]}) and len(table) == 4
+    # the first sweep's row, as it wrote it; a key it did not vary holds the base value
+    only_first, mu_run = runs[0][0], runs[2][0]
+    assert table[only_first]["final_s"] == first[only_first]["final_s"]
+    assert float(table[only_first]["wear.mu"]) == paper.wear.mu
+    assert float(table[mu_run]["wear.k"]) == paper.wear.k
+    for name, row in table.items():     # every row is its run directory's
+        run = Run(out / name)
+        assert run.case.wear.k == float(row["wear.k"])
+        assert run.case.wear.mu == float(row["wear.mu"])
+    entry = json.loads((out / "meta.json").read_text())["studies"]["sweep-mdr"]
+    assert len(entry["earlier"]) == 2
+
+
+@pytest.mark.parametrize("argv, what", [
+    (["--set", "loading.depth=2e-6"], "loading.depth"),
+    (["--solver", "bem"], "solver 'mdr'"),
+])
+def test_a_sweep_of_another_base_into_a_study_is_refused(cluster, tmp_path, capsys,
+                                                         monkeypatch, argv, what):
+    """One table for two different studies would pass for one: refused before the
+    cluster starts, one line naming what differs; the first sweep untouched."""
+    from wearcheck.comparisons.cli import main as cli_main
+    from wearcheck.comparisons.studies import sweep as sweep_mod
+    out = tmp_path / "s"
+    paper = str(cases.shipped("paper"))
+    sweep(cases.load(paper), {"wear.k": [1e-5, 1e-4]}, "mdr", out, scheduler=cluster,
+          quiet=True, solve=fake_solve)
+    before = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("the cluster started")
+    monkeypatch.setattr(sweep_mod, "run_cases", no_cluster)
+    assert cli_main(["sweep", paper, "--vary", "wear.k=1e-3", "--out", str(out), "--quiet",
+                     *argv]) == 2
+    err = [l for l in capsys.readouterr().err.splitlines() if not l.startswith("note:")]
+    assert len(err) == 1 and what in err[0], err
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == before
+
+
+
 def test_the_same_sweep_from_python_and_from_the_command_line_gives_the_same_runs(cluster,
                                                                                 tmp_path):
     """The command line types its text once and hands the study what Python hands it:

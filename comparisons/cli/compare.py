@@ -74,5 +74,8 @@ def main(args) -> int:
             print(f"edge peak: {m['edge_study']['summary']}", file=sys.stderr)
     if not m["passed"]:
         print(f"wearcheck compare: the comparison FAILED (see {out}/report.md)", file=sys.stderr)
+        if args.quiet and m.get("diagnosis"):   # the summary, which names it, was not printed
+            from wearcheck.comparisons.analysis import diagnosis
+            print(f"most likely fix: {diagnosis.sentence(m['diagnosis'])}", file=sys.stderr)
         return 1
     return 0

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from wearcheck.cases import reference
+from wearcheck.cases import WearcheckError, reference
 from wearcheck.comparisons import registry
 from wearcheck.comparisons.analysis import metrics
 from wearcheck.comparisons.present import figures
@@ -130,6 +130,8 @@ def try_render(run_dirs) -> dict:
         except MissingExtra as exc:   # one note, not one per run directory
             notes.append(f"no renders: {exc}")
             break
+        except WearcheckError as exc:  # said in one line, the partial directory's path not
+            notes.append(str(exc).replace(f"'{d}'", Path(d).name))
         except Exception as exc:  # noqa: BLE001 - rendering must not fail the comparison
             notes.append(f"rendering {Path(d).name} failed: {type(exc).__name__}: {exc}")
     return dict(notes=notes)

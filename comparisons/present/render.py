@@ -9,19 +9,38 @@ PNG paths:
                             in the picture.
 ``worn_surface.png``        the worn indenter surface at the last stage, its
                             height exaggerated (the factor is in the title).
+
+VTK draws in a process of its own (:func:`draw_in_child`): a render window
+that cannot start (e.g. ``VTK_DEFAULT_OPENGL_WINDOW=vtkOSOpenGLRenderWindow``
+without OSMesa) crashes that process, not the one holding the results, and is
+reported as one line (:class:`RenderError`). The data are checked here first.
 """
 
 from __future__ import annotations
 
+import json
 import os
+import re
+import signal
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 
+from wearcheck.cases import WearcheckError
 from wearcheck.comparisons.rundir import Run, atomic_directory
 from wearcheck.extras import need
 from wearcheck.comparisons.present.vtk import (SURFACE_SEGMENTS, VTK_QUADRATIC_TRIANGLE,
                   VTK_TRIANGLE, check_fields, grid, nice_factor, orient_triangles, revolve_curve, section_data, unworn_profile)
+
+
+class RenderError(WearcheckError):
+    """VTK could not draw the pictures (its process crashed or failed); nothing written."""
+
+
+#: seconds the drawing process may take before it is stopped
+RENDER_TIMEOUT = 600.0
 
 #: size (width, height) of every picture, pixels
 WINDOW_SIZE = (1200, 800)
@@ -135,34 +154,100 @@ def _surface_picture(run: Run, path: Path) -> None:
     plotter.close()
 
 
+def plan(run: Run) -> list[dict]:
+    """The pictures of ``run``, their data checked: [{"name", "kind", and for the von
+    Mises pictures "stage", "window", "clim"}]; [] when it stored no stage."""
+    if not len(run.stages["s"]):
+        return []
+    pictures = []
+    if run.fields is not None and "cells" in run.fields:  # a section mesh (FEM)
+        fields = run.fields
+        K = len(run.stages["s"])
+        check_fields(fields, K)
+        points = np.asarray(fields["points"], dtype=float)
+        window = zoom_window(points, fields["contact_nodes"], run.scales["a0"])
+        r_max, z_lo, z_hi = window
+        inside = ((np.abs(points[:, 0]) <= r_max) & (points[:, 1] >= z_lo)
+                  & (points[:, 1] <= z_hi))
+        for k in sorted({0, K - 1}):
+            # each its own colour range: the force, and with it the
+            # stress, falls by orders of magnitude as the tip wears flat
+            vmax = float(np.max(section_data(fields, k)["von_mises"][inside])) / 1e6
+            pictures.append(dict(name=f"von_mises_stage{k:03d}.png", kind="von_mises", stage=k,
+                                 window=[float(w) for w in window], clim=[0.0, vmax or 1.0]))
+    pictures.append(dict(name="worn_surface.png", kind="surface"))
+    return pictures
+
+
+def draw(run_dir, directory, pictures) -> None:
+    """Draw ``pictures`` (from :func:`plan`) of the run into ``directory``, here."""
+    run = Run(run_dir)
+    for p in pictures:
+        if p["kind"] == "von_mises":
+            _von_mises_picture(run, p["stage"], tuple(p["window"]), tuple(p["clim"]),
+                               Path(directory) / p["name"])
+        else:
+            _surface_picture(run, Path(directory) / p["name"])
+
+
+_ANSI = re.compile(r"\x1b\[[0-9;]*m")
+
+
+def _reason(stderr: str) -> str:
+    """The last message VTK (or Python) gave on ``stderr``, as one short line."""
+    lines = [_ANSI.sub("", line).strip() for line in stderr.splitlines()]
+    lines = [line for line in lines if line]
+    vtk = [line.split("|", 1)[1].strip() for line in lines
+           if re.search(r"\b(WARN|ERR)\|", line)]
+    text = (vtk or lines or [""])[-1]
+    return text.split(". ")[0][:200]     # its first sentence
+
+
+def draw_in_child(run_dir, directory, pictures) -> None:
+    """:func:`draw` in a process of its own; its crash or failure is a :class:`RenderError`."""
+    if not sys.executable:          # an embedded interpreter that cannot start another
+        draw(run_dir, directory, pictures)
+        return
+    code = ("import json, sys; from wearcheck.comparisons.present.render import draw; "
+            "draw(sys.argv[1], sys.argv[2], json.load(sys.stdin))")
+    try:
+        done = subprocess.run([sys.executable, "-c", code, str(run_dir), str(directory)],
+                              input=json.dumps(pictures), capture_output=True, text=True,
+                              timeout=RENDER_TIMEOUT)
+    except subprocess.TimeoutExpired:
+        raise RenderError(f"rendering '{run_dir}' did not finish within {RENDER_TIMEOUT:g} s; "
+                          "its process was stopped") from None
+    if done.returncode == 0:
+        return
+    rc = done.returncode
+    try:
+        what = f"crashed ({signal.Signals(-rc).name})" if rc < 0 else f"failed (exit {rc})"
+    except ValueError:
+        what = f"was stopped by signal {-rc}"
+    reason = _reason(done.stderr)
+    window = os.environ.get("VTK_DEFAULT_OPENGL_WINDOW")
+    hint = (f"; VTK_DEFAULT_OPENGL_WINDOW={window} is set: unset it to draw through EGL"
+            if window and window != "vtkEGLRenderWindow" else "")
+    raise RenderError(f"rendering '{run_dir}' failed: VTK's process {what}"
+                      + (f": {reason}" if reason else "") + hint)
+
+
 def render_run(run_dir) -> list[Path]:
     """Write the PNGs of a run into ``RUN_DIR/render/`` atomically; returns their paths.
 
-    A run that stored no stage has nothing to draw: no directory, no paths.
+    A run that stored no stage has nothing to draw: no directory, no paths. A
+    renderer that fails or crashes is a :class:`RenderError`; the run, and
+    pictures rendered before, are left as they were.
     """
     need("pyvista", "rendering")
     run = Run(run_dir)
     target = run.path / "render"
-    if not len(run.stages["s"]):
+    pictures = plan(run)
+    if not pictures:
         return []
-    names = []
     with atomic_directory(target, "render") as tmp:
-        if run.fields is not None and "cells" in run.fields:  # a section mesh (FEM)
-            fields = run.fields
-            K = len(run.stages["s"])
-            check_fields(fields, K)
-            points = np.asarray(fields["points"], dtype=float)
-            window = zoom_window(points, fields["contact_nodes"], run.scales["a0"])
-            r_max, z_lo, z_hi = window
-            inside = ((np.abs(points[:, 0]) <= r_max) & (points[:, 1] >= z_lo)
-                      & (points[:, 1] <= z_hi))
-            for k in sorted({0, K - 1}):
-                # each its own colour range: the force, and with it the
-                # stress, falls by orders of magnitude as the tip wears flat
-                vmax = float(np.max(section_data(fields, k)["von_mises"][inside])) / 1e6
-                name = f"von_mises_stage{k:03d}.png"
-                _von_mises_picture(run, k, window, (0.0, vmax or 1.0), tmp / name)
-                names.append(name)
-        _surface_picture(run, tmp / "worn_surface.png")
-        names.append("worn_surface.png")
-    return [target / name for name in names]
+        draw_in_child(run.path, tmp, pictures)
+        missing = [p["name"] for p in pictures if not (tmp / p["name"]).is_file()]
+        if missing:
+            raise RenderError(f"rendering '{run.path}' wrote no {', '.join(missing)}")
+    return [target / p["name"] for p in pictures]

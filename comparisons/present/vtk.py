@@ -263,26 +263,31 @@ def revolve_curve(r, y, segments):
 # -- fields of a run -------------------------------------------------------
 
 def check_fields(fields, n_stages):
-    """Raise ``WearcheckError`` unless ``fields`` has the FEM keys and shapes."""
+    """Raise ``CaseError`` (a damaged run, exit 2) unless ``fields`` has the FEM keys and
+    shapes, and finite values."""
     missing = [k for k in FIELD_KEYS if k not in fields]
     if missing:
-        raise WearcheckError(f"fields.npz lacks {missing}")
+        raise CaseError(f"fields.npz lacks {missing}")
     Np = len(fields["points"])
     Nc = len(fields["contact_nodes"])
     want = dict(points=(Np, 2), displacement=(n_stages, Np, 2), stress=(n_stages, Np, 4),
                 contact_pressure=(n_stages, Nc), wear_depth=(n_stages, Nc))
     for key, shape in want.items():
         if np.shape(fields[key]) != shape:
-            raise WearcheckError(f"fields.npz: '{key}' has shape {np.shape(fields[key])}, "
-                                 f"expected {shape}")
+            raise CaseError(f"fields.npz: '{key}' has shape {np.shape(fields[key])}, "
+                            f"expected {shape}")
+        bad = int(np.size(fields[key]) - np.count_nonzero(np.isfinite(fields[key])))
+        if bad:  # a run never stores one: damage, which would draw as nothing
+            raise CaseError(f"fields.npz is damaged: '{key}' holds {bad} values that are not "
+                            "finite (NaN or infinite)")
     cells = fields["cells"]
     if np.ndim(cells) != 2 or np.shape(cells)[1] not in (3, 6):
-        raise WearcheckError(f"fields.npz: 'cells' has shape {np.shape(cells)}, "
-                             "expected (Nt, 3) or (Nt, 6)")
+        raise CaseError(f"fields.npz: 'cells' has shape {np.shape(cells)}, "
+                        "expected (Nt, 3) or (Nt, 6)")
     for key in ("cells", "contact_nodes"):
         index = np.asarray(fields[key])
         if index.size and not (index.min() >= 0 and index.max() < Np):
-            raise WearcheckError(f"fields.npz: '{key}' refers to nodes outside 0..{Np - 1}")
+            raise CaseError(f"fields.npz: '{key}' refers to nodes outside 0..{Np - 1}")
 
 
 def section_data(fields, k):

@@ -20,6 +20,7 @@ tabulated profile, the table file at the same path.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import importlib
 import json
 import math
@@ -35,6 +36,7 @@ from pathlib import Path
 
 from wearcheck import cases
 from wearcheck.comparisons.present.progress import ProgressBar
+from wearcheck.comparisons.studies import scheduler as scheduler_mod
 from wearcheck.comparisons.rundir import jsonable, write_run
 from wearcheck.extras import need
 
@@ -50,11 +52,13 @@ WORKERS_PER_CORE = 4
 
 
 def _worker_timeout() -> float:
-    try:
-        value = float(os.environ.get("WEARCHECK_WORKER_TIMEOUT", WORKER_TIMEOUT))
-    except ValueError:
-        value = WORKER_TIMEOUT
-    return value if value > 0 else WORKER_TIMEOUT
+    return scheduler_mod.environment_timeout("WEARCHECK_WORKER_TIMEOUT", WORKER_TIMEOUT)
+
+
+def _answer_timeout() -> float:
+    """Seconds an external scheduler may take to answer (10 s, or the worker timeout
+    when that is set lower)."""
+    return scheduler_mod.answer_timeout(_worker_timeout())
 
 
 def check_workers(scheduler: str | None, workers) -> None:
@@ -205,22 +209,23 @@ class _Client:
         dask = need("dask", "a study (sweep, refine, fretting-map, fit: on Dask)")
         from distributed import Client, LocalCluster
         self.cluster = None
+        self._quiet = None
         check_workers(scheduler, workers)
         if scheduler:
+            self._quiet = scheduler_mod.quiet_logs()
             try:
-                self.client = Client(scheduler, timeout="10s")
-            except (OSError, TimeoutError, ValueError) as exc:
-                raise cases.WearcheckError(f"cannot reach the Dask scheduler at '{scheduler}': "
-                                           f"{exc}") from None
+                args = scheduler_mod.check_address(scheduler)
+                self.client = scheduler_mod.client(scheduler, _answer_timeout(), args)
+            except BaseException:
+                self._quiet()
+                raise
             try:
                 # tasks sent to a scheduler without workers would wait for ever
-                self.client.wait_for_workers(1, timeout=_worker_timeout())
-            except (TimeoutError, OSError):
-                self.client.close()
-                raise cases.WearcheckError(
-                    f"the Dask scheduler at '{scheduler}' has no worker: none joined within "
-                    f"{_worker_timeout():g} s; start workers (dask worker {scheduler}) or give "
-                    "no scheduler (an embedded cluster)") from None
+                scheduler_mod.wait_for_worker(self.client, scheduler, _worker_timeout(),
+                                              _answer_timeout())
+            except BaseException:
+                self.close()
+                raise
             return
         n = workers or max(1, min(os.cpu_count() or 1, n_tasks))
         # a task that kills its worker (out of memory, crash) is reported at once,
@@ -235,18 +240,25 @@ class _Client:
                                         silence_logs=40)
         self.client = Client(self.cluster)
 
-    def close(self):
-        self.client.close()
+    def close(self, timeout: float | None = None):
+        try:
+            # bounded: a scheduler that stopped answering is not waited for
+            self.client.close(timeout=timeout or _answer_timeout())
+        except Exception:  # noqa: BLE001 - TimeoutError, a comm already closed
+            pass
         if self.cluster is not None:
             self.cluster.close()
+        if self._quiet is not None:
+            self._quiet()
 
 
 class _Watchdog:
-    """Cancels the study's tasks when the cluster has had no worker for a while.
+    """Cancels the study's tasks when the cluster has had no worker, or its scheduler
+    has not answered, for the worker timeout.
 
-    An external scheduler whose workers all died would otherwise keep the
-    tasks waiting for ever; the embedded cluster restarts its workers, so
-    there this never fires.
+    An external scheduler whose workers all died, or that was stopped or
+    killed, would otherwise keep the tasks waiting for ever; the embedded
+    cluster restarts its workers, so there this never fires.
     """
 
     def __init__(self, client, futures: dict, interval: float = 1.0):
@@ -257,28 +269,48 @@ class _Watchdog:
         self._thread.start()
 
     def _run(self):
-        since = None
+        limit = _worker_timeout()
+        answered = time.monotonic()     # the scheduler's last answer
+        workerless = None               # since when it has had no worker
         while not self._stop.wait(self.interval):
+            now = time.monotonic()
+            # a request may take what is left of the limit, at most the answer timeout
+            wait = max(0.1, min(_answer_timeout(), answered + limit - now))
             try:
-                workers = len(self.client.nthreads())
-            except Exception:  # the scheduler itself is gone: the futures fail on their own
-                continue
+                workers = len(scheduler_mod.nthreads(self.client, wait))
+                answered = time.monotonic()
+            except Exception:  # noqa: BLE001 - no answer in time, or the scheduler is gone
+                workers = None
+            now = time.monotonic()
             if workers:
-                since = None
+                workerless = None
                 continue
-            since = since or time.monotonic()
-            if time.monotonic() - since >= _worker_timeout():
-                self.reason = (f"no worker left on the Dask scheduler for "
-                               f"{_worker_timeout():g} s; the task was cancelled")
-                for _ in range(3):
-                    try:
-                        futures = list(self.futures)
-                        break
-                    except RuntimeError:  # the dict grew meanwhile
-                        continue
-                for fut in futures:
+            if workers is None:
+                if getattr(self.client, "status", "") == "closed":
+                    # the connection broke and reconnecting failed: nothing to wait for
+                    self.reason = ("the Dask scheduler was lost (it died, or the connection "
+                                   "broke); the task was cancelled")
+                elif now - answered < limit:
+                    continue
+                else:
+                    self.reason = (f"the Dask scheduler stopped answering for {limit:g} s "
+                                   "(stopped, or gone); the task was cancelled")
+            else:
+                workerless = workerless or now
+                if now - workerless < limit:
+                    continue
+                self.reason = (f"no worker left on the Dask scheduler for {limit:g} s; the "
+                               "task was cancelled")
+            for _ in range(3):
+                try:
+                    futures = list(self.futures)
+                    break
+                except RuntimeError:  # the dict grew meanwhile
+                    continue
+            for fut in futures:
+                with contextlib.suppress(Exception):  # a client already closed
                     fut.cancel()
-                return
+            return
 
     def stop(self):
         self._stop.set()
@@ -355,6 +387,8 @@ def run_cases(case: cases.Case, tasks: list[Task], out: str | Path, *,
     from distributed import KilledWorker, as_completed
 
     check_workers(scheduler, workers)
+    if scheduler:
+        scheduler_mod.check_address(scheduler)  # before the study directory is made
     from wearcheck.comparisons.outputs import study_directory
     names = [t.name for t in tasks]
     if len(set(names)) != len(names):
@@ -384,7 +418,10 @@ def run_cases(case: cases.Case, tasks: list[Task], out: str | Path, *,
             # that dies would be lost with it
             if state["watchdog"] is not None and state["watchdog"].reason:
                 return  # no worker left: the pending tasks fail below
-            slots = max(1, sum(client.nthreads().values()))
+            try:
+                slots = max(1, sum(scheduler_mod.nthreads(client, _answer_timeout()).values()))
+            except Exception:  # noqa: BLE001 - no answer: the watchdog decides when to give up
+                return
             while pending and running.count() < slots:
                 t = pending.pop(0)
                 fut = client.submit(execute, case, t.changes, t.solver, t.name, topic, solve,
@@ -410,9 +447,11 @@ def run_cases(case: cases.Case, tasks: list[Task], out: str | Path, *,
                     handled.update(stuck)
                     yield from stuck
                     return
-                elif running.is_empty():
+                elif running.is_empty() and not pending:
                     return
                 else:
+                    if running.is_empty():
+                        fill()  # the scheduler did not answer the last time: ask again
                     time.sleep(0.05)
 
         for fut in completed():
@@ -424,8 +463,13 @@ def run_cases(case: cases.Case, tasks: list[Task], out: str | Path, *,
                 outcome = Outcome(task=t, ok=False, message="its worker died while running it "
                                   "(a crash, or memory beyond the worker's limit)")
             except (Exception, asyncio.CancelledError) as exc:  # the scheduler or workers lost
-                outcome = Outcome(task=t, ok=False, message=watchdog.reason or
-                                  f"{type(exc).__name__}: {exc}")
+                text = " ".join(str(exc).split())
+                if "scheduler-connection-lost" in text:
+                    text = ("the Dask scheduler was lost while the task ran (it died, or the "
+                            "connection broke); the task was cancelled")
+                else:
+                    text = f"{type(exc).__name__}: {text}"
+                outcome = Outcome(task=t, ok=False, message=watchdog.reason or text)
             fut.release()
             if outcome.ok:
                 meta = dict(task=t.name, changes=dict(t.changes),
@@ -445,15 +489,18 @@ def run_cases(case: cases.Case, tasks: list[Task], out: str | Path, *,
             reporter.finished(outcome)
             fill()
         for t in pending:  # never started: no worker was left to run them
-            outcomes[t.name] = Outcome(task=t, ok=False, message=watchdog.reason)
+            outcomes[t.name] = Outcome(task=t, ok=False, message=watchdog.reason or
+                                       "never started: the Dask scheduler gave it no worker")
             discard_run(out / t.name)
             reporter.finished(outcomes[t.name])
-        client.unsubscribe_topic(topic)
+        with contextlib.suppress(Exception):  # a scheduler that is gone
+            client.unsubscribe_topic(topic)
     finally:
+        given_up = state.get("watchdog") is not None and state["watchdog"].reason
         if state.get("watchdog") is not None:
             state["watchdog"].stop()
         reporter.close()
-        conn.close()
+        conn.close(1.0 if given_up else None)
     return [outcomes[t.name] for t in tasks]
 
 
@@ -466,21 +513,60 @@ def discard_run(path: Path) -> None:
 # --------------------------------------------------------------------------
 # The study directory
 
+def study_meta(out) -> dict:
+    """DIR/meta.json of a study directory ({} when there is none, or it is unreadable)."""
+    path = Path(out) / "meta.json"
+    try:
+        meta = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return meta if isinstance(meta, dict) else {}
+
+
 def record_study(out: Path, study: str, case, prov, arguments: dict | None = None) -> None:
     """Add this study's provenance, resolved case and ``arguments`` (what it varied, as
-    given) to DIR/meta.json (kept for the other studies)."""
-    path = Path(out) / "meta.json"
-    meta = {}
-    if path.is_file():
-        try:
-            meta = json.loads(path.read_text(encoding="utf-8"))
-        except json.JSONDecodeError:
-            meta = {}
-    meta.setdefault("studies", {})[study] = dict(
-        prov, case_file=str(getattr(case, "source", "")), arguments=arguments or {},
-        resolved_case=cases.to_toml(case))
-    from wearcheck.comparisons.outputs import write_study_text
-    write_study_text(out, "meta.json", json.dumps(jsonable(meta), indent=2) + "\n")
+    given) to DIR/meta.json (kept for the other studies).
+
+    A study of the same name recorded before (a re-run, or a sweep that adds
+    values) stays, under ``earlier`` in the new entry, latest first.
+    """
+    from wearcheck.comparisons.outputs import study_lock, write_study_text
+    with study_lock(out):       # read and written by one study at a time
+        meta = study_meta(out)
+        studies = meta.setdefault("studies", {})
+        entry = dict(prov, case_file=str(getattr(case, "source", "")),
+                     arguments=arguments or {}, resolved_case=cases.to_toml(case))
+        previous = studies.get(study)
+        if isinstance(previous, dict):
+            earlier = previous.pop("earlier", [])
+            entry["earlier"] = [previous] + (earlier if isinstance(earlier, list) else [])
+        studies[study] = entry
+        write_study_text(out, "meta.json", json.dumps(jsonable(meta), indent=2) + "\n")
+
+
+def _flat(table: dict, prefix: str = "") -> dict:
+    out = {}
+    for key, value in table.items():
+        if isinstance(value, dict):
+            out.update(_flat(value, f"{prefix}{key}."))
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
+def base_difference(recorded_toml: str, case) -> str | None:
+    """The first key (``section.key: here vs there``) in which ``case`` differs from a
+    resolved case recorded as TOML; None when they are the same case."""
+    import tomllib
+    try:
+        there = _flat(tomllib.loads(recorded_toml))
+    except (tomllib.TOMLDecodeError, TypeError):
+        return "the case recorded there cannot be read"
+    here = _flat(tomllib.loads(cases.to_toml(case)))
+    for key in sorted(set(here) | set(there)):
+        if here.get(key) != there.get(key):
+            return f"{key} = {here.get(key, '(unset)')!r} here, {there.get(key, '(unset)')!r} there"
+    return None
 
 
 def fmt(v, spec=".4g"):

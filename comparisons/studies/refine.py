@@ -20,7 +20,7 @@ from wearcheck.comparisons import registry
 from wearcheck.comparisons.analysis import convergence as rf
 from wearcheck.comparisons.studies.distributed import Task, fmt as _fmt, record_study, run_cases
 from wearcheck.comparisons.studies.sweep import refuse_unsupported
-from wearcheck.comparisons.outputs import write_study_text
+from wearcheck.comparisons.outputs import study_lock, write_study_text
 from wearcheck.comparisons.present.study_figures import FIGURES
 from wearcheck.comparisons.rundir import jsonable, provenance
 
@@ -63,16 +63,19 @@ def refine(case: cases.Case, solver: str, out, *, levels=None, steps=None, toler
     summary.update(case=str(case.source), provenance=prov)
     written = False
     try:
-        record_study(out, f"refine-{solver}", case, prov,
-                     dict(solver=solver, levels=levels, steps=steps, tolerance=tolerance,
-                          stage=stage))
-        write_study_text(out, f"refinement-{solver}.json",
-                         json.dumps(jsonable(summary), indent=2) + "\n")
-        written = True
-        write_study_text(out, f"refinement-{solver}.csv", csv_text(summary))
-        write_study_text(out, "refinement.csv", combined_csv_text(out))
-        from wearcheck.comparisons.present.study_figures import write_figures
-        write_figures(out)
+        # one study at a time: refinement.csv and the figures combine every
+        # study in the directory, meta.json records each
+        with study_lock(out):
+            record_study(out, f"refine-{solver}", case, prov,
+                         dict(solver=solver, levels=levels, steps=steps, tolerance=tolerance,
+                              stage=stage))
+            write_study_text(out, f"refinement-{solver}.json",
+                             json.dumps(jsonable(summary), indent=2) + "\n")
+            written = True
+            write_study_text(out, f"refinement-{solver}.csv", csv_text(summary))
+            write_study_text(out, "refinement.csv", combined_csv_text(out))
+            from wearcheck.comparisons.present.study_figures import write_figures
+            write_figures(out)
     except KeyboardInterrupt as exc:
         exc.summary_written = written  # for the CLI's message: what is on disk
         raise

@@ -24,7 +24,7 @@ from wearcheck.cases import ArgumentError
 from wearcheck.cases.reference import scales as case_scales
 from wearcheck.cases.schema import format_value, key_problem
 from wearcheck.comparisons.studies.distributed import Task, fmt, record_study, run_cases
-from wearcheck.comparisons.outputs import write_study_text
+from wearcheck.comparisons.outputs import study_lock, write_study_text
 from wearcheck.comparisons.rundir import provenance
 
 
@@ -189,6 +189,7 @@ def sweep(case: cases.Case, vary: Mapping[str, Iterable], solver: str, out, *,
     refuse_unsupported(case, solver, [t.changes for t in tasks])
     prov = provenance()
     out = Path(out)
+    earlier_rows(out, solver, case)      # refused now, before the cluster, if it must be
     outcomes = run_cases(case, tasks, out, scheduler=scheduler, workers=workers,
                          quiet=quiet, solve=solve, extra_meta=dict(study=f"sweep-{solver}"),
                          study_files=("meta.json", "sweep.csv"))
@@ -209,13 +210,98 @@ def sweep(case: cases.Case, vary: Mapping[str, Iterable], solver: str, out, *,
                          final_contact_radius_over_a0=float(h["contact_radius"][-1]) / sc["a0"])
         row.update(final)
         rows.append(row)
-    record_study(out, f"sweep-{solver}", case, prov, dict(solver=solver, vary=values))
-    head = [f"# wearcheck sweep, solver {solver}: {', '.join(names)}",
-            f"# command: {prov['command']}",
+    with study_lock(out):
+        # read again: a sweep into the directory may have ended since this one began
+        earlier = earlier_rows(out, solver, case)
+        record_study(out, f"sweep-{solver}", case, prov, dict(solver=solver, vary=values))
+        write_study_text(out, "sweep.csv", table_text(earlier, rows, solver, case, prov))
+    return rows
+
+
+def _quoted(v: str) -> str:
+    return '"' + str(v).replace('"', "'") + '"'
+
+
+def earlier_rows(out: Path, solver: str, case) -> list[dict]:
+    """The rows of the ``sweep.csv`` an earlier sweep wrote into the study ``out``, to keep.
+
+    A second sweep into a study adds its runs to the first's table (more values,
+    or another key; a run done again replaces its row), so that nothing the
+    first wrote is lost: the table covers every run in the directory. It must
+    then be a sweep of the same solver on the same base case (the case file
+    with its ``--set``): refused, before the cluster starts, otherwise, as one
+    table would present the runs of two different studies as one.
+    """
+    from wearcheck.comparisons.outputs import read_marker
+    from wearcheck.comparisons.studies.distributed import base_difference, study_meta
+    marker = read_marker(out) if Path(out).is_dir() else None
+    if not marker or marker.get("kind") != "study":
+        return []
+    studies = study_meta(out).get("studies", {})
+    for name, entry in studies.items():
+        if not name.startswith("sweep-") or not isinstance(entry, dict):
+            continue
+        if name != f"sweep-{solver}":
+            raise ArgumentError("out", f"holds a sweep by solver '{name[6:]}' (sweep.csv); a "
+                                f"sweep by '{solver}' would mix with it in one table: choose "
+                                "another directory", value=str(out))
+        why = base_difference(entry.get("resolved_case", ""), case)
+        if why:
+            raise ArgumentError("out", f"holds a sweep of another base case ({why}); its "
+                                "sweep.csv would mix two studies: choose another directory, "
+                                "or the same base case", value=str(out))
+    path = Path(out) / "sweep.csv"
+    if not path.is_file():
+        return []
+    import csv
+    with open(path, newline="", encoding="utf-8") as fh:
+        return list(csv.DictReader(line for line in fh if not line.startswith("#")))
+
+
+def table_text(earlier: list[dict], rows: list[dict], solver: str, case, prov) -> str:
+    """sweep.csv: the rows of earlier sweeps into the study (as they were written), then
+    this sweep's; a run of both appears once, as this sweep wrote it. A key an earlier
+    sweep did not vary holds the base case's value in its rows, and vice versa."""
+    import tomllib
+    base = tomllib.loads(cases.to_toml(case))
+
+    def base_cell(key: str) -> str:
+        section, _, name = key.partition(".")
+        value = base.get(section, {}).get(name)
+        return '""' if value is None else csv_cell(value)
+
+    def old_cell(key: str, text: str) -> str:
+        """An earlier row's cell, as it was written: quoted unless a number."""
+        if key not in ("run", "status"):
+            try:
+                float(text)
+                return text
+            except ValueError:
+                pass
+        return _quoted(text)
+
+    fixed = [k for k in rows[0] if k != "run" and "." not in k]
+    keys = list(dict.fromkeys([k for r in earlier + rows for k in r if "." in k]))
+    columns = ["run", *keys, *fixed]
+
+    def line(r: dict, old: bool) -> str:
+        cells = []
+        for k in columns:
+            if k not in r or (old and k in keys and r[k] in (None, "")):
+                cells.append(base_cell(k) if k in keys else '""')
+            else:
+                cells.append(old_cell(k, r[k] or "") if old else csv_cell(r[k]))
+        return ",".join(cells)
+
+    done = {r["run"] for r in rows}
+    body = [line(r, True) for r in earlier if r.get("run") not in done]
+    body += [line(r, False) for r in rows]
+    head = [f"# wearcheck sweep, solver {solver}: {', '.join(keys)}",
+            f"# command: {prov['command']}"
+            + (f" (with the rows of earlier sweeps into this directory: their commands "
+               f"in meta.json, studies.sweep-{solver}.earlier)" if earlier else ""),
             f"# git revision: {prov['git_revision']}; versions and resolved case: meta.json",
             "# final_*: end of each run, in that run's own scales (d0, a0, F0 of its unworn "
             "contact); peak_rss_mb: worker process RSS sampled every 10 ms during the task",
-            ",".join(rows[0])]
-    body = [",".join(csv_cell(v) for v in r.values()) for r in rows]
-    write_study_text(out, "sweep.csv", "\n".join(head + body) + "\n")
-    return rows
+            ",".join(columns)]
+    return "\n".join(head + body) + "\n"
