@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from wearcheck.extras import need
+
 from wearcheck.comparisons.analysis.convergence import MEASURES
 from wearcheck.cases import CaseError
 from wearcheck.comparisons import registry
@@ -66,7 +68,7 @@ def _with_differences(axes, study, curves):
 
 def write_figures(out: str | Path) -> list[Path]:
     """Draw the four study figures into ``out``; return their paths."""
-    import matplotlib
+    matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
