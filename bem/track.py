@@ -61,7 +61,7 @@ class TrackOperator:
     ``B`` sums a pixel column along x (the first axis) and spreads the sum
     over it: the groove under a column deepens by the pressure's integral
     along the sliding direction. Offers what :func:`bem.contact.solve` uses of
-    an operator (``spacing``, call, ``single``, ``preconditioner``, ``add_point_loads``).
+    an operator (``spacing``, call, ``preconditioner``, ``add_point_loads``).
     """
 
     def __init__(self, op: HalfSpace, sigma_flat: float):
@@ -69,15 +69,18 @@ class TrackOperator:
         self.spacing, self.n = op.spacing, op.n
 
     def __call__(self, p: np.ndarray) -> np.ndarray:
-        return self._flat(self.op(p), p)
-
-    def single(self, p: np.ndarray) -> np.ndarray:
-        """As the call, G p in single precision (:meth:`HalfSpace.single`), σ_flat B p in double."""
-        return self._flat(self.op.single(p), p)
-
-    def _flat(self, u, p):
+        u = self.op(p)
         if self.sigma_flat:
             u += self.sigma_flat * np.sum(p, axis=0)[None, :]
+        return u
+
+    def single(self, p: np.ndarray) -> np.ndarray:
+        """:meth:`__call__` with the half-space's transforms in single precision
+        (:meth:`HalfSpace.single`, whose error bound the contact solve carries); the
+        groove's column sums stay in double."""
+        u = self.op.single(p)
+        if self.sigma_flat:
+            u = u + self.sigma_flat * np.sum(p, axis=0)[None, :]
         return u
 
     def preconditioner(self, sigma: float = 0.0):
