@@ -101,9 +101,12 @@ def test_no_counterface_wear_is_the_ball_only_bem():
     # K_flat = 0 in the track model's numerics: the ball-only BEM's step on the same
     # operator and preconditioner. The ball-only BEM now starts each contact solve from
     # the last displacement with float32 search directions inside a float64 bound, the
-    # track model from its own guess: both meet the solve's tolerance (model.tol = 1e-8),
-    # so the histories agree to that, not to round-off (measured 7e-9 relative on the
-    # force); 1e-7 relative allows ten times the tolerance
+    # track model from its own guess, and the ball-only one solves on a window around
+    # the contact (contact.solve) with the residual checked on the whole box: both meet
+    # the solve's tolerance (model.tol = 1e-8), so the histories agree to that times the
+    # problem's conditioning, not to round-off (measured 7e-9 relative on the force
+    # without the window, 1.1e-7 on wear_center with it); 1e-6 relative allows a hundred
+    # times the tolerance, ten times the measured; a wrong wear step moves them by orders more
     case = paper_case(grid=32, s_hat=2.0, ratio=1.0, scheme="implicit", step_hat=0.2)
     sc = reference.scales(case)
     model, x = track.setup(case, sc)
@@ -115,7 +118,7 @@ def test_no_counterface_wear_is_the_ball_only_bem():
                       centre=model.centre)
     b = wear.run(ball, plan)["history"]
     for k in ("s", "force", "depth", "contact_radius", "wear_center", "wear_volume"):
-        assert np.allclose(a[k], b[k], rtol=1e-7, atol=0), k
+        assert np.allclose(a[k], b[k], rtol=1e-6, atol=0), k
     assert np.all(a["wear_volume_counterface"] == 0.0)
 
 
