@@ -27,6 +27,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.fft as sfft
 
 from wearcheck.cases import SolverError
 
@@ -45,6 +46,13 @@ SINGLE_ERROR = 2e-6
 #: halves at least once in SINGLE_STALL iterations; then double precision
 SINGLE_MIN_TOL = 1e-7
 SINGLE_STALL = 6
+#: the contact is solved on a square window of the box around the pixels
+#: that may touch (:func:`solve`) when its side is at most this fraction of
+#: the box's; pixels added around them (at least; an eighth of their extent
+#: when more); enlargements before solving on the whole box
+WINDOW_MAX_FRACTION = 0.85
+WINDOW_MARGIN = 4
+WINDOW_TRIES = 3
 
 
 @dataclass
@@ -69,7 +77,8 @@ class Contact:
 
 def complementarity_residual(p, gap, p_scale, g_scale) -> float:
     """max |min(p/p_scale, gap/g_scale)|: zero iff p >= 0, gap >= 0, p·gap = 0."""
-    return float(np.max(np.abs(np.minimum(p / p_scale, gap / g_scale))))
+    m = np.minimum(p, gap * (p_scale / g_scale))
+    return float(max(m.max(), -m.min())) / p_scale
 
 
 def initial_pressure(h, depth=None, force=None):
@@ -106,11 +115,134 @@ def _mirror_index(i: np.ndarray, n: int) -> np.ndarray:
     return np.where(j < n, j, i)
 
 
+def contact_window(candidates: np.ndarray, margin: int):
+    """The square window (rows, columns as slices) holding ``candidates`` with ``margin``.
+
+    Its side is a fast FFT length (its padded operator's is twice that);
+    None when it would exceed :data:`WINDOW_MAX_FRACTION` of the box.
+    """
+    n = candidates.shape[0]
+    rows = np.nonzero(candidates.any(axis=1))[0]
+    cols = np.nonzero(candidates.any(axis=0))[0]
+    if not len(rows):
+        return None
+    need = max(rows[-1] - rows[0], cols[-1] - cols[0]) + 1 + 2 * margin
+    m = sfft.next_fast_len(int(need), real=True)
+    if m > WINDOW_MAX_FRACTION * n:
+        return None
+
+    def place(first, last):
+        start = (first + last + 1 - m) // 2
+        return slice(int(min(max(start, 0), n - m)), int(min(max(start, 0), n - m)) + m)
+    return place(rows[0], rows[-1]), place(cols[0], cols[-1])
+
+
 def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
           g_scale=1.0, tol=1e-8, maxiter=5000, precondition=True,
           stroke_mean=False, single=True, displacement=None,
-          displacement_error=0.0) -> Contact:
+          displacement_error=0.0, window=True) -> Contact:
     """Constrained CG contact solve (Polonsky–Keer), warm-started from ``p_init``.
+
+    With ``window`` (and an operator that has windows, :meth:`bem.operator.
+    HalfSpace.window`) the CG runs on a square window of the box that holds
+    the starting pressure's pixels with a margin (an eighth of their extent,
+    at least :data:`WINDOW_MARGIN`; without one, those with h < d under depth
+    control, which are all that may touch as G and σ are non-negative, or
+    the first guess's under force control). G's coefficients depend on the offset
+    only, so with all the pressure inside, the window's solve is the box's.
+    The displacement on the whole box is then updated (one convolution of
+    the change of pressure) and the complementarity residual checked on the
+    whole box; a pixel outside that overlaps joins the window and the solve
+    is repeated (:data:`WINDOW_TRIES` times, then on the whole box).
+    Parameters and result as :func:`solve_box`.
+    """
+    if (depth is None) == (force is None):
+        raise ValueError("give depth or force")
+    n = h.shape[0]
+    if not (window and not stroke_mean and hasattr(op, "window") and h.shape == (op.n, op.n)):
+        return solve_box(op, h, depth=depth, force=force, sigma=sigma, p_init=p_init,
+                         p_scale=p_scale, g_scale=g_scale, tol=tol, maxiter=maxiter,
+                         precondition=precondition, stroke_mean=stroke_mean, single=single,
+                         displacement=displacement, displacement_error=displacement_error)
+    per_pixel = np.ndim(sigma) > 0
+    sigma = np.asarray(sigma, dtype=float) if per_pixel else float(sigma)
+    p = None
+    if p_init is not None and np.any(p_init > 0):
+        p = np.maximum(np.asarray(p_init, dtype=float), 0.0)
+    if p is None:
+        displacement = None
+    if p is not None:
+        candidates = p > 0
+    elif depth is not None:
+        candidates = h < depth
+    else:
+        candidates = initial_pressure(h, force=force) > 0
+    rows = np.nonzero(candidates.any(axis=1))[0]
+    cols = np.nonzero(candidates.any(axis=0))[0]
+    if not len(rows):
+        raise SolverError("no pixel of the profile reaches the approach d: no contact")
+    extent = max(rows[-1] - rows[0], cols[-1] - cols[0]) + 1
+    margin = max(WINDOW_MARGIN, int(extent) // 8)
+    iterations = 0
+    for _ in range(WINDOW_TRIES):
+        box = contact_window(candidates, margin)
+        if box is None:
+            break
+        sub = op.window(box[0].stop - box[0].start)
+        counts = sub.applications, sub.single_applications
+        try:
+            c = solve_box(sub, h[box], depth=depth, force=force,
+                          sigma=sigma[box] if per_pixel else sigma,
+                          p_init=None if p is None else p[box], p_scale=p_scale,
+                          g_scale=g_scale, tol=tol, maxiter=maxiter,
+                          precondition=precondition, single=single,
+                          displacement=None if displacement is None else displacement[box],
+                          displacement_error=displacement_error)
+        finally:
+            op.applications += sub.applications - counts[0]
+            op.single_applications += sub.single_applications - counts[1]
+        iterations += c.iterations
+        p_new = np.zeros_like(h)
+        p_new[box] = c.pressure
+        # the displacement on the box: the last one plus that of the change
+        # (in single precision under the running bound while that stays
+        # small against the tolerance, else one double convolution)
+        u, drift = None, 0.0
+        if displacement is not None and single and tol >= SINGLE_MIN_TOL:
+            change = op.single(p_new - p)
+            drift = displacement_error + SINGLE_ERROR * float(np.max(np.abs(change)))
+            if 2.0 * drift / g_scale < 0.5 * tol:
+                u = displacement + change
+        if u is None:
+            u, drift = op(p_new), 0.0
+        on = p_new > 0.0
+        d = float(np.mean((h + u + sigma * p_new)[on])) if force is not None else depth
+        gap = h - d + u + sigma * p_new
+        res = complementarity_residual(p_new, gap, p_scale, g_scale)
+        p, displacement, displacement_error = p_new, u, drift
+        if res + 2.0 * drift / g_scale < tol:
+            return Contact(pressure=p, gap=gap, depth=d, force=c.force,
+                           iterations=iterations, residual=res, displacement=u,
+                           displacement_error=drift)
+        outside = np.ones(h.shape, dtype=bool)
+        outside[box] = False
+        overlap = outside & (gap < 0.0)
+        if not np.any(overlap):
+            break       # the window's solve and the box's residual differ at rounding
+        candidates = candidates | overlap | on
+    c = solve_box(op, h, depth=depth, force=force, sigma=sigma, p_init=p, p_scale=p_scale,
+                  g_scale=g_scale, tol=tol, maxiter=maxiter, precondition=precondition,
+                  single=single, displacement=displacement,
+                  displacement_error=displacement_error)
+    c.iterations += iterations
+    return c
+
+
+def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
+              g_scale=1.0, tol=1e-8, maxiter=5000, precondition=True,
+              stroke_mean=False, single=True, displacement=None,
+              displacement_error=0.0) -> Contact:
+    """Constrained CG contact solve (Polonsky–Keer) on the whole box, warm-started from ``p_init``.
 
     Parameters
     ----------
@@ -178,6 +310,13 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
         """The wear compliance applied to v: σ v, or σ (v + M v)/2."""
         return sigma * (0.5 * (v + mirror_x(v)) if stroke_mean else v)
 
+    # Each CG iteration's elementwise work is a few dozen passes over the
+    # box; those below are skipped or fused where the result is the same:
+    # no wear compliance for σ = 0, h - d once under depth control, the
+    # inner products and the restriction to the free pixels in one pass each
+    has_compliance = stroke_mean or per_pixel or sigma != 0.0
+    h_minus_d = h - depth if depth is not None else None
+
     t = np.zeros_like(p)
     gz_old = 1.0
     free_old = None
@@ -198,7 +337,7 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
         if force is not None:
             # the approach: the mean of h + u over the contact (zero gap there)
             d = float(np.mean((h + u)[on]))
-        gap = h - d + u
+        gap = u + h_minus_d if force is None else h - d + u
         res = complementarity_residual(p, gap, p_scale, g_scale)
         if res < tol:
             if res + 2.0 * drift / g_scale < tol:
@@ -227,7 +366,7 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
             g[free] -= np.mean(g[free])
         if precond is not None:
             z = precond(g)
-            z[~free] = 0.0
+            np.multiply(z, free, out=z)
             if force is not None:
                 z[free] -= np.mean(z[free])
         else:
@@ -237,20 +376,23 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
         if free_old is None or not np.array_equal(free, free_old):
             t = z.copy()
         else:
-            t = z + (gz / gz_old) * t
+            t *= gz / gz_old
+            t += z
         free_old, gz_old = free, gz
-        r = (op.single(t) if single else op(t)) + compliance(t)
+        r = op.single(t) if single else op(t)
+        if has_compliance:
+            r += compliance(t)
         rt = float(np.sum(r * t))
         if not rt > 0.0:
             raise SolverError("contact solve: the search direction has no positive curvature "
                               f"(residual {res:.3g}); the operator is not positive definite")
         tau = gz / rt
-        p = p - tau * t
+        p -= tau * t
         u -= tau * r
         if single:
             drift += SINGLE_ERROR * abs(tau) * float(np.max(np.abs(r)))
         # the projection onto p >= 0: its (few) pixels enter u by direct sum
-        clipped = np.nonzero(p < 0.0)
+        clipped = np.nonzero(p < 0.0) if p.min() < 0.0 else ((),)
         if len(clipped[0]) > MAX_DIRECT:
             np.maximum(p, 0.0, out=p)
             u = None

@@ -131,6 +131,19 @@ class HalfSpace:
                                s=(n, n), workers=self.workers).astype(np.float64)
         return apply
 
+    def window(self, m: int) -> "HalfSpace":
+        """The same half-space on an m × m box (a window of this one), cached.
+
+        G's coefficients depend on the pixel offset only, so G restricted to
+        a window equals the window's own operator: a contact solve on a
+        window that holds all the pressure is exact there
+        (:func:`contact.solve`).
+        """
+        cache = self.__dict__.setdefault("_windows", {})
+        if m not in cache:
+            cache[m] = HalfSpace(m, self.spacing, self.E_star, self.workers)
+        return cache[m]
+
     def add_point_loads(self, u: np.ndarray, idx, values) -> None:
         """u += G applied to pressures ``values`` on the pixels ``idx`` (direct sum).
 

@@ -82,11 +82,12 @@ class TrackOperator:
         return u
 
     def single(self, p: np.ndarray) -> np.ndarray:
-        """G p + σ_flat·B p with G p in single precision (:meth:`HalfSpace.single`), for
-        the search directions of :func:`bem.contact.solve`; B p (column sums) in double."""
+        """:meth:`__call__` with the half-space's transforms in single precision
+        (:meth:`HalfSpace.single`, whose error bound the contact solve carries); the
+        groove's column sums stay in double."""
         u = self.op.single(p)
         if self.sigma_flat:
-            u += self.sigma_flat * np.sum(p, axis=0)[None, :]
+            u = u + self.sigma_flat * np.sum(p, axis=0)[None, :]
         return u
 
     def preconditioner(self, sigma: float = 0.0):

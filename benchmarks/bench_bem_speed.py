@@ -72,8 +72,11 @@ def run_child(name, grid, out, src=None):
     if src is not None:
         env["PYTHONPATH"] = str(src)
     before = os.getloadavg()[0]
+    # run outside the repository: `python -c` puts the working directory
+    # first on sys.path, and the repository's wearcheck/ there would shadow
+    # the staged baseline
     r = subprocess.run([sys.executable, "-c", CHILD, name, str(grid), str(out)], env=env,
-                       capture_output=True, text=True)
+                       capture_output=True, text=True, cwd=Path(out).parent)
     if r.returncode:
         raise RuntimeError(r.stderr)
     row = json.loads(r.stdout.strip().splitlines()[-1])

@@ -396,30 +396,100 @@ def _derive_wear(w: Wear) -> tuple[Wear, tuple[str, ...]]:
     return w, (other,)
 
 
-def _warnings(case: Case) -> tuple[str, ...]:
-    out = []
+#: What β = 0 (uncoupled normal and tangential problems) neglects in what ``compare``
+#: checks, per power of βμ: the largest change over a run, measured on paper.toml and
+#: ball_on_flat.toml by benchmarks/bench_coupling.py (docs/bem-tangential.md §6.5).
+#: Reciprocating strokes: second order (table 3: slopes 2, constants independent of
+#: βμ), the ring-averaged profile by 0.13 (βμ)² d, the force by 0.81 (βμ)² of itself
+#: (late in a depth-controlled run). One direction: first order (table 2 at βμ =
+#: 0.0857), the profile by 2.5e-3 d (0.029 βμ), the force by 2.0e-3 (0.023 βμ).
+COUPLING_CHANGE = {"reciprocating": {"order": 2, "profile": 0.13, "force": 0.81},
+                   "one direction": {"order": 1, "profile": 0.029, "force": 0.023}}
+#: the similarity note is given when a neglected change reaches this fraction of
+#: the case's own compare tolerance: below a tenth it moves no verdict by more than
+#: a tenth of its margin, less than the solvers' own differences on the shipped cases
+COUPLING_NOTE_FRACTION = 0.1
+
+
+def coupling_change(case: Case) -> dict | None:
+    """The largest change β = 0 neglects in the worn profile [d] and the force
+    [of itself], scaled from the measurement (:data:`COUPLING_CHANGE`); None when
+    no measurement covers the case (partial slip, wear.tangential_correction)."""
+    if case.fretting is not None or case.wear.tangential_correction:
+        return None
+    regime = "reciprocating" if case.sliding.stroke is not None else "one direction"
+    c = COUPLING_CHANGE[regime]
+    size = abs(dundurs_beta(case.indenter, case.counterface) * case.wear.mu) ** c["order"]
+    force = c["force"] * size if case.loading.control == "depth" else 0.0  # F held fixed
+    return {"regime": regime, "profile": c["profile"] * size, "force": force}
+
+
+def coupling_matters(case: Case) -> bool:
+    """Whether neglecting the normal-tangential coupling (β ≠ 0) reaches
+    :data:`COUPLING_NOTE_FRACTION` of the case's compare tolerances; always, when
+    β ≠ 0 in a regime no measurement covers (:func:`coupling_change` is None)."""
+    if abs(dundurs_beta(case.indenter, case.counterface)) <= 1e-9:
+        return False
+    change = coupling_change(case)
+    if change is None:
+        return True
+    tol = case.compare
+    return (change["profile"] >= COUPLING_NOTE_FRACTION * tol.profile_tolerance
+            or change["force"] >= COUPLING_NOTE_FRACTION * tol.force_tolerance)
+
+
+def _similarity_note(case: Case) -> str:
     beta = dundurs_beta(case.indenter, case.counterface)
-    if abs(beta) > 1e-9:
-        beta_mu = beta * case.wear.mu
-        # the sizes measured by benchmarks/bench_coupling.py (docs/bem-tangential.md §6.5)
-        out.append(
-            f"elastic similarity (paper Eq. 7) does not hold: Dundurs' beta = {beta:.4f} "
+    beta_mu = beta * case.wear.mu
+    change = coupling_change(case)
+    text = (f"elastic similarity (paper Eq. 7) does not hold: Dundurs' beta = {beta:.4f} "
             f"(0 when similar), beta·mu = {beta_mu:.3f}. The normal and tangential problems "
-            "are treated as uncoupled: the friction traction moves each stroke's pressure "
-            "against the traction on the worn body by 3·beta·mu/(2π) = "
+            "are treated as uncoupled: the friction traction moves the pressure against the "
+            "traction on the worn body by 3·beta·mu/(2π) = "
             f"{3 * abs(beta_mu) / (2 * math.pi):.3f} contact radii, which bem.coupling = true "
-            "solves (docs/bem-tangential.md §6). "
-            "Measured so on paper.toml and ball_on_flat.toml (beta·mu = 0.086): each "
-            "stroke's pressure changes by up to 12 % of its peak inside 0.9 a; with "
-            "reciprocating strokes F/F0 changes by at most 0.6 % of itself and the "
-            "ring-averaged worn profile by 1e-3 d; in one sliding direction F/F0 by 0.2 %, "
-            "the profile by 2.5e-3 d, and the wear is asymmetric (up to 9 % of the central "
-            "wear, early in the run)"
-            + ("; the tangential correction is approximate" if case.wear.tangential_correction
-               else "")
-            + ("; the partial-slip (fretting) solution is approximate"
-               if case.fretting is not None else "") + ".")
+            "solves (docs/bem-tangential.md §6)")
+    if change is not None:
+        text += (f". Scaled from the measurement ({change['regime']}), this case's "
+                 f"ring-averaged worn profile changes by up to {change['profile']:.1e} d")
+        if change["force"]:
+            text += f" and its force by up to {100 * change['force']:.2g} % of itself"
+        if change["regime"] == "one direction":
+            text += ", and the wear is asymmetric (up to 9 % of the central wear at beta·mu = 0.086)"
+    if case.wear.tangential_correction:
+        text += "; the tangential correction is approximate"
+    if case.fretting is not None:
+        text += "; the partial-slip (fretting) solution is approximate"
+    return text + "."
+
+
+#: the notes issued through :mod:`warnings` in this process (each kind once)
+_NOTED: set[str] = set()
+
+
+def _warnings(case: Case) -> tuple[str, ...]:
+    """The case's remarks (recorded in every output); the elastic-similarity note only
+    where the coupling matters (:func:`coupling_matters`), issued through
+    :mod:`warnings` once per process (a μ sweep would repeat it for every run)."""
+    out = []
+    if coupling_matters(case):
+        out.append(_similarity_note(case))
+        if "similarity" not in _NOTED:
+            _NOTED.add("similarity")
+            import warnings
+            from .errors import RunWarning
+            warnings.warn(out[-1] + " (said once per process; each case's own is in "
+                          "case.warnings)", RunWarning, stacklevel=_outside_wearcheck())
     return tuple(out)
+
+
+def _outside_wearcheck() -> int:
+    """The stack level of the first caller outside the wearcheck package (the user's
+    line, whichever of load_case, derive or a study loaded the case)."""
+    import sys
+    frame, level = sys._getframe(2), 2   # (the caller of warnings.warn's caller)
+    while frame is not None and frame.f_globals.get("__name__", "").split(".")[0] == "wearcheck":
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 # --------------------------------------------------------------------------

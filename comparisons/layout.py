@@ -265,6 +265,83 @@ FIT_COLUMNS = (
 )
 
 
+#: files a study writes into its directory (``wearcheck sweep``, ``refine``, ``fretting-map``);
+#: each table ``NAME.csv`` is header and rows only, its metadata in ``NAME.csv-metadata.json``
+STUDY_FILES = (
+    Item("meta.json", "", "every study run into the directory: resolved base case, its "
+                          "arguments, provenance"),
+    Item("sweep.csv", "", "wearcheck sweep: one row per run, the columns of SWEEP_COLUMNS"),
+    Item("refinement-<solver>.csv", "", "wearcheck refine: one row per level, the columns of "
+                                        "REFINEMENT_COLUMNS"),
+    Item("refinement.csv", "", "every refine study in the directory in one table, a solver "
+                               "column first"),
+    Item("refinement-<solver>.json", "", "the refine summary: levels, observed orders, "
+                                         "Richardson's estimate, converged level"),
+    Item("fretting_map.csv", "", "wearcheck fretting-map: one row per run, the varied keys "
+                                 "then the columns of FRETTING_MAP_COLUMNS"),
+    Item("NAME.csv-metadata.json", "", "beside each CSV above: W3C CSV on the Web metadata "
+                                       "(dc:title, dc:source = the command line, notes, and "
+                                       "each column's name, titles, dc:description and unit)"),
+)
+
+#: columns every study table shares
+_TASK_COLUMNS = (
+    Item("status", "", "ok, or the run's error"),
+    Item("wall_seconds", "s", "wall time of the task in its worker (case, solve; not writing)"),
+    Item("cpu_seconds", "s", "CPU time of the task in its worker"),
+    Item("solve_seconds", "s", "time in the solver proper"),
+    Item("peak_rss_mb", "MB", "worker process RSS, sampled every 10 ms during the task"),
+    Item("steps", "", "steps the run took"),
+)
+
+#: sweep.csv columns (after ``run``, one column per varied case key, in the case's units)
+SWEEP_COLUMNS = (
+    Item("run", "", "the run's directory in the study"),
+    *_TASK_COLUMNS,
+    Item("final_s", "m", "sliding distance at the end of the run"),
+    Item("final_s_hat", "", "dimensionless sliding ŝ at the end of the run"),
+    Item("final_F_over_F0", "", "normal force at the end over F0 of the run's unworn contact"),
+    Item("final_wear_center_over_d0", "", "wear depth at the centre at the end over d0"),
+    Item("final_contact_radius_over_a0", "", "contact radius at the end over a0"),
+)
+
+#: refinement-<solver>.csv columns (refinement.csv: ``solver`` first, then these)
+REFINEMENT_COLUMNS = (
+    Item("solver", "", "refinement.csv: the study's solver"),
+    Item("level", "", "the level's run directory"),
+    Item("resolution", "", "the refined resolution (elements, mesh size, ...) of the level"),
+    Item("step_hat", "", "the level's step in ŝ"),
+    *_TASK_COLUMNS,
+    Item("final_s_hat", "", "dimensionless sliding ŝ at the end of the run"),
+    Item("F/F0 at s_hat=<stage>", "", "normal force over F0 at each stage of the case"),
+    Item("profile_difference", "", "largest difference of the worn profile to the finest "
+                                   "level, over d0"),
+    Item("pressure_difference", "", "largest difference of the pressure to the finest level, "
+                                    "over p0"),
+    Item("pressure_interior_difference", "", "the same without the edge band "
+                                             "(compare.edge_band)"),
+    Item("force_difference", "", "largest difference of the force to the finest level, "
+                                 "over F0"),
+)
+
+#: fretting_map.csv columns (after one column per varied case key)
+FRETTING_MAP_COLUMNS = (
+    Item("run", "", "the run's directory in the study"),
+    Item("status", "", "ok, or the run's error"),
+    Item("regime", "", "partial slip when a stick zone survives the last cycle, else gross "
+                       "slip"),
+    Item("amplitude_over_u_star", "", "displacement amplitude over u* = 3 μ F0/(4 G* a0) of "
+                                      "the unworn contact"),
+    Item("u_star", "m", "u* = 3 μ F0/(4 G* a0), the amplitude of full sliding"),
+    Item("normal_force", "N", "normal force at the end"),
+    Item("stick_radius_over_a0", "", "stick radius of the last cycle over a0"),
+    Item("tangential_force_amplitude", "N", "tangential force amplitude of the last cycle"),
+    Item("wear_volume_per_cycle", "m^3", "final worn volume over cycles"),
+    Item("energy_last_cycle", "J", "energy dissipated in the last cycle"),
+    Item("wall_seconds", "s", "wall time of the task in its worker"),
+)
+
+
 def _table(items) -> dict:
     return {i.name: i.as_dict() for i in items}
 
@@ -344,4 +421,8 @@ def doc_tables() -> dict[str, str]:
         "verification-metrics": markdown(VERIFICATION_METRICS, "key"),
         "fit-files": markdown(FIT_FILES, "file"),
         "fit-columns": markdown(FIT_COLUMNS, "column"),
+        "study-files": markdown(STUDY_FILES, "file"),
+        "sweep-columns": markdown(SWEEP_COLUMNS, "column"),
+        "refinement-columns": markdown(REFINEMENT_COLUMNS, "column"),
+        "fretting-map-columns": markdown(FRETTING_MAP_COLUMNS, "column"),
     }

@@ -24,6 +24,7 @@ from typing import Callable
 
 import numpy as np
 
+from wearcheck import extras
 from wearcheck.cases import Case, CaseError, RunResult, SolverError
 from wearcheck.cases.result import Item  # noqa: F401  (registrations import it from here)
 
@@ -77,15 +78,25 @@ class Solver:
     supports_function: Callable | None = None
     default: bool = True
 
-    def _package(self):
-        return importlib.import_module(self.module)
+    def _function(self, name: str):
+        """The solver package's ``name`` (solve, supports; None if it has none),
+        imported on first use."""
+        try:
+            return getattr(importlib.import_module(self.module), name, None)
+        except ModuleNotFoundError as exc:
+            # an optional module the solver needs (the FEM's scikit-fem): one line
+            # naming the extra, which supports() gives as its reason
+            found = extras.missing(f"the {self.title}", exc)
+            if found is None:
+                raise
+            raise found from None
 
     def solve(self, case: Case, progress=None) -> RunResult:
         """Run this solver on ``case`` (refused with a CaseError when unsupported)."""
+        fn = self.solve_function or self._function("solve")   # a missing extra said first
         reason = self.supports(case)
         if reason is not None:
             raise CaseError(f"solver '{self.name}' cannot run this case: {reason}")
-        fn = self.solve_function or self._package().solve
         try:
             result = fn(case, progress=progress)
         except (ArithmeticError, np.linalg.LinAlgError) as exc:
@@ -106,7 +117,10 @@ class Solver:
         """None when this solver can run ``case``, else the reason it cannot."""
         fn = self.supports_function
         if fn is None and self.module is not None:
-            fn = getattr(self._package(), "supports", None)
+            try:
+                fn = self._function("supports")
+            except extras.MissingExtra as exc:
+                return str(exc)
         return fn(case) if fn is not None else None
 
 

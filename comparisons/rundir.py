@@ -24,13 +24,15 @@ from pathlib import Path
 
 import numpy as np
 
-from wearcheck import cases
+from wearcheck import cases, extras
 from wearcheck.cases import reference
 from wearcheck.cases.result import HISTORY_COLUMNS, RunResult
 from wearcheck.comparisons import layout
 
-DEPENDENCIES = ("numpy", "scipy", "scikit-fem", "meshio", "gmsh", "pyvista", "matplotlib",
-                "dask", "distributed")
+#: the packages whose versions every output records: the core's, then the extras'
+#: (None when not installed)
+DEPENDENCIES = ("numpy", "scipy", "threadpoolctl", "tqdm",
+                *dict.fromkeys(distribution for distribution, _ in extras.MODULES.values()))
 
 
 # output safety lives in comparisons.outputs; these names are kept for their users

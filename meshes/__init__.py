@@ -94,7 +94,8 @@ def cache_dir() -> Path:
 
 def _generate(params: SphereMeshParameters, msh_path: Path) -> dict:
     """Mesh with gmsh (headless), write ``msh_path`` (.msh 4.1), return the arrays."""
-    import gmsh
+    from wearcheck.extras import need
+    gmsh = need("gmsh", "meshing the FEM's sphere")
 
     R, rc, n = params.radius, params.contact_radius, params.contact_edges
     # element length along the contact arc

@@ -224,8 +224,60 @@ def test_a_known_displacement_replaces_the_first_convolution():
     again = contact.solve(op, worn, p_init=first.pressure, displacement=first.displacement,
                           displacement_error=first.displacement_error, **kw)
     assert op.applications == before
-    plain = contact.solve(op, worn, p_init=first.pressure, **kw)
+    plain = contact.solve(op, worn, p_init=first.pressure, window=False, **kw)
     assert op.applications == before + 1
     assert np.max(np.abs(again.pressure - plain.pressure)) < 50 * 1e-6 * plain.pressure.max()
     gap = worn - again.depth + op(again.pressure)
     assert contact.complementarity_residual(again.pressure, gap, 1e9, d) < 1e-6
+
+
+def test_a_contact_that_outgrows_its_window_is_enlarged(monkeypatch):
+    # Force control started from the pressure of a contact of half the
+    # radius (an eighth of the force): the first window (that pressure's
+    # pixels and a margin) cannot hold the new contact, pixels outside it
+    # overlap, and the window is enlarged until none does. The result must
+    # be the whole box's solve to 50·tol of the peak pressure (both meet the
+    # complementarity tolerance 1e-6; as the warm-start test above), and its
+    # complementarity residual on the whole box, with a fresh convolution,
+    # below the tolerance.
+    X, Y, op, a0 = _paraboloid_grid(96, box=8.0)
+    R, E = 0.01, 1e11
+    h = (X**2 + Y**2) / (2 * R)
+    d0 = a0**2 / R
+    W = 4.0 / 3.0 * E * math.sqrt(R) * d0**1.5
+    kw = dict(p_scale=1e9, g_scale=d0, tol=1e-6)
+    small = contact.solve(op, h, force=W / 8, **kw)
+    windows = []
+    window_of = contact.contact_window
+    monkeypatch.setattr(contact, "contact_window",
+                        lambda *a: windows.append(window_of(*a)) or windows[-1])
+    grown = contact.solve(op, h, force=W, p_init=small.pressure,
+                          displacement=small.displacement,
+                          displacement_error=small.displacement_error, **kw)
+    first = np.zeros(h.shape, dtype=bool)
+    first[windows[0]] = True
+    assert len(windows) >= 2 and windows[-1] is not None
+    assert np.any(grown.pressure[~first] > 0)        # the enlargement was needed
+    box = contact.solve(op, h, force=W, p_init=small.pressure, window=False, **kw)
+    assert np.max(np.abs(grown.pressure - box.pressure)) < 50 * 1e-6 * box.pressure.max()
+    gap = h - grown.depth + op(grown.pressure)
+    assert contact.complementarity_residual(grown.pressure, gap, 1e9, d0) < 1e-6
+    assert abs(grown.force - W) < 1e-9 * W
+
+
+def test_the_window_solve_equals_the_box_solve_under_depth_control():
+    # A depth-controlled solve on the worn profile with a contact small
+    # against the box: the window (pixels with h < d and a margin) holds
+    # every pixel that can touch, so the window's solve is the box's to
+    # 50·tol of the peak (both meet tol = 1e-6), in fewer operator work:
+    # its convolutions are on the window
+    X, Y, op, a0 = _paraboloid_grid(96, box=8.0)
+    d = 1e-6
+    f = (X**2 + Y**2) / 0.02 + 0.05 * d * np.cos(7 * X / a0) * np.exp(-(X**2 + Y**2) / a0**2)
+    kw = dict(depth=d, p_scale=1e9, g_scale=d, tol=1e-6)
+    win = contact.solve(op, f, **kw)
+    box = contact.solve(op, f, window=False, **kw)
+    assert contact.contact_window(f < d, contact.WINDOW_MARGIN) is not None
+    assert np.max(np.abs(win.pressure - box.pressure)) < 50 * 1e-6 * box.pressure.max()
+    gap = f - d + op(win.pressure)
+    assert contact.complementarity_residual(win.pressure, gap, 1e9, d) < 1e-6

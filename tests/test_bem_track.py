@@ -98,14 +98,15 @@ def test_the_balance_check_fails_on_a_wrong_volume():
 
 
 def test_no_counterface_wear_is_the_ball_only_bem():
-    # K_flat = 0 in the track model's numerics: the ball-only BEM's step (same
-    # operator and guesses). Since the BEM speed work (single-precision search
-    # directions, the ball-only solves warm-started from the displacement they
-    # carry, which the track model does not) the two solve the same contacts to
-    # the solve's tolerance, not solve for solve: the sliding, approach and
-    # contact radius still equal to 1e-12; force and wear within the contact
-    # solve's tolerance, model.tol = 1e-6 (measured 6.5e-9, 7.2e-9, 1.0e-9 of
-    # their largest; 1e-12 held before the speed work)
+    # K_flat = 0 in the track model's numerics: the ball-only BEM's step on the same
+    # operator and preconditioner. The ball-only BEM now starts each contact solve from
+    # the last displacement with float32 search directions inside a float64 bound, the
+    # track model from its own guess, and the ball-only one solves on a window around
+    # the contact (contact.solve) with the residual checked on the whole box: both meet
+    # the solve's tolerance (model.tol = 1e-8), so the histories agree to that times the
+    # problem's conditioning, not to round-off (measured 7e-9 relative on the force
+    # without the window, 1.1e-7 on wear_center with it); 1e-6 relative allows a hundred
+    # times the tolerance, ten times the measured; a wrong wear step moves them by orders more
     case = paper_case(grid=32, s_hat=2.0, ratio=1.0, scheme="implicit", step_hat=0.2)
     sc = reference.scales(case)
     model, x = track.setup(case, sc)
@@ -116,10 +117,8 @@ def test_no_counterface_wear_is_the_ball_only_bem():
                       force=None, p_scale=model.p_scale, g_scale=model.g_scale, tol=model.tol,
                       centre=model.centre)
     b = wear.run(ball, plan)["history"]
-    for k in ("s", "depth", "contact_radius"):
-        assert np.allclose(a[k], b[k], rtol=1e-12, atol=0), k
-    for k in ("force", "wear_center", "wear_volume"):
-        assert np.max(np.abs(a[k] - b[k])) <= model.tol * np.max(np.abs(b[k])), k
+    for k in ("s", "force", "depth", "contact_radius", "wear_center", "wear_volume"):
+        assert np.allclose(a[k], b[k], rtol=1e-6, atol=0), k
     assert np.all(a["wear_volume_counterface"] == 0.0)
 
 

@@ -125,8 +125,12 @@ def test_normal_problem_unchanged_and_no_wear_in_the_stick_zone():
 
 
 def _limit_run(N, control):
-    # k = 0.1 (1000 times the paper's) reaches the limiting state within 10^3 cycles
-    case, a, u_star = make(N=N, amplitude=0.5, cycles=800, k=0.1, jump_tolerance=0.02,
+    # k = 0.1 (1000 times the paper's) reaches the limiting state within 10^3 cycles.
+    # Every cycle simulated: the annulus pressure checked below (1e-5 p0) is a
+    # profile accuracy of ~1e-6 of the wear, beyond what cycle jumping at 0.02
+    # (an error bound of 2e-2 of the wear) holds: 3.4e-5 to 6.7e-5 p0 there, 1e-5
+    # at 0.001 (docs/fretting.md §4)
+    case, a, u_star = make(N=N, amplitude=0.5, cycles=800, k=0.1, jump_tolerance=0.0,
                            stage_cycles=[0, 800], control=control, increments=20)
     res = mdr.solve(case)
     c0 = rf.stick_radius(a, R, case.E_star, case.G_star, MU, 0.5 * u_star)
@@ -176,9 +180,12 @@ def test_worn_profile_approaches_popovs_limit_in_cycles():
     # Popov's F∞ = 2E*c0(d - c0²/(3R)) is a transient that dies out plus the
     # grid's floor (0.47 % at N = 200, falling as 1/N: the test above). The
     # transient decays exponentially in k·n (k·n measures the wear done; the
-    # same curve for k = 1 without jumps and k = 0.1 with them).
+    # same curve for k = 1 and k = 0.5). Every cycle simulated: at kn = 40 the
+    # transient is ~1e-3 of the wear's effect on the force, below what cycle
+    # jumping at 0.02 of the wear resolves (its fitted rate 0.154, 0.159 at
+    # 0.002; docs/fretting.md §4).
     rates = []
-    for k, tol in ((1.0, 0.0), (0.1, 0.02)):
+    for k, tol in ((1.0, 0.0), (0.5, 0.0)):
         case, res, kn_stage = _approach(k, tol)
         h = res.history
         d = case.loading.depth

@@ -65,7 +65,9 @@ def test_stick_radius_stays_within_its_bounds_over_the_whole_history(base):
     # accumulated 3D wear is non-decreasing in r inside the final stick zone
     w = res.f[-1] - res.r**2 / (2 * R)
     inside = res.r <= c[-1]
-    assert np.all(np.diff(w[inside]) >= 0.0)
+    # (to round-off: cycle jumping extrapolates the stick zone's round-off wear,
+    # 1e-23 m of either sign in its differences, 1e-14 of the largest wear)
+    assert np.all(np.diff(w[inside]) >= -1e-12 * np.max(w))
 
 
 def test_stick_radius_does_not_shrink(base):
@@ -108,7 +110,10 @@ def test_stick_radius_growth_and_limiting_depth_converge_in_N(base):
     c0 = rf.stick_radius_bounds(FORCE, case.E_star, case.G_star, MU, u0, R)[0]
     ratios, excess, raise_ = [], [], []
     for N in (200, 400, 800):
-        case, r, _ = _run(N=N, k=0.2)
+        # every cycle simulated: the depth's 1e-5 here is finer than the 2e-2 of
+        # the wear that cycle jumping at 0.02 holds (with it, the Richardson limit
+        # below came out -3.2e-5 against the 4.6e-5 mean raise; docs/fretting.md §4)
+        case, r, _ = _run(N=N, k=0.2, jump_tolerance=0.0)
         h = r.history
         c, d = h["stick_radius"][-1], h["depth"][-1]
         ratios.append(c / c0)

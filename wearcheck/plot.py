@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from wearcheck.extras import need
+
 __all__ = ["history", "stages"]
 
 #: the scale each quantity is divided by under ``scaled=True``, and its symbol
@@ -38,7 +40,7 @@ _NAMES = {"s": "sliding distance s", "force": "normal force F", "depth": "depth 
 def _axes(ax):
     if ax is not None:
         return ax
-    import matplotlib.pyplot as plt
+    plt = need("matplotlib.pyplot", "wearcheck.plot")
     return plt.figure().add_subplot()
 
 
@@ -108,7 +110,7 @@ def stages(result, field: str = "f", *, scaled: bool = False, ax=None, **style):
     values = np.asarray(st[field], float) / (sc[_SCALED[field][0]]
                                              if scaled and field in _SCALED else 1.0)
     ax = _axes(ax)
-    import matplotlib.pyplot as plt
+    plt = need("matplotlib.pyplot", "wearcheck.plot")
     colours = plt.get_cmap("viridis")(np.linspace(0.0, 0.9, max(len(values), 1)))
     for k, row in enumerate(values):
         tag = f"ŝ = {st['s_hat'][k]:.3g}" if scaled else f"s = {st['s'][k]:.3g} m"

@@ -296,6 +296,11 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return EXIT_IO
     except Exception as exc:
+        from wearcheck.extras import missing
+        found = missing("this command", exc)   # an optional module not imported by need()
+        if found is not None:
+            print(f"{name}: error: {_one_line(found)}", file=sys.stderr)
+            return found.exit_code
         if os.environ.get("WEARCHECK_TRACEBACK"):
             raise
         print(f"{name}: internal error: {type(exc).__name__}: {_one_line(exc)[:300]} "

@@ -37,6 +37,9 @@ def main(args) -> int:
     if args.revolve < 0 or 0 < args.revolve < 3:
         raise CaseError(f"--revolve {args.revolve}: need 0 (no solid) or at least 3 segments")
     args.vtk = args.vtk or args.revolve > 0
+    if args.vtk:   # said before the solve
+        from wearcheck.extras import need
+        need("pyvista", "writing ParaView files (--vtk)")
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-{args.solver}"
     check_output(out, "run")  # before the solve: a path we may not write fails at once

@@ -32,6 +32,7 @@ import numpy as np
 
 from wearcheck.cases import CaseError
 from wearcheck.cases.tables import parse_quantity, split_header
+from wearcheck.extras import need
 
 from . import (AXES, DISTANCES, HISTORY_QUANTITIES, External, Stage, check_unused,
                geometry_mapping)
@@ -139,10 +140,7 @@ def ring_bins(r, values: dict, where: str, notes: list) -> tuple[np.ndarray, dic
 
 def read(path: Path, mapping: dict) -> External:
     """The series at ``path`` (see the module docstring)."""
-    try:
-        import meshio
-    except ImportError:  # pragma: no cover - a dependency
-        raise CaseError("reading .pvd/.vtu results needs meshio (pip install meshio)") from None
+    meshio = need("meshio", "reading .pvd/.vtu results")
     path = Path(path)
     known = {"f", "wear", "p", "axis", "r"} | set(DISTANCES) | set(HISTORY_QUANTITIES)
     check_unused(mapping, known, "VTK")

@@ -12,6 +12,7 @@ from wearcheck.cases import WearcheckError, reference
 from wearcheck.comparisons import registry
 from wearcheck.comparisons.analysis import metrics
 from wearcheck.comparisons.present import figures
+from wearcheck.extras import MissingExtra
 
 
 def _style_word(style: dict) -> str:
@@ -126,6 +127,9 @@ def try_render(run_dirs) -> dict:
             break
         try:
             fn(d)
+        except MissingExtra as exc:   # one note, not one per run directory
+            notes.append(f"no renders: {exc}")
+            break
         except WearcheckError as exc:  # said in one line, the partial directory's path not
             notes.append(str(exc).replace(f"'{d}'", Path(d).name))
         except Exception as exc:  # noqa: BLE001 - rendering must not fail the comparison

@@ -13,12 +13,14 @@ from pathlib import Path
 
 import numpy as np
 
+from wearcheck.extras import need
+
 #: at most this many FEM markers per curve, so that MDR's line stays visible
 MAX_MARKERS = 70
 
 
 def _pyplot():
-    import matplotlib
+    matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     return plt

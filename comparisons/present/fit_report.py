@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 
+from wearcheck.extras import need
+
 #: how each quantity is drawn: label, unit shown and factor from SI
 _SHOWN = {"scar_diameter": ("scar diameter D", "µm", 1e6),
           "ball_volume": ("ball volume V", "mm³", 1e9),
@@ -30,7 +32,7 @@ def figure(result, path=None, axes=None):
     ``axes``: a sequence of as many matplotlib Axes as quantities plus one, to draw
     into; without it a figure is made (and saved to ``path``). Returns the axes.
     """
-    import matplotlib
+    matplotlib = need("matplotlib", "drawing figures")
     if axes is None and path is not None:
         matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt

@@ -18,18 +18,11 @@ import numpy as np
 from wearcheck import cases
 from wearcheck.cases import CaseError, reference
 from wearcheck.comparisons import layout, registry
+from wearcheck.extras import need
 
 #: the global attribute that marks a netCDF file as wearcheck's (only such a file is
 #: ever replaced)
 MARK = "wearcheck_output"
-
-
-def _need(module: str, extra: str):
-    import importlib
-    try:
-        return importlib.import_module(module)
-    except ImportError:
-        raise CaseError(f"this needs {module}: pip install \"wearcheck[{extra}]\"") from None
 
 
 def dictionary(result) -> dict:
@@ -52,7 +45,7 @@ def history_frame(result):
     ``attrs``: ``units`` and ``meanings`` per column (the index's under "s"),
     ``solver``, ``case`` (the shipped name or file), ``scales`` (a0, d0, F0, p0...).
     """
-    pd = _need("pandas", "xarray")
+    pd = need("pandas", "history_frame()")
     h = {k: np.asarray(v, float) for k, v in result.history.items()}
     table = dictionary(result)["history_csv"]
     frame = pd.DataFrame({k: v for k, v in h.items() if k != "s"},
@@ -81,7 +74,7 @@ def to_xarray(result):
     the resolved case as TOML text (``case_toml``), the scales (``scale_F0``...),
     the command line, versions and git revision, and the :data:`MARK`.
     """
-    xr = _need("xarray", "xarray")
+    xr = need("xarray", "to_xarray()")
     d = dictionary(result)
     hist, stages = d["history_csv"], d["stages_npz"]
 
@@ -119,7 +112,7 @@ def write_netcdf(result, path: str | Path) -> Path:
     """Write :func:`to_xarray` to the netCDF file ``path`` (netCDF 3 through scipy:
     no netCDF library needed), atomically; an existing file is replaced only when it
     is a wearcheck netCDF file."""
-    xr = _need("xarray", "xarray")
+    xr = need("xarray", "to_netcdf()")
     path = Path(path)
     if path.exists() or path.is_symlink():
         if not path.is_file() or path.is_symlink():

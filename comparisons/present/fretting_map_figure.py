@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from wearcheck.extras import need
+
 from wearcheck.comparisons.rundir import provenance
 
 
@@ -26,7 +28,7 @@ def _label(name: str) -> str:
 
 def write_figure(rows, names, path: Path) -> Path:
     """The map: regime by marker, wear volume per cycle by colour."""
-    import matplotlib
+    matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

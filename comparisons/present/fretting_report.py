@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from wearcheck.extras import MissingExtra, need
+
 from wearcheck.cases import reference_fretting as rf
 from wearcheck.comparisons.present import report
 
@@ -70,7 +72,7 @@ def unworn_checks(case, result) -> dict:
 
 
 def _figures(directory: Path, case, result, checks) -> list[str]:
-    import matplotlib
+    matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -137,7 +139,10 @@ def write(directory, case, result) -> list[Path]:
         return []
     directory = Path(directory)
     checks = unworn_checks(case, result)
-    figures = _figures(directory, case, result, checks)
+    try:
+        figures, missing = _figures(directory, case, result, checks), None
+    except MissingExtra as exc:   # the core install: the report without its figures
+        figures, missing = [], exc
     R, fmt = report, report.fmt
     fr = case.fretting
     load = (f"amplitude u0 = {fr.amplitude:g} m" if fr.amplitude is not None
@@ -185,5 +190,7 @@ def write(directory, case, result) -> list[Path]:
                          fmt(h["wear_volume"][i], 5), fmt(h["wear_center"][i], 5)]
                         for i in stage])]
     blocks += [R.image(name, name.removesuffix(".png").replace("_", " ")) for name in figures]
+    if missing is not None:
+        blocks.append(R.para(f"No figures: {missing}."))
     md, html = R.write(directory, blocks, f"wearcheck fretting: {Path(case.source).name}")
     return [md, html] + [directory / n for n in figures]

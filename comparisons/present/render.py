@@ -30,6 +30,7 @@ import numpy as np
 
 from wearcheck.cases import WearcheckError
 from wearcheck.comparisons.rundir import Run, atomic_directory
+from wearcheck.extras import need
 from wearcheck.comparisons.present.vtk import (SURFACE_SEGMENTS, VTK_QUADRATIC_TRIANGLE,
                   VTK_TRIANGLE, check_fields, grid, nice_factor, orient_triangles, revolve_curve, section_data, unworn_profile)
 
@@ -54,7 +55,7 @@ def _plotter():
     """An off-screen plotter through VTK's EGL window (no X server)."""
     # read when the render window is created; must precede any window
     os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-    import pyvista as pv
+    pv = need("pyvista", "rendering")
     pv.OFF_SCREEN = True
     plotter = pv.Plotter(off_screen=True, window_size=list(WINDOW_SIZE))
     plotter.set_background("white")
@@ -238,6 +239,7 @@ def render_run(run_dir) -> list[Path]:
     renderer that fails or crashes is a :class:`RenderError`; the run, and
     pictures rendered before, are left as they were.
     """
+    need("pyvista", "rendering")
     run = Run(run_dir)
     target = run.path / "render"
     pictures = plan(run)

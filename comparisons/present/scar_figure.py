@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from wearcheck.extras import need
+
 
 def scar_figure(path, tables: dict, *, title: str = "") -> Path:
     """Scar diameter and worn volume against cycles (or s), log axes, with the asymptote.
@@ -13,7 +15,7 @@ def scar_figure(path, tables: dict, *, title: str = "") -> Path:
     ``tables``: label -> :func:`scar_table` output (e.g. one per solver).
     Writes ``path`` (PNG or PDF by its suffix) and returns it.
     """
-    import matplotlib
+    matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

@@ -13,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from wearcheck.extras import need
+
 from wearcheck.comparisons.analysis.convergence import MEASURES
 from wearcheck.cases import CaseError
 from wearcheck.comparisons import registry
@@ -28,6 +30,8 @@ def studies(out: Path) -> list[dict]:
     """The refinement summaries in ``out``, MDR first."""
     found = []
     for path in sorted(Path(out).glob("refinement-*.json")):
+        if path.name.endswith(".csv-metadata.json"):   # a CSV's sidecar, not a summary
+            continue
         found.append(json.loads(path.read_text(encoding="utf-8")))
     order = {n: i for i, n in enumerate(registry.names())}
     return sorted(found, key=lambda s: order.get(s["solver"], len(order)))
@@ -64,7 +68,7 @@ def _with_differences(axes, study, curves):
 
 def write_figures(out: str | Path) -> list[Path]:
     """Draw the four study figures into ``out``; return their paths."""
-    import matplotlib
+    matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D

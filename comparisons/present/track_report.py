@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from wearcheck.extras import MissingExtra, need
 from wearcheck.cases import both_bodies
 from wearcheck.comparisons.analysis import track as analysis
 from wearcheck.comparisons.present import report
@@ -56,7 +57,7 @@ def flat_map(case, result):
 
 def write_flat_map(directory: Path, case, result) -> Path:
     """``counterface_wear.pvd`` over ``counterface_wear_KKK.vti`` (cell data ``wear_depth``)."""
-    import pyvista as pv
+    pv = need("pyvista", "the counterface's wear map (ParaView files)")
     x, y, depth = flat_map(case, result)
     dx, dy = x[1] - x[0], y[1] - y[0]
     image = pv.ImageData(dimensions=(len(x) + 1, len(y) + 1, 1), spacing=(dx, dy, 1.0),
@@ -76,7 +77,7 @@ def write_flat_map(directory: Path, case, result) -> Path:
 
 
 def _figure(directory: Path, result, cycles) -> str:
-    import matplotlib
+    matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     y = np.asarray(result.fields["y"], float)
@@ -151,12 +152,18 @@ def write(directory, case, result) -> list[Path]:
     csv.write_text(profile_csv_text(result.stage_s, cycles, result.fields["y"],
                                     result.fields["track_depth"]), encoding="utf-8")
     written = [csv]
+    content = blocks(case, result)
     if len(result.stage_s):
-        written.append(write_flat_map(directory, case, result))
-        figure = _figure(directory, result, cycles)
-        written.append(directory / figure)
-        content = blocks(case, result) + [report.image(figure, "track cross-sections")]
-    else:
-        content = blocks(case, result)
+        # the core install has neither pyvista nor matplotlib: the report says so
+        try:
+            written.append(write_flat_map(directory, case, result))
+        except MissingExtra as exc:
+            content.append(report.para(f"No ParaView files of the counterface: {exc}."))
+        try:
+            figure = _figure(directory, result, cycles)
+            written.append(directory / figure)
+            content.append(report.image(figure, "track cross-sections"))
+        except MissingExtra as exc:
+            content.append(report.para(f"No figure: {exc}."))
     md, html = report.write(directory, content, f"wearcheck both bodies: {Path(case.source).name}")
     return [md, html] + written

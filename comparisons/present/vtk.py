@@ -45,6 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
+from wearcheck.extras import need
 from wearcheck.cases import CaseError, WearcheckError
 from wearcheck.cases.profiles import height, height_xy
 from wearcheck.cases.schema import NON_AXISYMMETRIC
@@ -375,7 +376,7 @@ def stage_field_data(run: Run, k):
 
 def grid(xyz, cells):
     """pyvista UnstructuredGrid from points and {VTK cell type: connectivity}."""
-    import pyvista as pv
+    pv = need("pyvista", "writing ParaView files")
     return pv.UnstructuredGrid({int(t): np.asarray(c, dtype=np.int64) for t, c in cells.items()},
                                np.asarray(xyz, dtype=float))
 
@@ -510,6 +511,7 @@ def export_run(run_dir, revolve: int = 0) -> Path:
     """
     if revolve < 0 or 0 < revolve < 3:
         raise CaseError(f"--revolve {revolve}: need 0 (no solid) or at least 3 segments")
+    need("pyvista", "writing ParaView files")
     run = Run(run_dir)
     target = run.path / "vtk"
     from wearcheck.comparisons.resources import check_export

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from wearcheck.extras import need
 from wearcheck.cases import WearcheckError
 
 from wearcheck.comparisons.present.vtk import pvd_text, units_of, warp_scale
@@ -60,8 +61,7 @@ def write_image_series(directory, fields, stage_s, *, s_hat_per_m: float | None 
     stage_s : (K,) sliding distances [m] of the stages (the PVD time values).
     s_hat_per_m, p0 : optional scales for ``s_hat`` and ``p_over_p0``.
     """
-    import pyvista as pv
-
+    pv = need("pyvista", "writing ParaView files")
     directory = Path(directory)
     stage_s = np.asarray(stage_s, dtype=float)
     check_image_fields(fields, len(stage_s))

@@ -36,6 +36,7 @@ from wearcheck.comparisons.present.scar_figure import scar_figure
 from wearcheck.comparisons.resources import check_memory
 from wearcheck.comparisons.studies import edge_study as edge_mod
 from wearcheck.comparisons.studies import sphere_sweep as sphere_mod
+from wearcheck.extras import need
 
 #: how a solver is run; tests replace it with analytic stand-ins
 solve_case = registry.solve
@@ -396,6 +397,7 @@ def write(out, case, runs: Runs, m: dict, *, argv=None, render=True, started=Non
     total time (``started``: the ``time.perf_counter()`` of the comparison's
     start) added.
     """
+    need("matplotlib", "compare (its figures)")
     m = dict(m)
     names = list(runs.results)
     prov = rundir.provenance(argv)
@@ -459,6 +461,7 @@ def compare(case, out, *, solvers=None, reference_solver=None, argv=None, edge=F
     """
     started = time.perf_counter()
     check_output(out, "comparison")  # before the solves: a path we may not write
+    need("matplotlib", "compare (its figures)")    # and an extra it will need
     runs = run(case, solvers=solvers, reference_solver=reference_solver, edge=edge,
                sphere=sphere, sphere_ratios=sphere_ratios, solve=solve, quiet=quiet)
     return write(out, case, runs, analyse_runs(case, runs), argv=argv, render=render,

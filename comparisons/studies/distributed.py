@@ -38,6 +38,7 @@ from wearcheck import cases
 from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.comparisons.studies import scheduler as scheduler_mod
 from wearcheck.comparisons.rundir import jsonable, write_run
+from wearcheck.extras import need
 
 #: seconds between two samples of a task's resident set size
 RSS_INTERVAL = 0.01
@@ -205,7 +206,7 @@ class _Client:
     """A distributed Client on ``scheduler``, or on an embedded LocalCluster."""
 
     def __init__(self, scheduler: str | None, workers: int | None, n_tasks: int):
-        import dask
+        dask = need("dask", "a study (sweep, refine, fretting-map, fit: on Dask)")
         from distributed import Client, LocalCluster
         self.cluster = None
         self._quiet = None
@@ -381,6 +382,8 @@ def run_cases(case: cases.Case, tasks: list[Task], out: str | Path, *,
     ``rundir.write_run``) as soon as its result arrives, so an interrupted study
     keeps the levels already done.
     """
+    # the studies run on Dask: said before anything is checked or started
+    need("distributed", "a study (sweep, refine, fretting-map, fit: on Dask)")
     from distributed import KilledWorker, as_completed
 
     check_workers(scheduler, workers)

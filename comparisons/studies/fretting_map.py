@@ -19,14 +19,18 @@ from pathlib import Path
 from wearcheck import cases
 from wearcheck.cases import reference
 
-from wearcheck.comparisons.outputs import write_study_file, write_study_text
+from wearcheck.comparisons.csv_metadata import describer, sidecar_name, write_table
+from wearcheck.comparisons.layout import FRETTING_MAP_COLUMNS
+from wearcheck.comparisons.outputs import write_study_file
 from wearcheck.comparisons.rundir import provenance
 from wearcheck.comparisons.studies.distributed import record_study, run_cases
-from wearcheck.comparisons.studies.sweep import check_varied, csv_cell, tasks_for, varied_values
+from wearcheck.comparisons.studies.sweep import (check_varied, csv_cell, tasks_for,
+                                                 varied_column, varied_values)
 
-COLUMNS = ("run", "status", "regime", "amplitude_over_u_star", "u_star", "normal_force",
-           "stick_radius_over_a0", "tangential_force_amplitude", "wear_volume_per_cycle",
-           "energy_last_cycle", "wall_seconds")
+COLUMNS = tuple(c.name for c in FRETTING_MAP_COLUMNS)
+
+#: the sidecar's column descriptions
+describe = describer(FRETTING_MAP_COLUMNS)
 
 
 def summarise(outcome) -> dict:
@@ -72,21 +76,24 @@ def fretting_map(case: cases.Case, vary, out, *, scheduler=None, workers=None,
     out = Path(out)
     outcomes = run_cases(case, tasks, out, scheduler=scheduler, workers=workers,
                          quiet=quiet, solve=solve, extra_meta=dict(study="fretting-map"),
-                         study_files=("meta.json", "fretting_map.csv", "fretting_map.png"))
+                         study_files=("meta.json", "fretting_map.csv",
+                                      sidecar_name("fretting_map.csv"), "fretting_map.png"))
     rows = []
     for t, o in zip(tasks, outcomes):
         row = summarise(o)
         row.update(t.changes)
         rows.append(row)
     record_study(out, "fretting-map", case, prov, dict(vary=values))
-    head = [f"# wearcheck fretting-map: {', '.join(names)}",
-            f"# command: {prov['command']}",
-            "# regime: partial slip when a stick zone survives the last cycle; "
-            "u_star = 3 mu F0 / (4 G* a0) of the unworn contact; wear_volume_per_cycle = "
-            "final worn volume / cycles [m^3]; energy_last_cycle [J]",
-            ",".join(list(names) + list(COLUMNS))]
+    notes = [f"wearcheck fretting-map: {', '.join(names)}.",
+             f"Command: {prov['command']}.",
+             "regime: partial slip when a stick zone survives the last cycle; u_star = 3 mu "
+             "F0 / (4 G* a0) of the unworn contact; wear_volume_per_cycle = final worn volume "
+             "/ cycles [m^3]; energy_last_cycle [J]."]
+    head = [",".join(list(names) + list(COLUMNS))]
     body = [",".join(csv_cell(r[k]) for k in list(names) + list(COLUMNS)) for r in rows]
-    write_study_text(out, "fretting_map.csv", "\n".join(head + body) + "\n")
+    write_table(out, "fretting_map.csv", "\n".join(head + body) + "\n",
+                title="wearcheck fretting-map", command=prov["command"], notes=notes,
+                describe=lambda c: varied_column(c) if "." in c else describe(c))
     from wearcheck.comparisons.present.fretting_map_figure import write_figure
     write_study_file(out, "fretting_map.png", lambda tmp: write_figure(rows, names, tmp))
     return rows

@@ -20,7 +20,14 @@ from wearcheck.comparisons import registry
 from wearcheck.comparisons.analysis import convergence as rf
 from wearcheck.comparisons.studies.distributed import Task, fmt as _fmt, record_study, run_cases
 from wearcheck.comparisons.studies.sweep import refuse_unsupported
+from wearcheck.comparisons import csv_metadata
+from wearcheck.comparisons.csv_metadata import describer, sidecar_name, write_table
+from wearcheck.comparisons.layout import REFINEMENT_COLUMNS
 from wearcheck.comparisons.outputs import study_lock, write_study_text
+
+#: the sidecars' column descriptions
+describe = describer(REFINEMENT_COLUMNS, [("F/F0 at s_hat=", next(
+    c for c in REFINEMENT_COLUMNS if c.name.startswith("F/F0 at s_hat=")))])
 from wearcheck.comparisons.present.study_figures import FIGURES
 from wearcheck.comparisons.rundir import jsonable, provenance
 
@@ -58,6 +65,8 @@ def refine(case: cases.Case, solver: str, out, *, levels=None, steps=None, toler
                          extra_meta=dict(study=f"refine-{solver}"),
                          study_files=("meta.json", f"refinement-{solver}.json",
                                       f"refinement-{solver}.csv", "refinement.csv",
+                                      sidecar_name(f"refinement-{solver}.csv"),
+                                      sidecar_name("refinement.csv"),
                                       *FIGURES))[::-1]
     summary = summarize(case, solver, lvls, outcomes, varied, tolerance, stage)
     summary.update(case=str(case.source), provenance=prov)
@@ -72,8 +81,13 @@ def refine(case: cases.Case, solver: str, out, *, levels=None, steps=None, toler
             write_study_text(out, f"refinement-{solver}.json",
                              json.dumps(jsonable(summary), indent=2) + "\n")
             written = True
-            write_study_text(out, f"refinement-{solver}.csv", csv_text(summary))
-            write_study_text(out, "refinement.csv", combined_csv_text(out))
+            command = prov["command"]
+            write_table(out, f"refinement-{solver}.csv", csv_text(summary),
+                        title=f"wearcheck refine, solver {solver}", command=command,
+                        notes=csv_notes(summary), describe=describe)
+            write_table(out, "refinement.csv", combined_csv_text(out),
+                        title="wearcheck refine: every study in the directory",
+                        command=command, notes=combined_notes(out), describe=describe)
             from wearcheck.comparisons.present.study_figures import write_figures
             write_figures(out)
     except KeyboardInterrupt as exc:
@@ -151,37 +165,42 @@ def summarize(case, solver, lvls, outcomes, varied, tolerance, stage) -> dict:
     return summary
 
 
-def csv_text(summary: dict) -> str:
-    """refinement-<solver>.csv: summary lines as # comments, then one row per level."""
+def csv_notes(summary: dict) -> list[str]:
+    """refinement-<solver>.csv's notes (its sidecar's): the summary in sentences."""
     prov = summary["provenance"]
-    head = [f"# wearcheck refine, solver {summary['solver']}: differences to the finest level "
-            f"{summary['finest']}",
-            f"# command: {prov['command']}",
-            f"# git revision: {prov['git_revision']}; versions and resolved case: meta.json",
-            "# profile rel. d0, pressure rel. p0 (interior: without the edge band), force rel. "
-            "F0; wall/cpu_seconds: the task in its worker (case, solve; not writing), "
-            "peak_rss_mb: worker process RSS sampled every 10 ms during the task"]
+    notes = [f"wearcheck refine, solver {summary['solver']}: differences to the finest "
+             f"level {summary['finest']}.",
+             f"Command: {prov['command']}.",
+             f"Git revision: {prov['git_revision']}; versions and resolved case: meta.json.",
+             "Profile rel. d0, pressure rel. p0 (interior: without the edge band), force "
+             "rel. F0; wall/cpu_seconds: the task in its worker (case, solve; not writing), "
+             "peak_rss_mb: worker process RSS sampled every 10 ms during the task."]
     for m, fit in summary["observed_order"].items():
-        head.append(f"# observed order {m}: {_fmt(fit['order'], '.3f')} (log-log fit of the "
-                    f"differences between successive levels, {fit['levels']} levels)")
+        notes.append(f"Observed order {m}: {_fmt(fit['order'], '.3f')} (log-log fit of the "
+                     f"differences between successive levels, {fit['levels']} levels).")
     rich = summary["richardson"]
     if rich:
-        head.append(f"# Richardson ({', '.join(rich['levels'])}), F/F0 at each stage "
-                    "(order -> estimate; nan: not monotone): "
-                    + "; ".join(f"s_hat={float(st):g}: {_fmt(r['order'], '.3f')} -> "
-                                f"{_fmt(r['estimate'], '.7g')}"
-                                for st, r in rich["by_stage"].items()))
+        notes.append(f"Richardson ({', '.join(rich['levels'])}), F/F0 at each stage "
+                     "(order -> estimate; nan: not monotone): "
+                     + "; ".join(f"s_hat={float(st):g}: {_fmt(r['order'], '.3f')} -> "
+                                 f"{_fmt(r['estimate'], '.7g')}"
+                                 for st, r in rich["by_stage"].items()) + ".")
     conv = summary["converged"]
     if conv:
-        head.append(f"# coarsest converged level within {conv['tolerance']:g}: "
-                    f"{conv['level'] or 'none coarser than the finest'}")
+        notes.append(f"Coarsest converged level within {conv['tolerance']:g}: "
+                     f"{conv['level'] or 'none coarser than the finest'}.")
+    return notes
+
+
+def csv_text(summary: dict) -> str:
+    """refinement-<solver>.csv: one row per level (its notes: :func:`csv_notes`)."""
     stages = list(summary["levels"][0]["stage_force"]) if summary["levels"] else []
     cols = (["level", "resolution", "step_hat", "status", "wall_seconds", "cpu_seconds",
              "solve_seconds",
              "peak_rss_mb", "steps", "final_s_hat"]
             + [f"F/F0 at s_hat={s:g}" for s in stages]
             + [f"{m}_difference" for m in rf.MEASURES])
-    lines = head + [",".join(cols)]
+    lines = [",".join(cols)]
     for r in summary["levels"]:
         d = r["differences"]
         vals = ([r["name"], r["resolution"], r["step_hat"],
@@ -197,25 +216,29 @@ def csv_text(summary: dict) -> str:
 def combined_csv_text(out: Path) -> str:
     """refinement.csv: every study in ``out`` in one table, a ``solver`` column first.
 
-    Built from the per-solver CSV files (so the two never disagree); columns a
-    study lacks (e.g. stages of another case) stay empty.
+    Built from the per-solver CSV files (so the two never disagree), also those an
+    earlier version wrote with ``#`` lines above the header; columns a study lacks
+    (e.g. stages of another case) stay empty.
     """
-    import csv
-    import io
-    heads, rows, columns = [], [], ["solver"]
-    for path in sorted(out.glob("refinement-*.csv")):
+    rows, columns = [], ["solver"]
+    for path in _per_solver_tables(out):
         solver = path.stem.removeprefix("refinement-")
-        lines = path.read_text(encoding="utf-8").splitlines()
-        heads += [line for line in lines if line.startswith("#")]
-        reader = csv.DictReader(io.StringIO("\n".join(l for l in lines
-                                                     if not l.startswith("#"))))
-        columns += [c for c in reader.fieldnames if c not in columns]
-        rows += [dict(row, solver=solver) for row in reader]
-    text = io.StringIO()
-    writer = csv.DictWriter(text, fieldnames=columns, lineterminator="\n")
-    writer.writeheader()
-    writer.writerows(rows)
-    return "\n".join(heads) + "\n" + text.getvalue()
+        table = csv_metadata.read_rows(path)
+        columns += [c for r in table[:1] for c in r if c not in columns]
+        if not table:
+            columns += [c for c in csv_metadata.header(path.read_text(encoding="utf-8"))
+                        if c not in columns]
+        rows += [dict(row, solver=solver) for row in table]
+    return csv_metadata.rows_text(columns, rows)
+
+
+def combined_notes(out: Path) -> list[str]:
+    """refinement.csv's notes: those of every per-solver table, in its order."""
+    return [n for path in _per_solver_tables(out) for n in csv_metadata.read_notes(path)]
+
+
+def _per_solver_tables(out: Path) -> list[Path]:
+    return sorted(p for p in Path(out).glob("refinement-*.csv") if p.is_file())
 
 
 def table(summary: dict) -> str:

@@ -24,7 +24,10 @@ from wearcheck.cases import ArgumentError
 from wearcheck.cases.reference import scales as case_scales
 from wearcheck.cases.schema import format_value, key_problem
 from wearcheck.comparisons.studies.distributed import Task, fmt, record_study, run_cases
-from wearcheck.comparisons.outputs import study_lock, write_study_text
+from wearcheck.comparisons import csv_metadata
+from wearcheck.comparisons.csv_metadata import describer, sidecar_name, write_table
+from wearcheck.comparisons.layout import SWEEP_COLUMNS
+from wearcheck.comparisons.outputs import study_lock
 from wearcheck.comparisons.rundir import provenance
 
 
@@ -192,7 +195,7 @@ def sweep(case: cases.Case, vary: Mapping[str, Iterable], solver: str, out, *,
     earlier_rows(out, solver, case)      # refused now, before the cluster, if it must be
     outcomes = run_cases(case, tasks, out, scheduler=scheduler, workers=workers,
                          quiet=quiet, solve=solve, extra_meta=dict(study=f"sweep-{solver}"),
-                         study_files=("meta.json", "sweep.csv"))
+                         study_files=("meta.json", "sweep.csv", sidecar_name("sweep.csv")))
     rows = []
     for t, o in zip(tasks, outcomes):
         row = dict(run=t.name, **t.changes)
@@ -214,8 +217,15 @@ def sweep(case: cases.Case, vary: Mapping[str, Iterable], solver: str, out, *,
         # read again: a sweep into the directory may have ended since this one began
         earlier = earlier_rows(out, solver, case)
         record_study(out, f"sweep-{solver}", case, prov, dict(solver=solver, vary=values))
-        write_study_text(out, "sweep.csv", table_text(earlier, rows, solver, case, prov))
+        text = table_text(earlier, rows, case)
+        keys = [k for k in csv_metadata.header(text) if "." in k]
+        write_table(out, "sweep.csv", text, title=f"wearcheck sweep, solver {solver}",
+                    command=prov["command"], notes=table_notes(earlier, keys, solver, prov),
+                    describe=lambda c: varied_column(c) if "." in c else describe(c))
     return rows
+
+
+describe = describer(SWEEP_COLUMNS)
 
 
 def _quoted(v: str) -> str:
@@ -253,12 +263,10 @@ def earlier_rows(out: Path, solver: str, case) -> list[dict]:
     path = Path(out) / "sweep.csv"
     if not path.is_file():
         return []
-    import csv
-    with open(path, newline="", encoding="utf-8") as fh:
-        return list(csv.DictReader(line for line in fh if not line.startswith("#")))
+    return csv_metadata.read_rows(path)
 
 
-def table_text(earlier: list[dict], rows: list[dict], solver: str, case, prov) -> str:
+def table_text(earlier: list[dict], rows: list[dict], case) -> str:
     """sweep.csv: the rows of earlier sweeps into the study (as they were written), then
     this sweep's; a run of both appears once, as this sweep wrote it. A key an earlier
     sweep did not vary holds the base case's value in its rows, and vice versa."""
@@ -296,12 +304,23 @@ def table_text(earlier: list[dict], rows: list[dict], solver: str, case, prov) -
     done = {r["run"] for r in rows}
     body = [line(r, True) for r in earlier if r.get("run") not in done]
     body += [line(r, False) for r in rows]
-    head = [f"# wearcheck sweep, solver {solver}: {', '.join(keys)}",
-            f"# command: {prov['command']}"
+    return "\n".join([",".join(columns)] + body) + "\n"
+
+
+def table_notes(earlier: list[dict], keys, solver: str, prov) -> list[str]:
+    """sweep.csv's notes (its sidecar's): what the ``#`` lines above the table said."""
+    return [f"wearcheck sweep, solver {solver}: {', '.join(keys)}.",
+            f"Command: {prov['command']}"
             + (f" (with the rows of earlier sweeps into this directory: their commands "
-               f"in meta.json, studies.sweep-{solver}.earlier)" if earlier else ""),
-            f"# git revision: {prov['git_revision']}; versions and resolved case: meta.json",
-            "# final_*: end of each run, in that run's own scales (d0, a0, F0 of its unworn "
-            "contact); peak_rss_mb: worker process RSS sampled every 10 ms during the task",
-            ",".join(columns)]
-    return "\n".join(head + body) + "\n"
+               f"in meta.json, studies.sweep-{solver}.earlier)." if earlier else "."),
+            f"Git revision: {prov['git_revision']}; versions and resolved case: meta.json.",
+            "final_*: end of each run, in that run's own scales (d0, a0, F0 of its unworn "
+            "contact); peak_rss_mb: worker process RSS sampled every 10 ms during the task."]
+
+
+def varied_column(key: str):
+    """The sidecar's description of a varied case key's column."""
+    from wearcheck.cases.result import Item
+    return Item(key, "(case units)", f"the case key {key} of the run, in the case file's "
+                                     "units (docs: the case reference)")
+

@@ -255,7 +255,9 @@ def write_results(directory: Path, hist, stages, per_m) -> None:
     lines = [",".join(["s", "s_hat"] + cols[1:] + ["origin"])]
     for i in range(len(hist["s"])):
         vals = [hist["s"][i], hist["s"][i] * per_m] + [hist[q][i] for q in cols[1:]]
-        lines.append(",".join(f"{v:.12e}" for v in vals) + f",{hist['origin'][i]}")
+        # quoted: a file name in the origin may hold a comma
+        origin = '"' + str(hist["origin"][i]).replace('"', '""') + '"'
+        lines.append(",".join(f"{v:.12e}" for v in vals) + f",{origin}")
     (directory / "history.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
     lines = ["s,s_hat,r,f,p"]
     for st in stages:

@@ -1,0 +1,357 @@
+"""Error-controlled cycle jumping: a cycle-averaged rate integrated in the cycle count.
+
+A cyclic process (fretting: one tangential cycle of a contact) changes a slowly
+varying variable y (the worn profile) by F(y) per cycle, and over many cycles y
+follows the ODE dy/dN = F(y) in the cycle count N. The rate is known only by
+simulating a cycle, and it is stiff: in fretting a node worn too far unloads
+and wears less, so grid-scale modes of the profile relax within ~100 cycles
+while the profile changes over 10⁴–10⁸ cycles, and the ratio grows without
+bound as the wear rate decays towards the limit. Forward-Euler jumps are
+stable only while h·|λ| < 2 and were held at 115–200 cycles there.
+
+The integrator takes steps of h cycles by ROS2 (Verwer, Spee, Blom &
+Hundsdorfer, SIAM J. Sci. Comput. 20, 1999), a two-stage Rosenbrock method:
+
+    (I − γhJ) k1 = F(y),   (I − γhJ) k2 = F(y + h k1) − 2 k1,
+    y ← y + (3/2) h k1 + (1/2) h k2,          γ = 1 + 1/√2,
+
+second order for any matrix J (a W-method: J may be an approximation) and
+L-stable: a stiff mode relaxes within the step, and as F → 0 the step tends
+to the limit itself. J is the problem's own (``Problem.jacobian``; in
+fretting the part of ∂F/∂y that is stiff, the wear's response to the
+pressure, from the normal contact alone — no cycle is simulated for it),
+taken afresh at every step. Each step simulates two cycles: the stage F(y +
+h k1) and the cycle from the step's end, which is kept (a row of the
+history) and starts the next step.
+
+Error control is against the run that simulates every cycle. The local error
+estimate of a step is its difference to the trapezoidal rule on the rates at
+its ends, (3/2)h k1 + (1/2)h k2 − (h/2)(F(y) + F(y_new)), filtered through
+(I − γhJ)⁻¹ where J acts (Shampine's filter: on stiff modes the trapezoidal
+rule is no reference). The estimates are carried through the scheme's own
+linearised dynamics, e ← R(hJ) e + est (R the stability function: stiff
+errors are damped as the contact damps them), and max|e| is the global error
+estimate. A step may take LOCAL_SHARE of the room tol·Y − max|R e| (Y =
+max|y − y(0)|, the change so far), so max|e| <= tol·Y throughout; a rejected
+step is retried shorter. The step grows by up to GROWTH per step, so where the
+rate varies smoothly the cycles simulated grow with log N. Steps land where
+a simulated cycle must end (``Plan.landings``).
+
+What is integrated is the ODE, not the map of the cycles: their solutions part
+by about λ²N/2 on a mode of rate λ per cycle (of the map y ← y + F(y)), which
+no step's estimate sees; it stays below λ_max/2 of the change, and fast modes
+relax. The series correction F − ½JF was tried: right on maps whose J is
+exact, but fretting's J is the rate's, not the cycle's (a simulated cycle
+relaxes the stiff nodes within itself), and the correction broke the shipped
+case near 10⁶ cycles, capped or not.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from wearcheck.cases.errors import SolverError
+
+#: ROS2's γ (L-stable)
+GAMMA = 1.0 + 1.0 / math.sqrt(2.0)
+#: factor on the step the error estimate proposes (the estimate grows as h³)
+SAFETY = 0.8
+#: largest growth and shrinking of the step from one step to the next
+GROWTH = 2.0
+SHRINK = 0.2
+#: share of the room tol·Y − max|e| that one step's local error may take
+LOCAL_SHARE = 0.5
+#: what ``info["cycle_jumping"]["error_estimate"]`` means, in meta.json
+ERROR_MEANING = (
+    "estimated error of the integrated variable against the run that simulates every cycle, "
+    "max norm over its largest change so far, the largest over the run: the steps' local "
+    "error estimates (against the trapezoidal rule, filtered where stiff) carried through the "
+    "scheme's linearised dynamics; kept at most the tolerance. final_error_estimate: the same "
+    "at the last cycle (damped where the limit attracts; in fretting it misses errors along "
+    "the limit's neutral directions). local_error_sum: the estimates' norms summed, nothing "
+    "damped")
+
+
+@dataclass
+class Cycle:
+    """One simulated cycle: the state after it, the rate F (change of y over the
+    cycle) and whatever the problem keeps of it (``record``)."""
+
+    state: object
+    rate: np.ndarray
+    record: object = None
+
+
+class Problem:
+    """A cyclic process as the integrator sees it; states are the problem's own objects."""
+
+    def cycle(self, state, n: int, probe: bool = False) -> Cycle:
+        """Simulate cycle ``n`` (the one ending at cycle count n) from ``state``;
+        ``probe``: a stage of the integrator, nothing of it is kept. Must not
+        modify ``state``."""
+        raise NotImplementedError
+
+    def advance(self, state, increment: np.ndarray, cycles: int, cycle: Cycle | None):
+        """The state ``cycles`` cycles after ``state`` with y changed by ``increment``;
+        ``cycle``: the simulated cycle from ``state`` (its sums per cycle), None
+        for a stage state (``cycles`` = 0). Must not modify ``state``."""
+        raise NotImplementedError
+
+    def variable(self, state) -> np.ndarray:
+        """The integrated variable y of ``state``."""
+        raise NotImplementedError
+
+    def admissible(self, before: Cycle, after: Cycle) -> bool:
+        """Whether the kept cycle ``after`` (from a step's end) may follow the kept
+        cycle ``before`` (from its start): a step whose end breaks a law of the
+        process is retried at half the length, whatever its error estimate."""
+        return True
+
+    def jacobian(self, cycle: Cycle) -> tuple[np.ndarray, np.ndarray] | None:
+        """(index, J): an approximation of ∂F/∂y on the entries ``index`` near the
+        state of ``cycle`` (zero elsewhere), or None (explicit steps, Heun's)."""
+        return None
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What to run: ``cycles`` in all; ``tolerance`` on the global error relative to
+    the largest change of y (0: every cycle simulated); ``landings``: cycle counts
+    at which a simulated cycle must end; ``max_simulated``: the runaway guard on
+    the simulated cycles (all of them: kept, stages, rejected);
+    ``tolerance_key``: how messages name the tolerance."""
+
+    cycles: int
+    tolerance: float
+    landings: tuple = ()
+    max_simulated: int = 200_000
+    tolerance_key: str = "the jump tolerance"
+
+
+class Jacobian:
+    """J on the entries ``index`` and the solves with I − γhJ (factorised once per h)."""
+
+    def __init__(self, index: np.ndarray, matrix: np.ndarray):
+        self.index = np.asarray(index, dtype=int)
+        self.matrix = np.asarray(matrix, dtype=float)
+        self._lu = None
+
+    def solve(self, gh: float, x: np.ndarray) -> np.ndarray:
+        """(I − gh·J)⁻¹ x (non-finite where the matrix is singular)."""
+        from scipy.linalg import lu_factor, lu_solve
+
+        if self._lu is None or self._lu[0] != gh:
+            A = np.eye(len(self.index)) - gh * self.matrix
+            with np.errstate(all="ignore"):
+                try:
+                    self._lu = (gh, lu_factor(A, check_finite=False))
+                except (ValueError, np.linalg.LinAlgError):
+                    self._lu = (gh, None)
+        if self._lu[1] is None:
+            return np.full_like(x, np.nan)
+        with np.errstate(all="ignore"):
+            return lu_solve(self._lu[1], x, check_finite=False)
+
+    def filter(self, gh: float, x: np.ndarray) -> np.ndarray:
+        """x with its entries on ``index`` replaced by (I − gh·J)⁻¹ x there."""
+        x = np.array(x, dtype=float, copy=True)
+        if len(self.index):
+            x[self.index] = self.solve(gh, x[self.index])
+        return x
+
+
+def ros2(F0: np.ndarray, stage_rate, h: float, jac: Jacobian | None):
+    """One ROS2 step of h cycles: the increment of y (None if not finite).
+
+    ``stage_rate(y_increment)`` is F at y + y_increment. Entries outside the
+    Jacobian take J = 0 there (Heun's rule); without one, every entry does.
+    """
+    def solve(x):
+        return jac.filter(GAMMA * h, x) if jac is not None else np.array(x, dtype=float)
+
+    k1 = solve(F0)
+    if not np.all(np.isfinite(k1)):
+        return None
+    F2 = stage_rate(h * k1)
+    k2 = solve(F2 - 2.0 * k1)
+    increment = 1.5 * h * k1 + 0.5 * h * k2
+    return increment if np.all(np.isfinite(increment)) else None
+
+
+def ros2_propagate(e: np.ndarray, h: float, jac: Jacobian | None) -> np.ndarray:
+    """R(hJ) e: the error e carried through a ROS2 step of the linearised problem."""
+    if jac is None or not len(jac.index):
+        return e.copy()
+    S = jac.index
+    x = e[S]
+    k1 = jac.solve(GAMMA * h, jac.matrix @ x)
+    k2 = jac.solve(GAMMA * h, jac.matrix @ (x + h * k1) - 2.0 * k1)
+    out = e.copy()
+    out[S] = x + 1.5 * h * k1 + 0.5 * h * k2
+    return out
+
+
+@dataclass
+class Outcome:
+    """A run's end and its counts (``info`` for meta.json)."""
+
+    state: object
+    cycles: int = 0
+    rows: int = 0                  # simulated cycles kept (observed)
+    simulated: int = 0             # all simulated cycles
+    stage_cycles: int = 0          # of them: ROS2 stages
+    steps: int = 0
+    rejected_steps: int = 0
+    inadmissible_steps: int = 0    # of them: rejected by Problem.admissible
+    largest_step: int = 0          # cycles covered by a step
+    error_sum: float = 0.0         # Σ max|est| of the accepted steps
+    propagated_error: float = 0.0  # max|e| at the end
+    largest_error: float = 0.0     # max over the run of max|e|/Y (Y at that cycle)
+    largest_change: float = 0.0    # Y = max|y − y(0)| at the end
+    tolerance: float = 0.0
+
+    @property
+    def error_estimate(self) -> float:
+        """The largest relative global error estimate of the run (held <= tolerance)."""
+        return self.largest_error
+
+    def info(self) -> dict:
+        Y = self.largest_change
+        return dict(error_estimate=self.error_estimate,
+                    final_error_estimate=self.propagated_error / Y if Y > 0 else 0.0,
+                    tolerance=self.tolerance, meaning=ERROR_MEANING,
+                    local_error_sum=self.error_sum / Y if Y > 0 else 0.0,
+                    scheme="ROS2 (L-stable Rosenbrock W-method, order 2)",
+                    simulated_cycles=self.simulated, recorded_cycles=self.rows,
+                    stage_cycles=self.stage_cycles, steps=self.steps,
+                    rejected_steps=self.rejected_steps,
+                    inadmissible_steps=self.inadmissible_steps, largest_step=self.largest_step)
+
+
+def _factor(err: float, allowed: float) -> float:
+    """The step's factor from its error estimate, which grows as h³."""
+    if err <= 0.0:
+        return GROWTH
+    if not (allowed > 0.0 and math.isfinite(err)):
+        return SHRINK
+    return min(GROWTH, max(SHRINK, SAFETY * (allowed / err) ** (1.0 / 3.0)))
+
+
+def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
+    """Integrate ``problem`` from ``state`` (cycle count 0) to ``plan.cycles``.
+
+    ``observe(cycle, n)`` is called with every simulated cycle that is kept, in
+    order (``n`` the cycle count at its end): the cycle from each accepted
+    state. Stages and rejected steps are not kept. ``progress(fraction,
+    text)`` as the run advances. Raises SolverError past ``plan.max_simulated``
+    simulated cycles or on non-finite values.
+    """
+    tol = float(plan.tolerance)
+    end = int(plan.cycles)
+    landings = sorted({int(c) for c in plan.landings if 0 < c < end} | {end})
+    y0 = np.array(problem.variable(state), dtype=float, copy=True)
+    out = Outcome(state=state, tolerance=tol)
+    error = np.zeros_like(y0)      # the global error estimate (signed, carried)
+    h_ctrl = 2.0
+    last_report = -1.0
+
+    def simulate(st, count, probe=False):
+        if out.simulated >= plan.max_simulated:
+            raise SolverError(f"the cyclic run simulated more than {plan.max_simulated} cycles; "
+                              f"raise {plan.tolerance_key} or lower the cycles")
+        out.simulated += 1
+        return problem.cycle(st, count, probe)
+
+    def change(st):
+        return float(np.max(np.abs(problem.variable(st) - y0)))
+
+    def keep(cyc, count):
+        nonlocal last_report
+        out.rows += 1
+        observe(cyc, count)
+        if progress is not None and count / end - last_report >= 0.01:
+            last_report = count / end
+            progress(min(count / end, 1.0), f"cycle {count}")
+
+    def attempt(origin, n_origin, cyc, h, jac):
+        """The step of h cycles from ``origin``: (increment, state after it, the
+        cycle from there, local error estimate), Nones where not finite."""
+        def stage_rate(dy):
+            out.stage_cycles += 1
+            return simulate(problem.advance(origin, dy, 0, None), n_origin + 1, probe=True).rate
+
+        F0 = cyc.rate
+        increment = ros2(F0, stage_rate, h, jac)
+        if increment is None:
+            return None, None, None, None
+        new = problem.advance(origin, increment, h, cyc)
+        check = simulate(new, n_origin + h + 1)
+        if not problem.admissible(cyc, check):
+            out.inadmissible_steps += 1
+            return increment, new, check, None
+        est = increment - 0.5 * h * (F0 + check.rate)
+        if jac is not None:
+            est = jac.filter(GAMMA * h, est)
+        return increment, new, check, est
+
+    origin, n_origin = state, 0
+    cyc = simulate(origin, 1)
+    n = 1
+    keep(cyc, n)
+    while n < end:
+        # cyc: the kept cycle from origin (count n_origin), ending at n = n_origin + 1
+        h = 0
+        Y = change(origin)
+        if tol > 0.0 and Y > 0.0:
+            # (from the unworn state no error is small enough: the first step is
+            # taken from the first cycle's end)
+            land = next(c for c in landings if c > n)
+            h = min(int(h_ctrl), land - n_origin - 1)
+        accepted = False
+        if h >= 2:
+            index_matrix = problem.jacobian(cyc)
+            jac = Jacobian(*index_matrix) if index_matrix is not None else None
+        while h >= 2:
+            carried = ros2_propagate(error, h, jac)
+            allowed = LOCAL_SHARE * (tol * Y - float(np.max(np.abs(carried))))
+            increment, new, check, est = attempt(origin, n_origin, cyc, h, jac)
+            err = float(np.max(np.abs(est))) if est is not None else math.inf
+            if not math.isfinite(err) or not np.all(np.isfinite(carried)):
+                err = math.inf
+            if err <= allowed:
+                accepted = True
+                break
+            out.rejected_steps += 1
+            if est is None:
+                h = h // 2
+            else:
+                h = min(int(h * _factor(err, allowed)), h - 1)
+            h_ctrl = max(2.0, h)
+        if not accepted:
+            # one cycle as simulated: its error is nil, the carried error unchanged
+            origin, n_origin = cyc.state, n
+            cyc = simulate(origin, n + 1)
+            n += 1
+            keep(cyc, n)
+            continue
+        out.steps += 1
+        out.largest_step = max(out.largest_step, h)
+        out.error_sum += err
+        error = carried + est
+        f = _factor(err, allowed)
+        if h >= int(h_ctrl):
+            h_ctrl = max(2.0, h_ctrl * f)
+        else:                           # a step cut short to land does not lengthen the next
+            h_ctrl = min(h_ctrl, max(2.0, h * f))
+        origin, n_origin = new, n_origin + h
+        cyc, n = check, n_origin + 1
+        out.largest_error = max(out.largest_error,
+                                float(np.max(np.abs(error))) / max(change(origin), 1e-300))
+        keep(cyc, n)
+    out.state, out.cycles = cyc.state, n
+    out.largest_change = change(cyc.state)
+    out.propagated_error = float(np.max(np.abs(error)))
+    return out
