@@ -373,7 +373,7 @@ def _fit_rate(case, data, c, quiet, notes):
         ran = top
         if need <= curves.top:
             break
-            cap = min(s_hat_cap(case, n), 0.5 * ADAPTIVE_MAX_S_HAT)
+        cap = min(s_hat_cap(case, n), 0.5 * ADAPTIVE_MAX_S_HAT)
         if top >= cap or attempt == MOST_RUNS - 1:
             notes.append(f"the fit reads the model beyond its run's end (ŝ = {curves.top:.4g}"
                          + (f", where the long-run scar reaches {MOST_B_OVER_R:g} R"
@@ -460,12 +460,11 @@ def _fit_exponent(case, data, c, exponents, scheduler, workers, quiet, notes):
     spans = [plan(case, data, c, n) for n in exponents]
     tasks = []
     for n, (start, top) in zip(exponents, spans):
-        changes = forward_changes(case, n, top, start)
-        overrides = tuple(f"{k}={_toml(v)}" for k, v in changes.items())
-        tasks.append(Task(name=f"n-{n:g}", solver="mdr", overrides=overrides))
+        tasks.append(Task(name=f"n-{n:g}", solver="mdr",
+                          changes=forward_changes(case, n, top, start)))
     scratch = Path(tempfile.mkdtemp(prefix="wearcheck-fit-"))
     try:
-        outcomes = run_cases(case, (), tasks, scratch / "runs", scheduler=scheduler,
+        outcomes = run_cases(case, tasks, scratch / "runs", scheduler=scheduler,
                              workers=workers, quiet=quiet, study_files=())
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
@@ -491,14 +490,6 @@ def _fit_exponent(case, data, c, exponents, scheduler, workers, quiet, notes):
     found["resolution"] = _resolution(case, data, c, exponents[j], spans[j], curves[j], lo_j,
                                       hi_j, quiet)
     return found, runs, family
-
-
-def _toml(value) -> str:
-    if isinstance(value, str):
-        return f'"{value}"'
-    if isinstance(value, list):
-        return "[" + ", ".join(repr(float(v)) for v in value) + "]"
-    return repr(float(value))
 
 
 def _result(case, keys, data, rows, source, found, runs, family, c, notes, seconds):
