@@ -192,6 +192,11 @@ def read_measurements(data, case: cases.Case) -> tuple[fitting.Data, list, str]:
         raise CaseError(f"{where}: the measurements are in cycles; the case needs "
                         "'sliding.stroke' (one cycle slides 2·stroke)")
     s_all = x.values * 2.0 * case.sliding.stroke if given[0] == "cycles" else x.values
+    # a ball worn to its centre is the most there is to measure: a larger value is a unit
+    # slip (D in mm written as µm), and the model could only fail to reach it
+    R = case.indenter.radius
+    ball_bound = dict(scar_diameter=2.0 * R, wear_center=R,
+                      ball_volume=2.0 / 3.0 * math.pi * R**3)
     s, names, y, sigma, rows = [], [], [], [], []
     for i in range(len(table.rows)):
         if not np.isfinite(x.values[i]):
@@ -209,6 +214,12 @@ def read_measurements(data, case: cases.Case) -> tuple[fitting.Data, list, str]:
             if not v > 0:
                 raise CaseError(f"{table.where(i, q)}: {v:g}; a measured {col.quantity.meaning} "
                                 "must be > 0")
+            if not v <= ball_bound[q]:
+                unit = "m^3" if q == "ball_volume" else "m"
+                raise CaseError(f"{table.where(i, q)}: {v:g} {unit}; the values imply a scar "
+                                f"larger than the ball (indenter.radius R = {R:g} m: a "
+                                f"{col.quantity.meaning} is at most {ball_bound[q]:.4g} "
+                                f"{unit}); check the column's unit")
             u = col.uncertainty[i] if col.uncertainty is not None else math.nan
             if col.uncertainty is not None and not u > 0:
                 raise CaseError(f"{where}, row {int(table.rows[i])}, column "
