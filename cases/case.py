@@ -115,6 +115,17 @@ class Case:
             return f"it stops at s = {sl.distance:g} m"
         return f"it stops after {sl.cycles:g} cycles (s = {self.end_distance:g} m)"
 
+    def stages_from(self, k: int) -> str:
+        """The requested stages from the k-th on, in the unit they were given:
+        ``"ŝ = 20"``, ``"s = 0.5, 1 m"`` or ``"1e+07 cycles"`` (for a note on stages a
+        run did not reach)."""
+        st = self.stages
+        if st.cycles is not None:
+            return ", ".join(f"{c:g}" for c in st.cycles[k:]) + " cycles"
+        if st.s is not None:
+            return "s = " + ", ".join(f"{x:g}" for x in st.s[k:]) + " m"
+        return "ŝ = " + ", ".join(f"{x:g}" for x in st.s_hat[k:])
+
     @property
     def cycles_per_metre(self) -> float | None:
         """Cycles per metre of sliding, 1/(2·stroke) (1/(2π·track_radius) for a

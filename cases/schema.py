@@ -177,11 +177,17 @@ class Sliding:
                           "unconditionally stable, first order; bdf2, the variable-step "
                           "second-order backward differentiation formula, L-stable; or "
                           "explicit (forward) Euler as in the paper, stable below a step limit")
-    tolerance: float = key(1e-4, minimum=0.0, maximum=0.1, open_minimum=True,
+    # floor 1e-10: the step-doubling estimate is the difference of two O(1) solutions
+    # (force /F0, depth /d0) each carrying the round-off of its solves (~N·eps, 1e-13 to
+    # 1e-12 at N = 1e3-1e4); a tolerance near that is never met and the step shrinks
+    # without end (1e-15 ran for minutes). The smallest used anywhere is 1e-6 (references/derive.py).
+    tolerance: float = key(1e-4, minimum=1e-10, maximum=0.1,
                            doc="scheme = adaptive: local error allowed per step, estimated "
                                "by step doubling (force /F0; depth and central wear /max(d0, "
                                "value)); the global time error of the history comes out about "
-                               "this size and is recorded in meta.json info.time_error")
+                               "this size and is recorded in meta.json info.time_error; at "
+                               "least 1e-10 (below it float64 round-off in the estimate is "
+                               "never met)")
     step_hat: float | str = key("auto", positive=True,
                                 doc="sliding step in units of the dimensionless sliding "
                                     "ŝ = k μ E* s / (σ0 a0), or \"auto\": the solver's "

@@ -110,9 +110,12 @@ METRICS = (
     Item("pairs", "", "per solver: stages (list of STAGE_METRICS), stages_compared, worst "
                       "(largest share of each tolerance), history (over the common sliding "
                       "range), checks (stages_reached: the same number of stages as the "
-                      "reference), diagnosis (as `diagnosis`, for this solver; null when it "
+                      "reference; sliding_distance: its stages at the requested s), diagnosis (as `diagnosis`, for this solver; null when it "
                       "passed), passed"),
     Item("passed", "", "the verdict: every check of every solver within its tolerance"),
+    Item("sliding_distance", "", "per solver (the reference too): its stages at the requested "
+                                 "sliding distances (relative tolerance 1e-6) and inside its "
+                                 "history's s range; stage, s_solver, s_requested of a mismatch"),
     Item("skipped", "", "per registered solver left out of the comparison: why (the "
                         "reason it cannot run the case or here, opt-in, or not asked for)"),
     Item("diagnosis", "", "null when passed; else for the worst failed check: setting (the "

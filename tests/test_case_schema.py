@@ -220,3 +220,15 @@ def test_bad_input_is_rejected_by_schema_and_loader(label):
     with pytest.raises(CaseError):
         from_dict(BAD[label])
     assert not VALIDATOR.is_valid(BAD[label]), label
+
+
+@pytest.mark.parametrize("value", ["1e-15", "1e-11", "0"])
+def test_an_adaptive_tolerance_below_round_off_is_refused(value):
+    """sliding.tolerance below 1e-10 is never met in float64 (the step-doubling estimate
+    carries ~1e-13-1e-12 round-off): refused up front, naming the key, value and range,
+    instead of a run that shrinks its step for minutes."""
+    with pytest.raises(CaseError, match=r"key 'sliding\.tolerance' = .*: must be in "
+                                        r"\[1e-10, 0\.1\]"):
+        cases.load(cases.shipped("paper"), [f"sliding.tolerance={value}"])
+    # the floor itself and the smallest tolerance used anywhere (1e-6) are accepted
+    assert cases.load(cases.shipped("paper"), ["sliding.tolerance=1e-10"]).sliding.tolerance == 1e-10

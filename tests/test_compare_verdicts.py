@@ -99,6 +99,7 @@ def test_the_honest_copy_passes(paper, tmp_path):
     for st in m["pairs"]["copy"]["stages"]:
         assert all(c["value"] == 0.0 for c in st["checks"].values())
     assert m["diagnosis"] is None
+    assert all(c["passed"] and c["value"] == 0.0 for c in m["sliding_distance"].values())
     assert json.loads((tmp_path / "honest" / "metrics.json").read_text())["passed"]
 
 
@@ -127,3 +128,46 @@ def test_the_terminal_names_the_failing_check_relative_to_its_stage(paper):
     assert lines[-2] == "compare: FAIL -> OUT/report.html"
     assert "force 40%!" in lines[7] and lines[7].endswith("FAIL")
     assert lines[-1].startswith("most likely fix: ")
+
+
+def scaled_s(result, factor) -> RunResult:
+    """The result with its sliding distances (history and stages) multiplied by
+    ``factor``: every force and profile is still read at its own stage, so only the
+    sliding-distance check can see it."""
+    hist = {k: np.array(v, float) for k, v in result.history.items()}
+    hist["s"] = hist["s"] * factor
+    return dataclasses.replace(result, history=hist,
+                               stage_s=np.asarray(result.stage_s, float) * factor)
+
+
+@pytest.mark.parametrize("factor", [1.05, 1000.0, 1e-3])
+def test_sliding_distances_not_the_requested_ones_fail(paper, tmp_path, factor):
+    case, mdr = paper
+    try:
+        m = compare_mod.compare(case, tmp_path / "s", solvers=["mdr", "copy"],
+                                solve=solve_with(mdr, scaled_s(mdr, factor)), render=False)
+    finally:
+        unregister("copy")
+    assert not m["passed"]
+    # the stored stages are the requested ones bit for bit (the shared stepper lands
+    # them); 1e-6 (metrics.SLIDING_DISTANCE_RTOL) is far below the smallest error here, 5 %
+    assert m["sliding_distance"]["mdr"]["passed"]
+    c = m["pairs"]["copy"]["checks"]["sliding_distance"]
+    assert not c["passed"] and c["stage"] == 1        # stage 0 is s = 0 for both
+    assert c["s_solver"] == pytest.approx(factor * c["s_requested"], rel=1e-12)
+    # every per-stage check passed: without this check the verdict was PASS
+    assert all(st["passed"] for st in m["pairs"]["copy"]["stages"])
+    md = (tmp_path / "s" / "report.md").read_text()
+    assert "**FAIL**" in md and "Copy stage 1 at s = " in md
+    assert f"the case's stage 1 at s = {c['s_requested']:.6g} m" in md
+
+
+def test_a_history_that_does_not_hold_the_stages_fails(paper):
+    """Stages at the requested s, but a history in mm: stage 1 lies outside its range."""
+    case, mdr = paper
+    hist = {k: np.array(v, float) for k, v in mdr.history.items()}
+    hist["s"] = hist["s"] * 1e-3
+    m = compare_mod.analyse(case, {"mdr": mdr,
+                                   "copy": dataclasses.replace(mdr, history=hist)})
+    c = m["pairs"]["copy"]["checks"]["sliding_distance"]
+    assert not m["passed"] and not c["passed"] and c["reason"] == "history"

@@ -331,6 +331,10 @@ distance = 1.0
                                                    r"distance s .* not both"),
     (["--case-file"], "cycles, D [um]\n100, 150\n300, 160\n",
      r"the measurements are in cycles; the case needs 'sliding\.stroke'"),
+    # D in mm written as µm: 0.11 m scars on a 10 mm ball (the fit crashed on these)
+    ([], "cycles, D [mm], ± D [mm]\n300, 110.46, 2.19\n1000, 145.36, 2.89\n",
+     r"row 2, column 'D \[mm\]': 0\.11046 m; the values imply a scar larger than the ball "
+     r"\(indenter\.radius R = 0\.005 m: a ball scar diameter is at most 0\.01 m\)"),
     (["--paper"], "s [m], D [um]\n1, 150\n2, 160\n",
      r"'loading\.control' = \"depth\": wearcheck fit fits a test under a constant normal force"),
 ])
@@ -352,6 +356,19 @@ def test_bad_input_is_one_line(tmp_path, capsys, args, sheet, pattern):
     assert len(lines) == 1 and "Traceback" not in err
     import re
     assert re.search(pattern, lines[0]), lines[0]
+
+
+def test_a_fit_that_needs_a_longer_model_run_reports_it(tmp_path):
+    """Volumes of 1e-20 mm³ need K far below the first guess: the fit asks for longer
+    runs (it raised UnboundLocalError there)."""
+    path = tmp_path / "tinyV.csv"
+    path.write_text("cycles, V [mm^3]\n1000, 1e-20\n2000, 2e-20\n", encoding="utf-8")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RunWarning)
+        result = wearcheck.fit("ball_on_flat", path, quiet=True)
+    assert len(result.model["runs"]) >= 2        # a longer run was asked for
+    K = result.parameters["wear.specific_rate"]["value"]
+    assert np.isfinite(K) and K > 0
 
 
 def test_python_data_errors_name_the_key():

@@ -4,10 +4,12 @@ import io
 import json
 import math
 import os
+import re
 
 import numpy as np
 import pytest
 
+import wearcheck
 from wearcheck import cases
 from wearcheck.cases import reference
 from wearcheck.comparisons import rundir as runio
@@ -179,3 +181,24 @@ def test_run_says_which_requested_stages_it_did_not_reach(tmp_path, capsys):
                  "--set", "stages.s_hat=[0.0, 20.0]", "--out", str(out)]) == 0
     err = capsys.readouterr().err
     assert "the run ended before the stages at ŝ = 20 (it stops once F < 0.01 F0)" in err
+
+
+@pytest.mark.parametrize("given, expect", [
+    ("stages.cycles=[0, 10, 1e4, 2e4]", "the stages at 10000, 20000 cycles "
+                                         "(it stops after 1000 cycles (s = 2 m))"),
+    ("stages.s=[0, 0.5, 4]", "the stages at s = 4 m (it stops after 1000 cycles (s = 2 m))"),
+])
+def test_stages_not_reached_are_named_in_the_unit_given(tmp_path, capsys, given, expect):
+    """Stages given in cycles or in metres are named so when the run ends before them
+    (the note said "ŝ = 144627" for a stage at 1e7 cycles)."""
+    from wearcheck.comparisons.cli import main
+    over = ["mdr.elements=100", "sliding.until=\"cycles\"", "sliding.cycles=1000", given]
+    args = [x for o in over for x in ("--set", o)]
+    assert main(["run", "ball_on_flat", "--solver", "mdr", *args,
+                 "--out", str(tmp_path / "run")]) == 0
+    err = capsys.readouterr().err
+    assert f"note: the run ended before {expect}" in err, err
+    # the Python API's warning says the same
+    case = cases.load(cases.shipped("ball_on_flat"), over)
+    with pytest.warns(UserWarning, match="the run ended before " + re.escape(expect)):
+        wearcheck.solve(case, "mdr")

@@ -467,3 +467,33 @@ def test_an_uncertain_reference_decides_nothing(no_figures, tmp_path, paper_run,
                    tmp_path / "v2")
     last = m["pairs"]["results"]["stages"][-1]
     assert not last["checks"]["force"]["passed"]       # 0.23 > 0.03 + 0.015
+
+
+def test_results_that_stop_early_fail(no_figures, tmp_path, paper_run):
+    """Results must reach the case's last stage: a one-row history (the unworn force
+    alone) and an honest history cut after ŝ = 0.5 would otherwise pass on the stages
+    they hold (1 of 7, 3 of 7), as compare fails a solver that stopped early."""
+    one = tmp_path / "one"
+    one.mkdir()
+    (one / "history.csv").write_text("s,force\n0,30.7\n", encoding="utf-8")
+    m = run_verify("paper", one, tmp_path / "v1")
+    reach = m["pairs"]["results"]["reach"]
+    assert not m["passed"] and not reach["passed"] and reach["end_s"] == 0.0
+    per_m = m["scales"]["s_hat_per_m"]
+    case_s_hat = wearcheck.load_case("paper").stages.s_hat
+    assert [s * per_m for s in reach["not_reached"]] == pytest.approx(case_s_hat[1:], rel=1e-12)
+    # the stage it holds is right (F0 = 30.7 N to 0.3 %): only the reach fails it
+    assert all(st["passed"] for st in m["pairs"]["results"]["stages"])
+
+    res = fmt.csv_dir(tmp_path / "cut", paper_run, stages=False)
+    lines = (res / "history.csv").read_text().splitlines()
+    col = lines[0].split(",").index("s [mm]")
+    keep = [ln for ln in lines[1:] if float(ln.split(",")[col]) / 1e3 * per_m <= 0.6]
+    (res / "history.csv").write_text("\n".join(lines[:1] + keep) + "\n", encoding="utf-8")
+    done = cli("verify", "paper", res, "--out", tmp_path / "v2")
+    assert done.returncode == 1, done.stderr
+    assert "verify: FAIL" in done.stderr
+    assert "the case's stage(s) at ŝ = 1.5, 3, 5, 8, 10 not reached" in done.stderr
+    end = max(float(ln.split(",")[col]) / 1e3 * per_m for ln in keep)
+    assert f"your results end at ŝ = {end:.4g}" in done.stderr
+    # the full history passes (test_history_alone_judges_the_history): the cut alone fails it

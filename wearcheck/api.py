@@ -226,8 +226,8 @@ def solve(case: str | Path | Case, solver: str = "mdr", *,
     notes = list(case.warnings) + list(run.info.get("warnings", []))  # (the run's: warned)
     missing = list(case.stages.s_hat)[len(run.stage_s):]
     if missing:
-        text = ("the run ended before the stages at ŝ = " + ", ".join(f"{s:g}" for s in missing)
-                + f" ({case.end_condition}); they are not in result.stages")
+        text = (f"the run ended before the stages at {case.stages_from(len(run.stage_s))} "
+                f"({case.end_condition}); they are not in result.stages")
         notes.append(text)
         warnings.warn(text, stacklevel=2)
     stages = dict(s=np.asarray(run.stage_s, float),

@@ -250,6 +250,48 @@ def compare_results(ref, other, *, s_hat_per_m, a0, F0, p0, depth, tolerances, e
                 passed=bool(K > 0 and all(st["passed"] for st in stages)))
 
 
+#: relative tolerance on a solver's stage sliding distances against the requested ones.
+#: The shared stepper lands every stage exactly (MDR, FEM and BEM store the requested
+#: s bit for bit); 1e-6 leaves room for a result written to text with ~7 digits and
+#: read back, and is far below any unit slip (1e-3, 1e3) or a few-percent scaling.
+SLIDING_DISTANCE_RTOL = 1e-6
+
+
+def sliding_distance_check(stage_s, history_s, requested_s, rtol=SLIDING_DISTANCE_RTOL) -> dict:
+    """Whether a result's stages sit at the requested sliding distances.
+
+    Each stored stage k must be at the requested s_k, to ``rtol`` of max(|s_k|, the
+    last requested s) (so the ŝ = 0 stage is judged on the run's scale), and lie within
+    the history's sliding range, to the same tolerance. Returns {passed, tolerance,
+    value (the largest relative difference), stage, s_solver, s_requested, history_s_min,
+    history_s_max, reason} with stage/reason naming the first mismatch (None if none).
+    """
+    stage_s = np.asarray(stage_s, float)
+    req = np.asarray(requested_s, float)
+    hs = np.asarray(history_s, float)
+    K = min(len(stage_s), len(req))
+    scale = float(np.max(np.abs(req))) if len(req) else 1.0
+    scale = scale if scale > 0 else 1.0
+    lo = float(np.nanmin(hs)) if hs.size else math.nan
+    hi = float(np.nanmax(hs)) if hs.size else math.nan
+    rel = np.abs(stage_s[:K] - req[:K]) / np.maximum(np.abs(req[:K]), scale)
+    out = dict(tolerance=rtol, value=float(np.max(rel)) if K else 0.0, stage=None,
+               s_solver=None, s_requested=None, history_s_min=lo, history_s_max=hi,
+               reason=None)
+    for k in range(K):
+        s_k, r_k = float(stage_s[k]), float(req[k])
+        bad = None
+        if not (np.isfinite(s_k) and rel[k] <= rtol):
+            bad = "stage"
+        elif not (lo - rtol * scale <= s_k <= hi + rtol * scale):
+            bad = "history"
+        if bad:
+            out.update(stage=k, s_solver=s_k, s_requested=r_k, reason=bad)
+            break
+    out["passed"] = out["stage"] is None
+    return out
+
+
 def worst(stages, checks=CHECKS) -> dict:
     """Per check, the stage using the largest fraction of its tolerance.
 

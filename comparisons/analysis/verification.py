@@ -270,7 +270,27 @@ def judge(reference, history: dict, stages: list, *, case_stage_s, scales: dict,
                 worst=metrics.worst(out_stages, used), checks_used=[c.column for c in used],
                 not_given=not_given, not_judged=not_judged,
                 history=history_differences(reference, history, scales, depth, given),
-                passed=bool(out_stages) and all(st["passed"] for st in out_stages))
+                reach=(reach := reached(history, stages, case_stage_s, same_distance)),
+                passed=(bool(out_stages) and all(st["passed"] for st in out_stages)
+                        and reach["passed"]))
+
+
+def reached(history: dict, stages: list, case_stage_s, same: float = SAME_DISTANCE) -> dict:
+    """Whether the user's results reach the case's last stage.
+
+    Results that stop early would otherwise pass on the stages they hold (a one-row
+    history judged at ŝ = 0). The results end at the largest distance of the history
+    or of the stages; a case stage beyond that end (relative ``same``, the precision
+    of the written distances) is not reached. Returns {passed, end_s, not_reached
+    (the case's stage distances [m] beyond the end)}.
+    """
+    hs = np.asarray(history.get("s", []), float)
+    ends = [float(np.nanmax(hs))] if hs.size and np.isfinite(hs).any() else []
+    ends += [float(st["s"]) for st in stages]
+    end = max(ends) if ends else math.nan
+    late = [float(s) for s in case_stage_s
+            if not (np.isfinite(end) and end >= s - same * abs(s))]
+    return dict(passed=not late, end_s=end, not_reached=late)
 
 
 def _peak(reference, s, a, edge_band, exclude_radius, exclude_width) -> float:

@@ -65,9 +65,8 @@ def main(args) -> int:
     missing = [] if case.fretting is not None else list(case.stages.s_hat)[len(result.stage_s):]
     if missing and not args.quiet:
         # as the Python API warns: a stage the user asked for is not in stages.npz
-        print("note: the run ended before the stages at ŝ = "
-              + ", ".join(f"{s:g}" for s in missing) + f" ({case.end_condition}); "
-              "stages.npz does not hold them", file=sys.stderr)
+        print(f"note: the run ended before the stages at {case.stages_from(len(result.stage_s))}"
+              f" ({case.end_condition}); stages.npz does not hold them", file=sys.stderr)
     if args.json:
         print_json(dict(case=args.case, **summary(case, result, args.solver, out)))
     if not args.quiet:

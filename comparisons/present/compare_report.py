@@ -267,6 +267,17 @@ def _failed_check(name, c) -> str:
             f"{report.fmt(c['scale'], 4)}·{c['unit']}")
 
 
+def _sliding_distance_text(name, c) -> str:
+    """One failed sliding-distance check (metrics.sliding_distance_check) in words."""
+    k, s_k, r_k = c["stage"], c["s_solver"], c["s_requested"]
+    if c["reason"] == "history":
+        return (f"{name} stage {k} at s = {s_k:.6g} m lies outside its history's sliding "
+                f"range s = {c['history_s_min']:.6g} to {c['history_s_max']:.6g} m")
+    return (f"{name} stage {k} at s = {s_k:.6g} m, the case's stage {k} at s = {r_k:.6g} m "
+            f"(relative tolerance {c['tolerance']:g}): its sliding distances are not "
+            f"the requested ones")
+
+
 def _failure_text(m) -> str:
     failed = []
     for solver, pair in m["pairs"].items():
@@ -288,6 +299,9 @@ def _failure_text(m) -> str:
         if c and not c["passed"]:
             failed.append(f"{title(solver)} reached {c['value']} stage(s), "
                           f"{title(m['reference'])} {c['tolerance']}")
+    for solver, c in m.get("sliding_distance", {}).items():
+        if not c["passed"]:
+            failed.append(_sliding_distance_text(title(solver), c))
     if m["stages_compared"] == 0:
         failed.append("no stage reached by every solver")
     return "failed: " + "; ".join(failed)

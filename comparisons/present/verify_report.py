@@ -3,6 +3,7 @@ the checks, per-stage metrics, figures and provenance, as ``present.report`` blo
 
 from __future__ import annotations
 
+import math
 import sys
 
 from wearcheck import cases
@@ -32,6 +33,16 @@ def failures(m) -> list[str]:
         if bad:
             out.append(f"stage {st['index']} (ŝ = {st['s_hat_reference']:.4g}; {st['origin']}): "
                        + ", ".join(bad))
+    reach = pair.get("reach")
+    if reach is not None and not reach["passed"]:
+        per_m = m["scales"]["s_hat_per_m"]
+        late = ", ".join(f"{s * per_m:.4g}" for s in reach["not_reached"])
+        end = reach["end_s"]
+        ends = (f"your results end at ŝ = {end * per_m:.4g} (s = {end:.4g} m)"
+                if math.isfinite(end) else "your results hold no sliding distance")
+        out.append(f"the case's stage(s) at ŝ = {late} not reached: {ends}, before the "
+                   f"case's last stage at ŝ = {reach['not_reached'][-1] * per_m:.4g} "
+                   f"(s = {reach['not_reached'][-1]:.4g} m)")
     if not pair["stages"]:
         out.append("no stage could be judged" + (": " + "; ".join(pair["not_judged"])
                                                  if pair["not_judged"] else ""))

@@ -189,7 +189,18 @@ def analyse(case, results, reference_solver=None) -> dict:
         pair["checks"] = dict(stages_reached=dict(value=reached[name], tolerance=reached[ref],
                                                   passed=same))
         pair["passed"] = bool(pair["passed"] and same)
-    m["passed"] = bool(pairs) and all(p["passed"] for p in pairs.values())
+    # every solver (the reference too) must store its stages at the requested sliding
+    # distances: stage k is paired with stage k, so a solver whose s is scaled (a unit
+    # slip, a wrong speed) would otherwise be compared at the wrong wear
+    requested = np.asarray(case.stages.s_hat, float) / sc["s_hat_per_m"]
+    m["sliding_distance"] = {k: metrics.sliding_distance_check(v.stage_s, v.history["s"],
+                                                               requested)
+                             for k, v in results.items()}
+    for name, pair in pairs.items():
+        pair["checks"]["sliding_distance"] = m["sliding_distance"][name]
+        pair["passed"] = bool(pair["passed"] and m["sliding_distance"][name]["passed"])
+    m["passed"] = (bool(pairs) and all(p["passed"] for p in pairs.values())
+                   and m["sliding_distance"][ref]["passed"])
     m["scales"] = sc
     m["profile_scale_depth"] = depth
     m["tolerances"] = dataclasses.asdict(cmp)

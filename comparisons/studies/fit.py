@@ -192,6 +192,11 @@ def read_measurements(data, case: cases.Case) -> tuple[fitting.Data, list, str]:
         raise CaseError(f"{where}: the measurements are in cycles; the case needs "
                         "'sliding.stroke' (one cycle slides 2·stroke)")
     s_all = x.values * 2.0 * case.sliding.stroke if given[0] == "cycles" else x.values
+    # a ball worn to its centre is the most there is to measure: a larger value is a unit
+    # slip (D in mm written as µm), and the model could only fail to reach it
+    R = case.indenter.radius
+    ball_bound = dict(scar_diameter=2.0 * R, wear_center=R,
+                      ball_volume=2.0 / 3.0 * math.pi * R**3)
     s, names, y, sigma, rows = [], [], [], [], []
     for i in range(len(table.rows)):
         if not np.isfinite(x.values[i]):
@@ -209,6 +214,12 @@ def read_measurements(data, case: cases.Case) -> tuple[fitting.Data, list, str]:
             if not v > 0:
                 raise CaseError(f"{table.where(i, q)}: {v:g}; a measured {col.quantity.meaning} "
                                 "must be > 0")
+            if not v <= ball_bound[q]:
+                unit = "m^3" if q == "ball_volume" else "m"
+                raise CaseError(f"{table.where(i, q)}: {v:g} {unit}; the values imply a scar "
+                                f"larger than the ball (indenter.radius R = {R:g} m: a "
+                                f"{col.quantity.meaning} is at most {ball_bound[q]:.4g} "
+                                f"{unit}); check the column's unit")
             u = col.uncertainty[i] if col.uncertainty is not None else math.nan
             if col.uncertainty is not None and not u > 0:
                 raise CaseError(f"{where}, row {int(table.rows[i])}, column "
@@ -373,7 +384,7 @@ def _fit_rate(case, data, c, quiet, notes):
         ran = top
         if need <= curves.top:
             break
-            cap = min(s_hat_cap(case, n), 0.5 * ADAPTIVE_MAX_S_HAT)
+        cap = min(s_hat_cap(case, n), 0.5 * ADAPTIVE_MAX_S_HAT)
         if top >= cap or attempt == MOST_RUNS - 1:
             notes.append(f"the fit reads the model beyond its run's end (ŝ = {curves.top:.4g}"
                          + (f", where the long-run scar reaches {MOST_B_OVER_R:g} R"
@@ -460,12 +471,11 @@ def _fit_exponent(case, data, c, exponents, scheduler, workers, quiet, notes):
     spans = [plan(case, data, c, n) for n in exponents]
     tasks = []
     for n, (start, top) in zip(exponents, spans):
-        changes = forward_changes(case, n, top, start)
-        overrides = tuple(f"{k}={_toml(v)}" for k, v in changes.items())
-        tasks.append(Task(name=f"n-{n:g}", solver="mdr", overrides=overrides))
+        tasks.append(Task(name=f"n-{n:g}", solver="mdr",
+                          changes=forward_changes(case, n, top, start)))
     scratch = Path(tempfile.mkdtemp(prefix="wearcheck-fit-"))
     try:
-        outcomes = run_cases(case, (), tasks, scratch / "runs", scheduler=scheduler,
+        outcomes = run_cases(case, tasks, scratch / "runs", scheduler=scheduler,
                              workers=workers, quiet=quiet, study_files=())
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
@@ -491,14 +501,6 @@ def _fit_exponent(case, data, c, exponents, scheduler, workers, quiet, notes):
     found["resolution"] = _resolution(case, data, c, exponents[j], spans[j], curves[j], lo_j,
                                       hi_j, quiet)
     return found, runs, family
-
-
-def _toml(value) -> str:
-    if isinstance(value, str):
-        return f'"{value}"'
-    if isinstance(value, list):
-        return "[" + ", ".join(repr(float(v)) for v in value) + "]"
-    return repr(float(value))
 
 
 def _result(case, keys, data, rows, source, found, runs, family, c, notes, seconds):
