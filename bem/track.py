@@ -53,6 +53,12 @@ DEFAULT_STEP_HAT = 0.1
 #: the wear of one pass (or move), over d0, beyond which a run says that its
 #: model's continuous wear is coarse
 COARSE_PASS = 0.05
+#: the shortest stroke, in unworn contact diameters 2a0, for which the run does not
+#: warn: from 3 diameters on the long-stroke model's groove and ball wear agree with
+#: the moving-contact model's within about 3 % of their largest (the model leaves out
+#: the track's ends, a share ~a/L of it); below, the difference grows fast
+#: (docs/both-bodies.md, "Range"; tests/test_bem_moving.py)
+SHORT_STROKE_DIAMETERS = 3.0
 
 
 class TrackOperator:
@@ -61,7 +67,8 @@ class TrackOperator:
     ``B`` sums a pixel column along x (the first axis) and spreads the sum
     over it: the groove under a column deepens by the pressure's integral
     along the sliding direction. Offers what :func:`bem.contact.solve` uses of
-    an operator (``spacing``, call, ``preconditioner``, ``add_point_loads``).
+    an operator (``spacing``, call, ``single``, ``preconditioner``,
+    ``add_point_loads``).
     """
 
     def __init__(self, op: HalfSpace, sigma_flat: float):
@@ -401,6 +408,22 @@ def coarse_wear_remark(largest: float, d0: float, unit: str) -> str | None:
                if unit == "pass" else "refine bem.grid (a move is one pixel)"))
 
 
+def short_stroke_remark(sliding, a0: float) -> str | None:
+    """The remark when a reciprocating stroke is shorter than
+    :data:`SHORT_STROKE_DIAMETERS` unworn contact diameters ``2·a0``, else None."""
+    if sliding.motion == "unidirectional" or not sliding.stroke:
+        return None
+    diameters = sliding.stroke / (2.0 * a0)
+    if diameters >= SHORT_STROKE_DIAMETERS:
+        return None
+    return (f"key 'sliding.stroke' = {sliding.stroke!r}: the stroke is {diameters:.3g} unworn "
+            f"contact diameters (2a0 = {2.0 * a0:.4g} m), below the {SHORT_STROKE_DIAMETERS:g} "
+            "from which the long-stroke model (a groove along the whole track) agrees with "
+            "the moving contact within about 3 %; it leaves out the track's ends, which "
+            "make up much of so short a track (at 1 diameter the groove differs by 26 %): "
+            "solve it with bem.track_model = \"moving\" (docs/both-bodies.md, \"Range\")")
+
+
 def balance(history: dict, K_ball: float, K_flat: float, force=None) -> dict:
     """The global Archard balance of a run: each body loses K_body·F·s.
 
@@ -442,6 +465,9 @@ def solve(case, progress=None) -> RunResult:
     rings = n // 2
     r = np.arange(rings) * dx
     watch = validity.BodyWatch(case, spacing=dx)
+    short = short_stroke_remark(case.sliding, sc["a0"])
+    if short:
+        validity.remark(watch.remarks, short)
     out = run(model, plan, progress, y=x, ring=(ring, rings, r), watch=watch)
     hist = programme.finish_history(case, out["history"], until, plan.end, per_m)
     K = len(out["stages"])

@@ -19,6 +19,11 @@ from . import contact, linalg, resolution, transforms, wear
 #: implicit Euler's default step in ŝ (sliding.step_hat = "auto"); see README/report:
 #: on the paper case its time error in F/F0 is 7.7e-3 (0.077 Δŝ, first order)
 IMPLICIT_STEP_HAT = 0.1
+#: the largest |V/(K F s) − 1| at the end of a force-controlled run with n = 1 that
+#: is taken as wear and not round-off: the grid's and the steps' own errors are far
+#: below it (tests/test_mdr_archard_balance.py), round-off past it (k = 1e-25 on
+#: ball_on_flat: 0.48)
+ARCHARD_BALANCE_TOL = 0.02
 #: BDF2's default step in ŝ, chosen for speed: on paper.toml its time error in
 #: F/F0 is 1/30 of implicit Euler's at its default step, second order in the
 #: bulk of the run (at finer steps the first tenths of ŝ, the Hertz start, not
@@ -407,6 +412,42 @@ class Wear(stepping.Problem):
         return state, {"correction": corr, "previous": f_prev}
 
 
+def archard_balance(history: dict, K: float, force: float) -> float:
+    """|V / (K F s) − 1| at the run's end: Archard's law (n = 1) under a constant force
+    F wears the volume K·F·s exactly, whatever the profile; 0 for a run without sliding."""
+    s, V = float(history["s"][-1]), float(history["wear_volume"][-1])
+    return abs(V / (K * force * s) - 1.0) if s > 0.0 else 0.0
+
+
+def wear_rate_key(case) -> tuple[str, float]:
+    """The key the case gave K by, and its value: wear.k, or wear.specific_rate
+    (the loader derives the other, :attr:`cases.Case.derived`)."""
+    w = case.wear
+    return ("wear.specific_rate", w.specific_rate) if "wear.k" in case.derived \
+        else ("wear.k", w.k)
+
+
+def check_archard_balance(case, history: dict) -> float | None:
+    """Refuse (SolverError) a force-controlled run with n = 1 whose volume at the end is
+    not K·F·s within :data:`ARCHARD_BALANCE_TOL`: its wear was lost to round-off (a wear
+    rate so small that each step's wear K·p·Δs falls below float64's resolution of the
+    profile heights). Returns the balance's error (None where it does not apply)."""
+    if case.loading.control != "force" or case.wear.pressure_exponent != 1.0:
+        return None
+    K, F = case.wear_rate, case.loading.force
+    error = archard_balance(history, K, F)
+    if error > ARCHARD_BALANCE_TOL:
+        key, value = wear_rate_key(case)
+        s, V = float(history["s"][-1]), float(history["wear_volume"][-1])
+        raise SolverError(
+            f"key '{key}' = {value!r}: the worn volume at the end, {V:.4g} m³, is "
+            f"{V / (K * F * s):.3g} of Archard's K·F·s = {K * F * s:.4g} m³ (K = {K:.4g} 1/Pa): "
+            f"the wear of each step, K·p·Δs, is lost in the round-off of the profile heights "
+            f"(float64, 1e-16 of them); a wear rate this small leaves the profile unworn to float64's "
+            f"resolution: its volume is V = K·F·s by Archard's law alone")
+    return error
+
+
 def run(model: wear.Model, plan: stepping.Plan, progress=None, *, profile=None,
         check_oscillation: bool = True, watch=None) -> dict:
     """Step the wear from the unworn state as ``plan`` says; the numerics without case handling.
@@ -497,6 +538,9 @@ def _solve(case, progress=None) -> RunResult:
     if watch.remarks:
         info["warnings"] = watch.remarks
     hist = programme.finish_history(case, out["history"], until, plan.end, per_m)
+    balance = check_archard_balance(case, hist)
+    if balance is not None:
+        info["archard_balance_error"] = balance
     info.update(out["counters"])
     if progress is not None:
         progress(1.0, "done")

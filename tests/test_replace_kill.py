@@ -8,7 +8,8 @@ left it: the path holds the earlier output or the new one, whole (the
 fallback: or it is missing while the earlier one waits, complete, in its
 ``.NAME.old-*``), and nothing hidden says complete unless it is. Then a later
 write (and a read) must put everything right: the path whole again, no
-``.partial-*`` or ``.old-*`` left.
+``.partial-*`` or ``.old-*`` left. SIGINT and SIGTERM at every step (the
+clean-up runs) the same, through the command line, whose message claims no more.
 """
 
 from __future__ import annotations
@@ -195,6 +196,64 @@ def test_a_read_restores_an_output_a_kill_left_aside(tmp_path):
     run = Run(out)
     assert run.case.mdr.elements == 40
     assert _hidden(tmp_path) == []
+
+
+def _cli_signalled(step, exchange, signum, argv, err: Path):
+    """The child: ``wearcheck`` with ``argv``, sending itself ``signum`` at ``step``;
+    its stderr into ``err``, its exit code the command's."""
+    from wearcheck.comparisons import renames
+    from wearcheck.comparisons.cli import main as cli_main
+    if not exchange:
+        renames._RENAMEAT2 = None
+
+    def hook(name):
+        if name == step:
+            os.kill(os.getpid(), signum)
+    outputs.STEP_HOOK = hook
+    fd = os.open(err, os.O_WRONLY | os.O_CREAT | os.O_TRUNC)
+    os.dup2(fd, 2)
+    sys.stderr = open(2, "w", closefd=False)
+    code = cli_main(argv)
+    sys.stderr.flush()
+    os._exit(code)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize("exchange", [True, False], ids=["exchange", "rename-fallback"])
+def test_an_interrupt_at_each_step_leaves_the_old_or_the_new_run(tmp_path, exchange, signum):
+    """SIGINT (Ctrl-C) or SIGTERM at each step of replacing a run, the fallback's
+    ``aside`` (the run moved away, the new one not yet in) among them: the clean-up
+    that runs puts the old run back or keeps the new one, whole, nothing hidden is
+    left, and the message says no more than that (the new run may be in place)."""
+    from wearcheck import cases
+    from wearcheck.comparisons.cli import main as cli_main
+    from wearcheck.comparisons.rundir import Run
+    out, err = tmp_path / "out", tmp_path.parent / f"err-{tmp_path.name}"
+    hertz = str(cases.shipped("hertz"))
+    argv = ["run", hertz, "--out", str(out), "--quiet", "--set"]
+    assert cli_main(argv + ["mdr.elements=40"]) == 0
+    for step in STEPS[exchange]:
+        proc = multiprocessing.get_context("fork").Process(
+            target=_cli_signalled, args=(step, exchange, signum, argv + ["mdr.elements=41"], err))
+        proc.start()
+        proc.join(60)
+        assert proc.exitcode == 128 + signum, (step, proc.exitcode)   # 130, 143
+        said = err.read_text()
+        assert "nothing incomplete was written" in said and "nothing was written" not in said
+        before = step in ("built", "checked", "complete", "graveyard", "aside")
+        left = [p.name for p in tmp_path.iterdir() if p.name != "out"]
+        if step == "retiring":
+            # interrupted while removing the old run (new one in place): what is left
+            # of it does not say complete, and the next read removes it, as after a kill
+            assert all((outputs.read_marker(tmp_path / n) or {}).get("complete") is not True
+                       for n in left), left
+            outputs.recover(out)
+        else:
+            assert left == [], (step, signum, left)
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["out"], (step, signum)
+        assert Run(out).case.mdr.elements == (40 if before else 41), (step, signum)
+        if not before:
+            assert cli_main(argv + ["mdr.elements=40"]) == 0
 
 
 @pytest.mark.parametrize("step", outputs.STUDY_FILE_STEPS)

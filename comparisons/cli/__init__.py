@@ -281,7 +281,7 @@ def main(argv=None) -> int:
         print(f"{name}: terminated; nothing incomplete was written", file=sys.stderr)
         return EXIT_TERMINATED
     except KeyboardInterrupt:
-        print(f"{name}: interrupted; nothing was written", file=sys.stderr)
+        print(f"{name}: interrupted; nothing incomplete was written", file=sys.stderr)
         return EXIT_INTERRUPTED
     except MemoryError:
         print(f"{name}: error: out of memory; nothing was written (reduce the resolution)",
