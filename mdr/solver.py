@@ -428,11 +428,15 @@ def wear_rate_key(case) -> tuple[str, float]:
 
 
 def check_archard_balance(case, history: dict) -> float | None:
-    """Refuse (SolverError) a force-controlled run with n = 1 whose volume at the end is
+    """Refuse (SolverError) a force-controlled run with n = 1 (and no tangential
+    correction, whose slip factor wears less than K·F·s) whose volume at the end is
     not K·F·s within :data:`ARCHARD_BALANCE_TOL`: its wear was lost to round-off (a wear
     rate so small that each step's wear K·p·Δs falls below float64's resolution of the
     profile heights). Returns the balance's error (None where it does not apply)."""
-    if case.loading.control != "force" or case.wear.pressure_exponent != 1.0:
+    # with wear.tangential_correction each stroke end loses sliding to the tangential
+    # springs' reversal (slip factor S < 1): the volume is K·F·∫S ds, not K·F·s
+    if case.loading.control != "force" or case.wear.pressure_exponent != 1.0 \
+            or case.wear.tangential_correction:
         return None
     K, F = case.wear_rate, case.loading.force
     error = archard_balance(history, K, F)

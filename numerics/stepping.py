@@ -418,9 +418,13 @@ def _check_projected_steps(plan: Plan, s: float, force_ratio: float, scheme: str
     the contact and slows itself), so s·(1 - ff)/(1 - F/F0) underestimates
     the distance to F = ff·F0 and the projected count does not refuse a run
     that would end under the cap. A force that has not fallen at all (a step
-    below the resolution of floating point) projects no end.
+    below the resolution of floating point) projects no end; nor does a fall within
+    round-off of the force (1e-12 of F0: the BEM's force moved by one ulp, 2e-16, in
+    a step of 1e-300, which projected 4e15 steps), which no step can be told by.
     """
     fallen = (1.0 - force_ratio) / (1.0 - plan.force_fraction)
+    if abs(1.0 - force_ratio) < 1e-12:
+        fallen = 0.0
     projected = s / fallen / plan.step if fallen > 0.0 else math.inf
     if projected > plan.max_steps:
         what = "steps of at most" if scheme == "adaptive" else "steps of"
