@@ -93,7 +93,8 @@ def test_jsonable_is_strict_json():
                                 "4": [1, "t"]}
 
 
-@pytest.mark.parametrize("name", ["run", "sweep", "refine", "fretting-map", "mesh"])
+@pytest.mark.parametrize("name", ["run", "sweep", "refine", "fretting-map", "mesh", "fit",
+                                  "compare", "verify"])
 def test_commands_that_print_numbers_take_json(name):
     _, choices = _choices()
     assert "--json" in choices[name].format_help()
@@ -110,3 +111,24 @@ def test_mesh_json_sizes(capsys):
     assert out["spacing"] * (out["contact_nodes"] - 1) == pytest.approx(out["contact_radius"],
                                                                       rel=1e-12)
     assert out["dofs"] == 2 * out["nodes"] and out["vertices"] < out["nodes"]
+
+
+def test_compare_json_is_the_verdict_and_agrees_with_the_exit_code(tmp_path, capsys):
+    # the MDR against itself on Hertz's unworn contact (passes), then with the coarsest
+    # MDR grid against the FEM on a short paper run (fails on the profile:
+    # tests/test_compare.py): stdout is one JSON line whose "passed" is the exit code's
+    from wearcheck.comparisons.cli import main
+    small = ["--set", "stages.s_hat=[0.0, 0.5]", "--set", 'sliding.until="distance"',
+             "--set", "sliding.distance=0.015", "--set", "fem.contact_nodes=60"]
+    for elements, code_wanted in ((200, 0), (32, 1)):
+        out = tmp_path / f"c{elements}"
+        code = main(["compare", "paper", "--solvers", "mdr,fem", "--no-render", "--json",
+                     "--out", str(out), "--set", f"mdr.elements={elements}", *small])
+        lines = capsys.readouterr().out.strip().splitlines()
+        assert len(lines) == 1
+        verdict = json.loads(lines[0])
+        assert code == code_wanted and verdict["passed"] is (code == 0)
+        assert verdict["pairs"] == {"fem": code == 0}
+        assert json.loads(open(verdict["metrics"]).read())["passed"] is verdict["passed"]
+        assert (verdict["diagnosis"] is None) is (code == 0)
+

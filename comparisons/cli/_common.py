@@ -90,3 +90,11 @@ def jsonable(value):
 def print_json(value) -> None:
     """``value`` (:func:`jsonable`) as one line of JSON on stdout."""
     print(json.dumps(jsonable(value)))
+
+
+def verdict(m: dict, out: Path) -> dict:
+    """What ``--json`` prints: the comparison's verdict and where its numbers are."""
+    return dict(passed=bool(m["passed"]), reference=m.get("reference"),
+                pairs={name: bool(pair.get("passed")) for name, pair in m.get("pairs", {}).items()},
+                skipped=m.get("skipped", {}), diagnosis=m.get("diagnosis"),
+                metrics=str(Path(out) / "metrics.json"), report=str(Path(out) / "report.md"))

@@ -15,7 +15,7 @@ from wearcheck.comparisons import registry
 from wearcheck.comparisons.present.compare_report import print_summary
 from wearcheck.comparisons.studies.compare import compare
 from wearcheck.comparisons.studies.sphere_sweep import SPHERE_RATIOS
-from ._common import add_case_arguments, load_case
+from ._common import add_case_arguments, load_case, print_json, verdict
 
 
 def _ratios(text):
@@ -56,6 +56,10 @@ def add_parser(sub):
                         + ",".join(f"{v:g}" for v in SPHERE_RATIOS) + ")")
     p.add_argument("--no-render", action="store_true",
                    help="do not render pictures of the run directories")
+    p.add_argument("--json", action="store_true",
+                   help="print the verdict on stdout as JSON (passed, reference, each "
+                        "solver's verdict, the skipped solvers, the most likely fix, the "
+                        "path of metrics.json) instead of the summary")
     return p
 
 
@@ -66,7 +70,9 @@ def main(args) -> int:
                 edge=args.edge_study, sphere=args.sphere_sweep,
                 sphere_ratios=args.sphere_ratios, quiet=args.quiet,
                 render=not args.no_render)
-    if not args.quiet:
+    if args.json:
+        print_json(verdict(m, out))
+    elif not args.quiet:
         print_summary(m, out)
         for note in m.get("render_notes", []):
             print(f"note: {note}", file=sys.stderr)
@@ -79,3 +85,4 @@ def main(args) -> int:
             print(f"most likely fix: {diagnosis.sentence(m['diagnosis'])}", file=sys.stderr)
         return 1
     return 0
+

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from wearcheck.comparisons import registry
 from wearcheck.comparisons.external import parse_mapping
-from ._common import add_case_arguments, load_case
+from ._common import add_case_arguments, load_case, print_json, verdict
 
 
 def add_parser(sub):
@@ -40,6 +40,9 @@ def add_parser(sub):
                         "reference (registered: " + ", ".join(registry.names()) + ")")
     p.add_argument("--out", type=Path, default=None,
                    help="output directory (default: runs/verify-<case name>)")
+    p.add_argument("--json", action="store_true",
+                   help="print the verdict on stdout as JSON (passed, each check's verdict, "
+                        "the path of metrics.json) instead of the summary")
     return p
 
 
@@ -51,7 +54,9 @@ def main(args) -> int:
     out = args.out or Path("runs") / f"verify-{args.case.stem}"
     m = verify(case, args.results, out, mapping=mapping,
                reference_solver=args.reference_solver, quiet=args.quiet)
-    if not args.quiet:
+    if args.json:
+        print_json(verdict(m, out))
+    elif not args.quiet:
         print_summary(m, out)
     if not m["passed"]:
         print(f"wearcheck verify: the results FAILED (see {out}/report.md)", file=sys.stderr)
