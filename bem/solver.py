@@ -81,13 +81,17 @@ def largest_contact_radius(case, sc: dict) -> float:
     return max(sc["a0"], beyond(level))
 
 
-def grid(case, sc: dict) -> tuple[np.ndarray, float, float]:
+def grid(case, sc: dict, a_max: float | None = None,
+         holds: str = "") -> tuple[np.ndarray, float, float]:
     """Pixel-centre coordinates (n,), pixel side Δ and the largest contact radius.
 
     The pixel n // 2 is centred on the tip, x_i = (i - n//2) Δ, Δ = box·a_max/n.
+    ``a_max``: the radius the box must hold (default: the largest contact radius of
+    the run); ``holds``: what it holds, for the message (the both-bodies track).
     """
     n = case.bem.grid
-    a_max = largest_contact_radius(case, sc)
+    if a_max is None:
+        a_max = largest_contact_radius(case, sc)
     dx = case.bem.box * a_max / n
     a_small = sc["a0"]
     if case.indenter.profile == "ellipsoid":
@@ -96,8 +100,8 @@ def grid(case, sc: dict) -> tuple[np.ndarray, float, float]:
     if a_small / dx < MIN_PIXELS_IN_CONTACT:
         need = math.ceil(MIN_PIXELS_IN_CONTACT * case.bem.box * a_max / a_small)
         raise CaseError(f"key 'bem.grid' = {n}: only {a_small / dx:.1f} pixels span the unworn "
-                        f"contact radius; at least {MIN_PIXELS_IN_CONTACT} are needed, i.e. "
-                        f"bem.grid >= {need}")
+                        f"contact radius{holds}; at least {MIN_PIXELS_IN_CONTACT} are needed, "
+                        f"i.e. bem.grid >= {need}")
     x = (np.arange(n) - n // 2) * dx
     return x, dx, a_max
 

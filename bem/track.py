@@ -45,6 +45,8 @@ from wearcheck.cases import reference, validity
 from wearcheck.cases.result import SCAR_THRESHOLD, scar_radius
 from wearcheck.numerics import stepping
 
+from .wear import ring_scar_radius
+
 from . import contact
 from .operator import HalfSpace
 
@@ -288,14 +290,7 @@ def run(model: TrackModel, plan: stepping.Plan, progress=None, *, y=None, ring=N
         column[0] = max(column[0], float(np.max(st.p.sum(axis=0))))
         hist["cg_iterations"].append(st.iterations)
         hist["complementarity_residual"].append(st.residual)
-        if ring is not None:
-            index, rings, radii = ring
-            inside = index < rings
-            total = np.bincount(index[inside], w[inside], minlength=rings)
-            count = np.maximum(np.bincount(index[inside], minlength=rings), 1)
-            hist["scar_radius"].append(scar_radius(radii, total / count))
-        else:
-            hist["scar_radius"].append(math.nan)
+        hist["scar_radius"].append(ring_scar_radius(ring, w))
         if watch is not None:
             watch(s, hist["contact_radius"][-1], hist["scar_radius"][-1])
         for _ in range(reached):
@@ -351,23 +346,14 @@ def setup(case, sc: dict, spacing: float | None = None) -> tuple[TrackModel, np.
     ``spacing``: a pixel side at most the case's (the moving-contact model's,
     which divides the stroke), instead of the case's.
     """
-    from .solver import MIN_PIXELS_IN_CONTACT
+    from .solver import grid
     from wearcheck.cases import profiles
     n = case.bem.grid
-    a_max = largest_track_radius(case, sc)
-    dx = case.bem.box * a_max / n
-    a_small = sc["a0"]
-    if case.indenter.profile == "ellipsoid":
-        c = reference.unworn_contact(case)
-        a_small = min(c["semi_axis_x"], c["semi_axis_y"])
-    if a_small / dx < MIN_PIXELS_IN_CONTACT:
-        need = math.ceil(MIN_PIXELS_IN_CONTACT * case.bem.box * a_max / a_small)
-        raise CaseError(f"key 'bem.grid' = {n}: only {a_small / dx:.1f} pixels span the unworn "
-                        f"contact radius in a box that holds the worn track; at least "
-                        f"{MIN_PIXELS_IN_CONTACT} are needed, i.e. bem.grid >= {need}")
-    if spacing is not None:
-        dx = min(dx, spacing)
-    x = (np.arange(n) - n // 2) * dx
+    x, dx, a_max = grid(case, sc, largest_track_radius(case, sc),
+                        " in a box that holds the worn track")
+    if spacing is not None and spacing < dx:
+        dx = spacing
+        x = (np.arange(n) - n // 2) * dx
     X, Y = np.meshgrid(x, x, indexing="ij")
     f0 = profiles.height_xy(case.indenter, X, Y, case.table)
     f0 -= f0[n // 2, n // 2]

@@ -339,14 +339,7 @@ def run(model: Model, plan: stepping.Plan, progress=None, *, ring: tuple | None 
         hist["max_pressure"].append(float(np.max(st.p)))
         hist["cg_iterations"].append(st.iterations)
         hist["complementarity_residual"].append(st.residual)
-        if ring is not None:
-            index, rings, radii = ring
-            inside = index < rings
-            total = np.bincount(index[inside], w[inside], minlength=rings)
-            count = np.maximum(np.bincount(index[inside], minlength=rings), 1)
-            hist["scar_radius"].append(scar_radius(radii, total / count))
-        else:
-            hist["scar_radius"].append(math.nan)
+        hist["scar_radius"].append(ring_scar_radius(ring, w))
         if watch is not None:
             watch(s, hist["contact_radius"][-1], hist["scar_radius"][-1])
         for _ in range(reached):
@@ -358,3 +351,15 @@ def run(model: Model, plan: stepping.Plan, progress=None, *, ring: tuple | None 
                     F_start=outcome.force_start)
     return dict(history={k: np.asarray(v) for k, v in hist.items()}, stages=stages,
                 counters=counters)
+
+
+def ring_scar_radius(ring, w) -> float:
+    """The scar radius of the wear ``w`` (n, n) from its ring averages; ``ring`` =
+    (ring index per pixel, number of rings, ring radii), or None: NaN."""
+    if ring is None:
+        return math.nan
+    index, rings, radii = ring
+    inside = index < rings
+    total = np.bincount(index[inside], w[inside], minlength=rings)
+    count = np.maximum(np.bincount(index[inside], minlength=rings), 1)
+    return scar_radius(radii, total / count)
