@@ -140,6 +140,7 @@ def _fftw_plan(nfft: int, single: bool = False):
     plan = plans.pop((nfft, single), None)
     if plan is None:
         try:
+            # lazy (a): pyFFTW, the optional "fftw" extra
             import pyfftw
         except ImportError:         # found but broken: pocketfft from now on
             global FFT

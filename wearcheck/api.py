@@ -23,6 +23,14 @@ from wearcheck import cases
 from wearcheck.cases import ArgumentError, Case, CaseError, RunResult
 from wearcheck.cases import reference as closed_forms
 from wearcheck import registry, rundir
+from wearcheck.comparisons.present import frames
+from wearcheck.comparisons.present.progress import ProgressBar
+from wearcheck.references import certified
+from wearcheck.external import parse_mapping
+from wearcheck.studies.verify import verify as _verify
+from wearcheck.studies.compare import compare as _compare
+from wearcheck.studies import fit as _fit
+from wearcheck.comparisons.present.vtk import export_run
 
 __all__ = ["load_case", "shipped_cases", "solvers", "solve", "Result", "read_run", "compare",
            "refine", "sweep", "fit", "export_vtk", "reference", "verify"]
@@ -120,7 +128,6 @@ class Result:
             return (f"<table><caption style='text-align:left'>{caption}</caption>{body}"
                     "</table>")
 
-        from wearcheck.comparisons.present import frames
         hu = frames.dictionary(self)["history_csv"]
         end = [(k, f"{float(np.asarray(v)[-1]):.6g}", hu.get(k, {}).get("unit", ""))
                for k, v in h.items() if np.size(v)]
@@ -148,19 +155,16 @@ class Result:
         """The history as a pandas DataFrame indexed by the sliding distance s [m];
         ``attrs`` holds each column's unit and meaning, the solver and the scales
         (needs pandas: ``pip install "wearcheck[xarray]"``)."""
-        from wearcheck.comparisons.present import frames
         return frames.history_frame(self)
 
     def to_xarray(self):
         """History and stages as an xarray Dataset with units, meanings and provenance
         as attributes (needs xarray: ``pip install "wearcheck[xarray]"``)."""
-        from wearcheck.comparisons.present import frames
         return frames.to_xarray(self)
 
     def to_netcdf(self, path: str | Path) -> Path:
         """Write :meth:`to_xarray` as a netCDF file (atomically; never over a file that
         is not a wearcheck netCDF file)."""
-        from wearcheck.comparisons.present import frames
         return frames.write_netcdf(self, path)
 
     def write(self, out: str | Path) -> Path:
@@ -191,7 +195,6 @@ def _progress(progress, label):
     if callable(progress):
         return (lambda fraction, text="": progress(fraction)), None
     if progress:
-        from wearcheck.comparisons.present.progress import ProgressBar
         bar = ProgressBar(label)
         return bar, bar
     return None, None
@@ -260,7 +263,6 @@ def reference(name: str) -> Result:
     (method, levels, observed orders, the other solvers' spread, provenance).
     ``result.write(path)`` writes it as a run directory.
     """
-    from wearcheck.references import certified
     ref = certified.load(name)
     run = ref.run_result()
     sc = ref.scales
@@ -287,8 +289,6 @@ def verify(case: str | Path | Case, results: str | Path, out: str | Path, *,
     ``["p [MPa]=CONTACT.CPRESS"]`` as ``--map``. Returns the metrics as in
     ``metrics.json``; ``["passed"]`` is the verdict.
     """
-    from wearcheck.external import parse_mapping
-    from wearcheck.studies.verify import verify as _verify
     if mapping is not None and not isinstance(mapping, Mapping):
         mapping = parse_mapping([mapping] if isinstance(mapping, str) else list(mapping))
     return _verify(load_case(case), results, out, mapping=dict(mapping or {}),
@@ -306,7 +306,6 @@ def compare(case: str | Path | Case, out: str | Path, *, solvers: Iterable[str] 
 
     Returns the metrics as in ``metrics.json``; ``["passed"]`` is the verdict.
     """
-    from wearcheck.studies.compare import compare as _compare
     if isinstance(solvers, str):
         # "mdr,fem" as on the command line (--solvers)
         solvers = [name.strip() for name in solvers.split(",") if name.strip()] or [solvers]
@@ -326,6 +325,7 @@ def refine(case: str | Path | Case, out: str | Path, solver: str = "mdr", *,
            quiet: bool = True) -> dict:
     """A refinement study on Dask (paper Fig. 4): returns its summary (observed orders,
     Richardson's estimate, coarsest converged level); run directories go to ``out``."""
+    # lazy (b): loads asyncio and dask's client, a measured start-up cost (docs/performance.md)
     from wearcheck.studies.refine import refine as _refine
     case = load_case(case)
     levels = None if levels is None else [_plain(v) for v in _listed(levels, "levels")]
@@ -348,6 +348,7 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
     Returns the rows of ``sweep.csv`` (the varied values, final ŝ, F/F0, wear
     depth, status per run).
     """
+    # lazy (b): loads asyncio and dask's client, a measured start-up cost (docs/performance.md)
     from wearcheck.studies.sweep import sweep as _sweep
     case = load_case(case)
     if isinstance(vary, str):
@@ -390,7 +391,6 @@ def fit(case: str | Path | Case, data, keys: str | Iterable[str] = ("wear.specif
     CaseError
         bad keys, case or data (one message naming the file, row and column).
     """
-    from wearcheck.studies import fit as _fit
     result = _fit.fit(load_case(case), data, keys, exponents=exponents, scheduler=scheduler,
                       workers=workers, quiet=quiet)
     for text in result.warnings:
@@ -428,5 +428,4 @@ def export_vtk(run_dir: str | Path, revolve: int = 0) -> Path:
 
     ``revolve`` N >= 3 also writes the FEM fields revolved into a 3D solid.
     """
-    from wearcheck.comparisons.present.vtk import export_run
     return export_run(run_dir, revolve=revolve)

@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from wearcheck.extras import need
+from wearcheck.comparisons.analysis.fitting import LABELS
 
 #: how each quantity is drawn: label, unit shown and factor from SI
 _SHOWN = {"scar_diameter": ("scar diameter D", "µm", 1e6),
@@ -35,6 +36,7 @@ def figure(result, path=None, axes=None):
     matplotlib = need("matplotlib", "drawing figures")
     if axes is None and path is not None:
         matplotlib.use("Agg", force=False)
+    # lazy (a): matplotlib, the optional "plot" extra
     import matplotlib.pyplot as plt
     rows = result.measurements
     quantities = [q for q in _SHOWN if any(r["quantity"] == q for r in rows)]
@@ -96,7 +98,6 @@ def _g(v, spec=".4g"):
 
 def text(result) -> str:
     """The text ``wearcheck fit`` prints: parameters, the lab formula, the residuals."""
-    from wearcheck.comparisons.analysis.fitting import LABELS
     runs = result.model["runs"]
     lines = [f"fit of {', '.join(result.keys)} to {len(result.measurements)} measurements "
              f"({result.source}) against the MDR, the ball alone: {len(runs)} run(s), "
