@@ -27,8 +27,6 @@ from wearcheck.comparisons.present import frames
 from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.references import certified
 from wearcheck.external import parse_mapping
-from wearcheck.studies.verify import verify as _verify
-from wearcheck.studies.compare import compare as _compare
 from wearcheck.comparisons.present.vtk import export_run
 
 __all__ = ["load_case", "shipped_cases", "solvers", "solve", "Result", "read_run", "compare",
@@ -290,6 +288,9 @@ def verify(case: str | Path | Case, results: str | Path, out: str | Path, *,
     """
     if mapping is not None and not isinstance(mapping, Mapping):
         mapping = parse_mapping([mapping] if isinstance(mapping, str) else list(mapping))
+    # lazy (b): the studies' modules made `import wearcheck` 1.10x slower (measured:
+    # docs/performance.md, "Measurements behind the code")
+    from wearcheck.studies.verify import verify as _verify
     return _verify(load_case(case), results, out, mapping=dict(mapping or {}),
                    reference_solver=reference_solver, quiet=quiet)
 
@@ -313,6 +314,9 @@ def compare(case: str | Path | Case, out: str | Path, *, solvers: Iterable[str] 
         if not solvers:
             raise CaseError("solvers = []: name at least two solvers, or None for every "
                             "solver that supports the case")
+    # lazy (b): the studies' modules made `import wearcheck` 1.10x slower (measured:
+    # docs/performance.md, "Measurements behind the code")
+    from wearcheck.studies.compare import compare as _compare
     return _compare(load_case(case), out, solvers=solvers,
                     reference_solver=reference_solver, edge=edge_study, sphere=sphere_sweep,
                     render=render, quiet=quiet)
