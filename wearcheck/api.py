@@ -328,7 +328,8 @@ def refine(case: str | Path | Case, out: str | Path, solver: str = "mdr", *,
            quiet: bool = True) -> dict:
     """A refinement study on Dask (paper Fig. 4): returns its summary (observed orders,
     Richardson's estimate, coarsest converged level); run directories go to ``out``."""
-    # lazy (b): loads asyncio and dask's client, a measured start-up cost (docs/performance.md)
+    # lazy (b): the studies load asyncio (refine also scipy.optimize), which `import
+    # wearcheck` leaves out (tests/test_cli_startup.py; docs/performance.md, "Start-up")
     from wearcheck.studies.refine import refine as _refine
     case = load_case(case)
     levels = None if levels is None else [_plain(v) for v in _listed(levels, "levels")]
@@ -351,7 +352,8 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
     Returns the rows of ``sweep.csv`` (the varied values, final ŝ, F/F0, wear
     depth, status per run).
     """
-    # lazy (b): loads asyncio and dask's client, a measured start-up cost (docs/performance.md)
+    # lazy (b): the studies load asyncio (refine also scipy.optimize), which `import
+    # wearcheck` leaves out (tests/test_cli_startup.py; docs/performance.md, "Start-up")
     from wearcheck.studies.sweep import sweep as _sweep
     case = load_case(case)
     if isinstance(vary, str):
