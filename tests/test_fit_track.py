@@ -159,6 +159,67 @@ def test_K_flat_intervals_cover_the_truth_95_percent(truth, family):
     assert abs(est.mean() - math.log(K_FLAT)) < 3 * est.std() / 10
 
 
+def test_a_track_that_deepens_faster_is_flagged_by_the_residuals(truth, family):
+    """The verdict can fail: depths ± 2 % made to deepen as (s/s_3)^0.3 faster than the
+    model's (a counterface whose wear accelerates, which no constant K_flat gives)
+    fail the χ² test; the true depths with the same noise pass it."""
+    fam, c = family
+    depth = truth["track_depth"]
+    rng = np.random.default_rng(3)
+    noise = 1 + 0.02 * rng.standard_normal(len(S))
+    for values, fits in ((depth, True), (depth * (S / S[2]) ** 0.3, False)):
+        data = _data({"track_depth": values * noise}, 0.02 * values)
+        gof = fitting.fit_rates(fam, data, c, ("flat",), math.log(K_BALL), 0.0, -50,
+                                0)["goodness_of_fit"]
+        assert gof["test"] == "chi2" and gof["fits"] is fits, gof
+
+
+def test_the_widths_resolution_check(case, truth, family):
+    """The scar diameter is read where the wear falls to 1e-3 of its largest, between
+    pixels: the check repeats the run nearest the estimate on 1.5 times the pixels.
+    Independent of the code: at the start of wear the scar is the unworn contact,
+    2 a0 (Hertz), and the finer grid reads it closer to that than the coarse one;
+    the note comes when the estimated error passes a fifth of the uncertainty, not
+    when the uncertainty is far larger."""
+    fam, c = family
+    D = truth["scar_diameter"]
+    found = fitting.fit_rates(fam, _data({"scar_diameter": D}, 0.005 * D), c, ("flat",),
+                              math.log(K_BALL), 0.0, -50, 0)
+    top, start = 1.05 * K_BALL * c * S[-1], 1e-3 * K_BALL * c * S[0]
+    check = fit_track.width_resolution(case, _data({"scar_diameter": D}, 0.005 * D), found,
+                                       fam, K_BALL, top, start, c, None, None, True)
+    assert check["grid"] == [32, 48]
+    j = int(np.argmin(np.abs(fam.log_ratios - (found["log_K_flat"] - found["log_K_ball"]))))
+    coarse = fam.curves[j]
+    fine = fit_track.curves_of(_solve(case.derive(dict(
+        fit_track.forward_changes(case, K_BALL, float(fam.log_ratios[j]), top, start),
+        **{"bem.grid": 48}))).history)
+    two_a0 = 2.0 * reference.scales(case)["a0"]
+    assert abs(fine.values["scar_diameter"][0] - two_a0) < \
+        abs(coarse.values["scar_diameter"][0] - two_a0)
+    precise = _data({"scar_diameter": D}, 1e-4 * D)
+    assert "resolution matters for the widths" in fit_track.width_note(check, precise,
+                                                                       found["model"])
+    loose = _data({"scar_diameter": D}, 0.5 * D)
+    assert fit_track.width_note(check, loose, found["model"]) is None
+
+
+def test_the_scan_grows_to_the_fit(case, truth, monkeypatch):
+    """A first guess of K_flat ten times too small puts the truth's ratio (6.5) past the
+    first scan's end (0.65 × 2^±2): the scan grows, one run a step, until the estimate
+    and the interval are half a step inside it, and the interval holds K_FLAT."""
+    monkeypatch.setattr(fit_track, "flat_guess", lambda case, data: K_FLAT / 10.0)
+    depth = truth["track_depth"]
+    noisy = depth * (1 + 0.02 * np.random.default_rng(9).standard_normal(len(S)))
+    result = wearcheck.fit(case.derive({"wear.specific_rate": K_BALL}),
+                           {"s [m]": S, "track depth [m]": noisy, "± track depth [m]": 0.02 * depth},
+                           "counterface.specific_rate")
+    ratios = sorted(r["ratio"] for r in result.model["runs"])
+    assert len(ratios) > fit_track.FIRST_RATIOS and ratios[-1] > 6.5 * 2 ** 0.5
+    lo, hi = result.parameters["counterface.specific_rate"]["ci95"]
+    assert lo <= K_FLAT <= hi
+
+
 def test_both_rates_are_recovered_from_the_command_line(tmp_path, truth, capsys):
     """Ball central wear and track depth, ± 2 % (one draw): wearcheck fit with both keys
     holds both true rates in its intervals; --json; the runs are a ratio scan."""
@@ -174,9 +235,16 @@ def test_both_rates_are_recovered_from_the_command_line(tmp_path, truth, capsys)
     import json
     code = cli_main(["fit", "ball_on_flat_steel", str(sheet), "--fit", "wear.specific_rate",
                      "--fit", "counterface.specific_rate", "--set", "bem.grid=32",
-                     "--set", "sliding.tolerance=1e-3", "--json"])
+                     "--set", "sliding.tolerance=1e-3", "--json", "--out",
+                     str(tmp_path / "fit")])
     out = json.loads(capsys.readouterr().out)
     assert code == 0
+    # the fit directory: the figure has a panel per quantity and the residuals; the
+    # fitted case holds both rates
+    assert (tmp_path / "fit" / "fit.png").stat().st_size > 10_000
+    fitted = wearcheck.load_case(tmp_path / "fit" / "fitted_case.toml")
+    assert fitted.counterface_wear_rate == pytest.approx(
+        out["parameters"]["counterface.specific_rate"]["value"], rel=1e-12)
     p = out["parameters"]
     for key, true in (("wear.specific_rate", K_BALL), ("counterface.specific_rate", K_FLAT)):
         lo, hi = p[key]["ci95"]

@@ -42,6 +42,13 @@ FIRST_RATIOS = 5
 MOST_RATIOS = 11
 #: with K_ball held, the runs reach this factor past the last measurement's ŝ
 HELD_MARGIN = 1.05
+#: the widths' resolution check runs the ratio nearest the estimate again on this many
+#: times the pixels along each side (a finer grid: the widths' reading converges as the
+#: pixel shrinks, and it is biased wide on coarse pixels)
+FINER_GRID = 1.5
+#: the widths' estimated discretisation error, over their smallest relative uncertainty
+#: (or scatter), beyond which a note says the resolution matters
+WIDTH_ERROR_SHARE = 0.2
 
 
 def check(case: cases.Case, keys: tuple, data: fitting.Data, source: str) -> tuple[str, ...]:
@@ -215,13 +222,18 @@ def fit(case: cases.Case, data: fitting.Data, rows: list, source: str, keys: tup
             ratios.append(grid[0] - RATIO_STEP)
         if above and len(curves) + below < MOST_RATIOS:
             ratios.append(grid[-1] + RATIO_STEP)
+    resolution = None
+    widths = [q for q in WIDTHS if np.any(data.quantity == q)]
+    if widths:
+        resolution = width_resolution(case, data, found, family, K_ball, top, start, c,
+                                      scheduler, workers, quiet)
     reach = max(found["log_K_ball"], (found["intervals"].get("ball") or (0, None))[1]
                 or found["log_K_ball"])
     if math.exp(reach) * c * s_max > top * (1 + 1e-9):
         notes.append(f"the fit reads the model beyond its runs' end (ŝ = {top:.4g}): extended "
                      "by the power law of each run's last step")
     return _result(case, keys, free, data, rows, source, found, family, runs, c, notes,
-                   time.perf_counter() - t0)
+                   resolution, time.perf_counter() - t0)
 
 
 def _parameter(log_value, interval, key, notes) -> dict:
@@ -237,7 +249,8 @@ def _parameter(log_value, interval, key, notes) -> dict:
     return entry
 
 
-def _result(case, keys, free, data, rows, source, found, family, runs, c, notes, seconds):
+def _result(case, keys, free, data, rows, source, found, family, runs, c, notes, resolution,
+            seconds):
     parameters = {}
     if "ball" in free:
         parameters[BALL] = _parameter(found["log_K_ball"], found["intervals"]["ball"], BALL,
@@ -253,9 +266,10 @@ def _result(case, keys, free, data, rows, source, found, family, runs, c, notes,
     warning = ball_fit.misfit_warning(gof)
     if warning:
         notes.insert(0, warning)
-    widths = [q for q in ("scar_diameter", "track_width") if np.any(data.quantity == q)]
-    if widths:
-        notes.append(_width_note(case, data, widths, max(r["pixel"] for r in runs)))
+    if resolution is not None:
+        note = width_note(resolution, data, found["model"])
+        if note:
+            notes.append(note)
     s = np.geomspace(float(np.min(data.s)) / 3.0, float(np.max(data.s)) * 3.0, 200)
     curve = (s, {q: fitting.predict_rates(family, _probe(q, s), found["log_K_ball"],
                                           found["log_K_flat"], c)
@@ -271,8 +285,9 @@ def _result(case, keys, free, data, rows, source, found, family, runs, c, notes,
                  s_hat_per_K_s=c, pass_length=both_bodies.pass_length(case.sliding),
                  held={k: v for k, v in ((BALL, case.wear_rate), (FLAT,
                        case.counterface_wear_rate)) if k not in keys},
-                 resolution="not checked by the fit (docs/fitting.md: the widths are read "
-                            "to about a pixel)")
+                 resolution=resolution if resolution is not None else
+                 "the depths, areas and volumes: not checked (they converge at second "
+                 "order in the pixel, docs/both-bodies.md); the widths: checked when measured")
     return ball_fit.FitResult(case=case, fitted_case=fitted, keys=keys, parameters=parameters,
                               measurements=measurements, lab=lab, goodness_of_fit=gof,
                               model=model, interval_method=ball_fit.interval_method(data),
@@ -283,11 +298,62 @@ def _probe(quantity: str, s) -> fitting.Data:
     return fitting.Data(s, np.full(len(s), quantity), np.ones(len(s)), np.full(len(s), np.nan))
 
 
-def _width_note(case, data, widths, pixel) -> str:
-    """The widths are read on the BEM's pixels: the note names the pixel against the
-    smallest measured width."""
-    smallest = min(float(np.min(data.y[data.quantity == q])) for q in widths)
-    return (f"the model reads the widths ({', '.join(widths)}) on the BEM's pixels, side up to "
-            f"{pixel:.3g} m at bem.grid = {case.bem.grid}, {100 * pixel / smallest:.2g} % of the "
-            f"smallest measured width ({smallest:.4g} m); the intervals do not include that "
-            "error (a finer bem.grid narrows it)")
+#: the quantities read as widths (where the wear falls to 10⁻³ of its largest, between
+#: pixels): first order in the pixel
+WIDTHS = ("scar_diameter", "track_width")
+
+
+def width_resolution(case, data, found, family, K_ball, top, start, c, scheduler, workers,
+                     quiet) -> dict:
+    """The widths' reading on a finer grid: the run at the scanned ratio nearest the
+    estimate repeated on :data:`FINER_GRID` times the pixels, both read at the
+    estimate's K_ball at each measured width. Returns the grids, the ratio, the
+    largest relative change of a width and the first-order error estimate
+    change/(M/N − 1) (the reading converges at first order in the pixel)."""
+    j = int(np.argmin(np.abs(family.log_ratios - (found["log_K_flat"] - found["log_K_ball"]))))
+    r = float(family.log_ratios[j])
+    N = case.bem.grid
+    M = 2 * int(round(FINER_GRID * N / 2))
+    changes = dict(forward_changes(case, K_ball, r, top, start), **{"bem.grid": M})
+    (history, info, seconds, _), = _run_all(case, [(f"ratio-{math.exp(r):.4g}-grid-{M}",
+                                                    changes)], scheduler, workers, quiet)
+    fine = curves_of(history)
+    widths = np.isin(data.quantity, WIDTHS)
+    part = fitting.Data(data.s[widths], data.quantity[widths], data.y[widths],
+                        data.sigma[widths])
+    coarse_w = fitting.predict(family.curves[j], part, found["log_K_ball"], c)
+    fine_w = fitting.predict(fine, part, found["log_K_ball"], c)
+    change = fine_w / coarse_w - 1.0
+    k = int(np.argmax(np.abs(change)))
+    return dict(grid=[N, M], ratio=math.exp(r), seconds=float(seconds),
+                largest_change=float(change[k]), at_s=float(part.s[k]),
+                quantity=str(part.quantity[k]), error=float(change[k] / (M / N - 1.0)),
+                meaning="the widths read at the estimate on the run nearest its ratio, on N "
+                        "and on M pixels a side: error = change/(M/N − 1) estimates their "
+                        "discretisation error at N (first order); the intervals do not "
+                        "include it")
+
+
+def width_note(resolution: dict, data: fitting.Data, model) -> str | None:
+    """A note when the widths' estimated discretisation error passes
+    :data:`WIDTH_ERROR_SHARE` of their smallest relative uncertainty (without
+    uncertainties: of the residuals' relative scatter, ``model`` the fitted
+    model's values), else None."""
+    widths = np.isin(data.quantity, WIDTHS)
+    if data.weighted:
+        scale = float(np.min(data.sigma[widths] / data.y[widths]))
+        what = "measured uncertainty"
+    else:
+        r = fitting.residuals(data, np.asarray(model, float))
+        scale = float(np.sqrt(np.mean(r**2)))
+        what = "residuals' scatter"
+    error = abs(resolution["error"])
+    if error <= WIDTH_ERROR_SHARE * scale:
+        return None
+    N, M = resolution["grid"]
+    said = f" against a {what} of {100 * scale:.2g} %"
+    return (f"the model's resolution matters for the widths: {resolution['quantity']} moves by "
+            f"{100 * resolution['largest_change']:+.2g} % from bem.grid = {N} to {M}, an "
+            f"estimated error at {N} of {100 * error:.2g} %{said}, which the intervals do not "
+            f"include; raise bem.grid (e.g. --set bem.grid={2 * N}) or fit the depths, "
+            "areas and volumes without the width columns")
