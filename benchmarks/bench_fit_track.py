@@ -49,7 +49,8 @@ def fit_run(mode: str, sheet: str, grid: int, workers: int) -> dict:
     else:
         keys = ["counterface.specific_rate"] + (["wear.specific_rate"] if mode == "both" else [])
         res = wearcheck.fit(case, sheet, keys, workers=int(workers) or None)
-        out = dict(parameters=res.parameters, runs=res.model["runs"], seconds=res.seconds)
+        out = dict(parameters=res.parameters, runs=res.model["runs"], seconds=res.seconds,
+                   resolution=res.model["resolution"], warnings=res.warnings)
     out["wall"] = time.perf_counter() - t0
     return out
 
@@ -105,6 +106,12 @@ def main():
                   f"{len(runs)} runs ({sum(r['seconds'] for r in runs):.1f} s: "
                   + ", ".join(f"{r['ratio']:.3g}: {r['seconds']:.1f} s" for r in runs)
                   + f"); {params}")
+            check = out["resolution"]
+            if isinstance(check, dict):
+                print(f"  widths' check: {check['seconds']:.1f} s at bem.grid {check['grid']}, "
+                      f"{check['quantity']} {100 * check['largest_change']:+.2g} %")
+            for w in out["warnings"]:
+                print(f"  note: {w}")
 
 
 if __name__ == "__main__":
