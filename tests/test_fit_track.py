@@ -254,6 +254,24 @@ def test_both_rates_are_recovered_from_the_command_line(tmp_path, truth, capsys)
     print("both rates:", p, [(r["ratio"], r["seconds"]) for r in out["model"]["runs"]])
 
 
+@pytest.mark.slow
+def test_the_scan_on_dask(case, truth):
+    """The runs on a Dask cluster (--workers 2; a cluster's start costs more than these
+    small runs, hence slow): the same scan and K_flat as run here, one after another."""
+    depth = truth["track_depth"]
+    noisy = depth * (1 + 0.02 * np.random.default_rng(4).standard_normal(len(S)))
+    data = {"s [m]": S, "track depth [m]": noisy, "± track depth [m]": 0.02 * depth}
+    held = case.derive({"wear.specific_rate": K_BALL})
+    here = wearcheck.fit(held, data, "counterface.specific_rate")
+    dask = wearcheck.fit(held, data, "counterface.specific_rate", workers=2)
+    assert all(r["worker"] for r in dask.model["runs"])
+    assert [r["ratio"] for r in dask.model["runs"]] == [r["ratio"] for r in here.model["runs"]]
+    # the same runs in another process: the same numbers (the BEM is deterministic; 1e-9
+    # leaves room for a different FFT plan there)
+    assert dask.parameters["counterface.specific_rate"]["value"] == pytest.approx(
+        here.parameters["counterface.specific_rate"]["value"], rel=1e-9)
+
+
 # -- refusals -------------------------------------------------------------------------------
 
 BALL_ONLY = "cycles, D [um]\n100, 300\n300, 320\n"
