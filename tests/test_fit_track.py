@@ -159,6 +159,26 @@ def test_K_flat_intervals_cover_the_truth_95_percent(truth, family):
     assert abs(est.mean() - math.log(K_FLAT)) < 3 * est.std() / 10
 
 
+def test_K_flat_intervals_without_uncertainties_cover_the_truth(truth, family):
+    """100 draws of the track depth and area with 3 % relative scatter, not given: the
+    profile-t interval (the scatter estimated from the 10 values) should hold K_FLAT
+    in 95 of them (90-99 with probability 0.97); the goodness of fit is the trend
+    test."""
+    fam, c = family
+    covered = 0
+    for seed in range(100):
+        rng = np.random.default_rng(1000 + seed)
+        values = {q: truth[q] * np.exp(0.03 * rng.standard_normal(len(S)))
+                  for q in ("track_depth", "track_area")}
+        found = fitting.fit_rates(fam, _data(values), c, ("flat",), math.log(K_BALL), 0.0,
+                                  -50, 0)
+        a, b = found["intervals"]["flat"]
+        covered += a is not None and b is not None and a <= math.log(K_FLAT) <= b
+    assert found["goodness_of_fit"]["test"] == "trend"
+    print(f"coverage of K_flat without uncertainties: {covered}/100")
+    assert 90 <= covered <= 99
+
+
 def test_a_track_that_deepens_faster_is_flagged_by_the_residuals(truth, family):
     """The verdict can fail: depths ± 2 % made to deepen as (s/s_3)^0.3 faster than the
     model's (a counterface whose wear accelerates, which no constant K_flat gives)
