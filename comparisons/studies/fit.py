@@ -574,8 +574,10 @@ def _result(case, keys, data, rows, source, found, runs, family, c, notes, secon
 #: the lab's formula of each quantity's volume (the ball's, or the counterface's)
 LAB_FORMULAS = {"scar_diameter": "V = π D⁴/(64 R)", "ball_volume": "V measured",
                 "wear_center": "V = π h² (3R − h)/3",
-                "track_width": "the unworn ball's groove of width w (G133: stroke·A_seg(w, R) "
-                               "+ the ends' cap; G99: 2π R_track·A_seg(w, R))",
+                "track_width": "the unworn ball's groove of width w, G133's flat: "
+                               "stroke·A_seg(w, R) + the ends' cap",
+                "track_width_disc": "the unworn pin's groove of width w, G99's disc: "
+                                    "2π R_track·A_seg(w, R)",
                 "track_depth": "L·A_seg of the unworn ball's groove of depth δ",
                 "track_area": "V = L·A (profilometer)", "track_volume": "V measured"}
 
@@ -596,7 +598,9 @@ def lab_formulas(case: cases.Case, data: fitting.Data) -> tuple[dict, np.ndarray
         per, pooled = fitting.lab_rate(V, F, data.s[at])
         lab_K[at] = per
         body = "K_flat" if q in fitting.TRACK_QUANTITIES else "K"
-        lab[q] = dict(K=pooled, formula=f"{LAB_FORMULAS[q]}; {body} = V/(F s), least squares "
+        disc = q == "track_width" and case.sliding.motion == "unidirectional"
+        formula = LAB_FORMULAS["track_width_disc" if disc else q]
+        lab[q] = dict(K=pooled, formula=f"{formula}; {body} = V/(F s), least squares "
                                         "through the origin over the measurements (n = 1)")
     return lab, lab_K
 
