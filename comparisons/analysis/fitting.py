@@ -135,6 +135,17 @@ class RatioCurves:
     log_ratios: np.ndarray
     curves: tuple
 
+    def __post_init__(self):
+        # the spline is linear in the values it interpolates: its cardinal functions,
+        # built once, give it at any ln ρ as weights on the runs' values
+        object.__setattr__(self, "_cardinal", scipy.interpolate.CubicSpline(
+            np.asarray(self.log_ratios, float), np.eye(len(self.curves)), axis=0))
+
+    def weights(self, log_ratio: float) -> np.ndarray:
+        """The spline's weights on the runs at ln ρ = log_ratio: Σ_j w_j y_j is the
+        not-a-knot cubic spline through (ln ρ_j, y_j) there."""
+        return self._cardinal(log_ratio)
+
 
 # -- the misfit -----------------------------------------------------------------
 
@@ -193,8 +204,7 @@ def _across_ratios(family: RatioCurves, data: Data, log_K_ball: float, s_hat_per
     """r -> the prediction at ln ρ = r and this K_ball (the runs read once)."""
     logs = np.array([np.log(predict(c, data, log_K_ball, s_hat_per_K_m))
                      for c in family.curves])
-    spline = scipy.interpolate.CubicSpline(family.log_ratios, logs, axis=0)
-    return lambda r: np.exp(spline(r))
+    return lambda r: np.exp(family.weights(r) @ logs)
 
 
 def residuals(data: Data, model: np.ndarray) -> np.ndarray:
