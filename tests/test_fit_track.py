@@ -21,10 +21,10 @@ import pytest
 
 import wearcheck
 from wearcheck.cases import CaseError, reference
-from wearcheck.comparisons import registry
+from wearcheck import registry
 from wearcheck.comparisons.analysis import fitting
-from wearcheck.comparisons.cli import main as cli_main
-from wearcheck.comparisons.studies import fit_track
+from wearcheck.cli import main as cli_main
+from wearcheck.studies import fit_track
 
 K_BALL, K_FLAT = 2e-15, 1.3e-14          # the ratio 6.5 is on no scan's grid
 CYCLES = np.geomspace(10.0, 300.0, 5)

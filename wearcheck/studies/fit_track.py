@@ -150,7 +150,7 @@ def _run_all(case, tasks, scheduler, workers, quiet) -> list:
                                 f"measurement, on the first guess of the rates): {exc}") from None
             out.append((result.history, result.info, time.perf_counter() - t, None))
         return out
-    from wearcheck.comparisons.studies.distributed import Task, run_cases
+    from wearcheck.studies.distributed import Task, run_cases
     scratch = Path(tempfile.mkdtemp(prefix="wearcheck-fit-"))
     try:
         outcomes = run_cases(case, [Task(name=n, solver="bem", changes=c) for n, c in tasks],
