@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from wearcheck.extras import need
-from wearcheck.comparisons.analysis.fitting import LABELS
+from wearcheck.comparisons.analysis.fitting import LABELS, lab_track_volume
 
 #: how each quantity is drawn: label, unit shown and factor from SI
 _SHOWN = {"scar_diameter": ("scar diameter D", "µm", 1e6),
@@ -23,7 +23,6 @@ _SHOWN = {"scar_diameter": ("scar diameter D", "µm", 1e6),
 def _lab_line(quantity, K_lab, s, case):
     """The lab formula's quantity for V = K F s (inverting π D⁴/64R, π h²(3R − h)/3 ≈ π R h²,
     and the track's formulas, the width's and depth's numerically)."""
-    from wearcheck.comparisons.analysis.fitting import lab_track_volume
     R, F = case.indenter.radius, case.loading.force
     V = K_lab * F * np.asarray(s, float)
     if quantity == "scar_diameter":

@@ -57,8 +57,8 @@ SUBCOMMANDS = {
     "cases": "list the shipped cases, or print one",
     "compare": "run every solver that supports a case and compare them",
     "export": "write ParaView files (VTU/PVD) of a run directory",
-    "fit": "fit K (and n) of a ball to measured scars, volumes or depths, with 95 %% "
-           "intervals",
+    "fit": ("fit K (and n) of a ball, and K of a counterface that wears, to measured "
+            "scars, tracks, volumes or depths, with 95 %% intervals"),
     "fretting-map": "running-condition map of a fretting case (partial/gross slip, "
                     "wear per cycle), on Dask",
     "mesh": "generate (or fetch from the cache) the FEM mesh of a case",
