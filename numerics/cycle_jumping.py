@@ -30,9 +30,10 @@ its ends, (3/2)h k1 + (1/2)h k2 − (h/2)(F(y) + F(y_new)), filtered through
 (I − γhJ)⁻¹ where J acts (Shampine's filter: on stiff modes the trapezoidal
 rule is no reference). The estimates are carried through the scheme's own
 linearised dynamics, e ← R(hJ) e + est (R the stability function: stiff
-errors are damped as the contact damps them), and max|e| is the global error
-estimate. A step may take LOCAL_SHARE of the room tol·Y − max|R e| (Y =
-max|y − y(0)|, the change so far), so max|e| <= tol·Y throughout; a rejected
+errors are damped as the contact damps them), and max|e| + max|d| is the
+global error estimate, d the map drift carried alike (below). A step may take
+LOCAL_SHARE of the room tol·Y − max|R e| − max|R d| (Y = max|y − y(0)|, the
+change so far), so max|e| + max|d| <= tol·Y throughout; a rejected
 step is retried shorter. The step grows by up to GROWTH per step, so where the
 rate varies smoothly the cycles simulated grow with log N. Steps land where
 a simulated cycle must end (``Plan.landings``).
@@ -238,7 +239,7 @@ class Outcome:
     propagated_error: float = 0.0  # max|e| + max|d| at the end
     propagated_drift: float = 0.0  # max|d| at the end: the ODE's parting from the map
     largest_drift: float = 0.0     # max over the run of max|d|/Y
-    largest_error: float = 0.0     # max over the run of max|e|/Y (Y at that cycle)
+    largest_error: float = 0.0     # max over the run of (max|e| + max|d|)/Y (Y then)
     largest_change: float = 0.0    # Y = max|y − y(0)| at the end
     tolerance: float = 0.0
 
