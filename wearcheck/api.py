@@ -361,7 +361,8 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
 def fit(case: str | Path | Case, data, keys: str | Iterable[str] = ("wear.specific_rate",), *,
         out: str | Path | None = None, exponents: Iterable[float] | None = None,
         scheduler: str | None = None, workers: int | None = None, quiet: bool = True):
-    """Fit a ball's wear coefficients to measurements, as ``wearcheck fit`` does.
+    """Fit a ball's (and a wearing counterface's) wear coefficients to measurements, as
+    ``wearcheck fit`` does.
 
     Parameters
     ----------
@@ -372,7 +373,10 @@ def fit(case: str | Path | Case, data, keys: str | Iterable[str] = ("wear.specif
         (a pandas DataFrame works).
     keys : ``"wear.specific_rate"``, optionally with ``"wear.pressure_exponent"``
         (then one run per exponent of ``exponents``, default 1, 1.25, ..., 4, on
-        Dask: ``scheduler``, ``workers`` as for :func:`sweep`).
+        Dask: ``scheduler``, ``workers`` as for :func:`sweep`); with a counterface
+        that wears, ``"counterface.specific_rate"`` and/or ``"wear.specific_rate"``
+        against the BEM's long-stroke model (one run per ratio K_flat/K_ball of a
+        scan; on Dask when ``scheduler`` or ``workers`` is given).
     out : also write a fit directory there (fit.json, measurements.csv, fit.png,
         the fitted case, meta.json).
 
