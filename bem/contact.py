@@ -375,19 +375,25 @@ def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=
     # Each CG iteration's elementwise work is a few dozen passes over the
     # box; those below are skipped or fused where the result is the same:
     # no wear compliance for σ = 0, h - d once under depth control, the
-    # inner products and the restriction to the free pixels in one pass each
+    # inner products in one pass each (einsum), and every array of the
+    # iteration written into one allocated before it: a fresh array of a
+    # window's size is mapped from the system and faulted in page by page
+    # (measured: twice the time of the pass itself, docs/performance.md)
     has_compliance = stroke_mean or per_pixel or sigma != 0.0
     h_minus_d = h - depth if depth is not None else None
 
     t = np.zeros_like(p)
+    gap, g, z, work = (np.empty_like(p) for _ in range(4))
+    on, free, free_old = (np.empty(p.shape, dtype=bool) for _ in range(3))
     gz_old = 1.0
-    free_old = None
+    restart = True
     d = depth
     res = np.inf
     u = None
     drift = 0.0          # bound on the error single-precision increments left in u [m]
     single = single and tol >= SINGLE_MIN_TOL
     best, since = np.inf, 0
+    ratio = p_scale / g_scale
     if displacement is not None:
         u = displacement + compliance(p)
         drift = displacement_error
@@ -395,12 +401,23 @@ def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=
         if u is None or it % REFRESH == 0:
             u = op(p) + compliance(p)
             drift = 0.0
-        on = p > 0.0
+            # the gap jumps by the error the recomputation removed: the
+            # conjugate directions' recurrence no longer holds (after a
+            # displacement off by 2e-5 d the iteration stalled for hundreds
+            # of iterations without this restart)
+            restart = True
+        np.greater(p, 0.0, out=on)
         if force is not None:
             # the approach: the mean of h + u over the contact (zero gap there)
             d = float(np.mean((h + u)[on]))
-        gap = u + h_minus_d if force is None else h - d + u
-        res = complementarity_residual(p, gap, p_scale, g_scale)
+            np.subtract(h, d, out=gap)
+            gap += u
+        else:
+            np.add(u, h_minus_d, out=gap)
+        # the complementarity residual (:func:`complementarity_residual`)
+        np.multiply(gap, ratio, out=work)
+        np.minimum(p, work, out=work)
+        res = float(max(work.max(), -work.min())) / p_scale
         if res < tol:
             if res + 2.0 * drift / g_scale < tol:
                 return Contact(pressure=p, gap=gap, depth=float(d),
@@ -421,38 +438,42 @@ def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=
                     continue
         # the free pixels of the bound-constrained problem: loaded, or
         # unloaded and overlapping (their gradient points into p > 0)
-        free = on | (gap < 0.0)
-        g = np.where(free, gap, 0.0)
+        np.less(gap, 0.0, out=free)
+        free |= on
+        np.multiply(gap, free, out=g)
         if force is not None:
             # the force is held: directions of zero mean on the free pixels
             g[free] -= np.mean(g[free])
         if precond is not None:
-            z = precond(g)
-            np.multiply(z, free, out=z)
+            np.multiply(precond(g), free, out=z)
             if force is not None:
                 z[free] -= np.mean(z[free])
         else:
-            z = g
-        gz = float(np.sum(g * z))
+            np.copyto(z, g)
+        gz = float(np.einsum("ij,ij->", g, z))
         # conjugate directions while the free set stays; restart when it changes
-        if free_old is None or not np.array_equal(free, free_old):
-            t = z.copy()
+        if restart or not np.array_equal(free, free_old):
+            np.copyto(t, z)
         else:
             t *= gz / gz_old
             t += z
-        free_old, gz_old = free, gz
+        restart = False
+        free, free_old = free_old, free
+        gz_old = gz
         r = op.single(t) if single else op(t)
         if has_compliance:
             r += compliance(t)
-        rt = float(np.sum(r * t))
+        rt = float(np.einsum("ij,ij->", r, t))
         if not rt > 0.0:
             raise SolverError("contact solve: the search direction has no positive curvature "
                               f"(residual {res:.3g}); the operator is not positive definite")
         tau = gz / rt
-        p -= tau * t
-        u -= tau * r
+        np.multiply(t, tau, out=work)
+        p -= work
+        np.multiply(r, tau, out=work)
+        u -= work
         if single:
-            drift += SINGLE_ERROR * abs(tau) * float(np.max(np.abs(r)))
+            drift += SINGLE_ERROR * abs(tau) * float(max(r.max(), -r.min()))
         # the projection onto p >= 0: its (few) pixels enter u by direct sum
         clipped = np.nonzero(p < 0.0) if p.min() < 0.0 else ((),)
         if len(clipped[0]) > MAX_DIRECT:
