@@ -37,12 +37,13 @@ from wearcheck.cases import SolverError
 MAX_DIRECT = 32
 #: iterations between fresh convolutions of the whole pressure (rounding drift)
 REFRESH = 50
-#: relative error of a single-precision operator application (measured
-#: 3.2e-7-3.9e-7 of max |G t|, :meth:`HalfSpace.single`), times 5: the bound
-#: on what each single-precision search direction adds to the displacement's error
+#: relative error of a single-precision operator application (measured for
+#: :meth:`HalfSpace.single`, docs/performance.md "Measurements behind the
+#: code"), times 5: the bound on what each single-precision search direction
+#: adds to the displacement's error
 SINGLE_ERROR = 2e-6
-#: single-precision directions only for tolerances from this up (the
-#: iteration stagnates near 2e-7 with them), and only while the residual
+#: single-precision directions only for tolerances from this up (below, the
+#: iteration stagnates with them: docs/performance.md), and only while the residual
 #: halves at least once in SINGLE_STALL iterations; then double precision
 SINGLE_MIN_TOL = 1e-7
 SINGLE_STALL = 6
@@ -505,7 +506,7 @@ def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=
 
 
 #: normal–tangential coupling: most sweeps, and the sweep after which the
-#: iteration must have contracted (rate about βμ, measured 0.05-0.09 per sweep)
+#: iteration must have contracted (its rate is about βμ per sweep: docs/bem-tangential.md)
 COUPLED_MAX_SWEEPS = 40
 COUPLED_CHECK_AFTER = 4
 

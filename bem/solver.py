@@ -15,9 +15,9 @@ from . import moving, track, wear
 from .operator import HalfSpace
 from .tangential import ShearToNormal
 
-#: implicit Euler's and BDF2's step in ŝ when sliding.step_hat = "auto" (as
-#: the MDR: the BEM's time error is the same ODE's, 0.08 Δŝ in F/F0 for
-#: implicit Euler on the paper case, 0.02 Δŝ² for BDF2)
+#: implicit Euler's and BDF2's step in ŝ when sliding.step_hat = "auto": the
+#: MDR's, because the BEM's time error is the same ODE's (docs/performance.md,
+#: "Measurements behind the code")
 IMPLICIT_STEP_HAT = 0.1
 BDF2_STEP_HAT = 0.1
 #: fewest pixels across the unworn contact radius
