@@ -27,6 +27,7 @@ jumping here.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -285,7 +286,8 @@ def run_jumped(model: MovingModel, cycle_offsets, moves: int, *, tolerance: floa
         if 0 < m <= whole * P:
             count = -(-m // P)
             stops.setdefault(count, []).append(m - (count - 1) * P)
-    counters = dict(moves=0, cg_iterations=0, largest_wear_per_move=0.0)
+    counters = dict(moves=0, cg_iterations=0, largest_wear_per_move=0.0,
+                    jacobian_cg_iterations=0, jacobian_seconds=0.0)
     problem = Cycles(model, cycle_offsets, counters, stops)
     c = start(model)
     state = Between(model.f0.copy(), np.zeros((model.rows, model.op.n)), c)
@@ -356,7 +358,6 @@ def supports(case) -> str | None:
 
 def solve(case, progress=None):
     """The BEM run of a case whose counterface wears: the moving-contact model."""
-    import time
 
     from wearcheck.cases import CaseError, RunResult, programme, reference, validity
 
@@ -511,7 +512,7 @@ class Cycles(cycle_jumping.Problem):
         return WearJacobian([
             Body(m.wear_rate, rec["ball_sliding"], m.op.spacing, m.op.E_star),
             Body(m.flat_wear_rate, rec["flat_sliding"], m.op.spacing, m.op.E_star)],
-            force_control=m.force is not None)
+            force_control=m.force is not None, counters=self.counters)
 
 
 class Body:
@@ -546,6 +547,7 @@ class Body:
         self.kernel_hat = sfft.rfft2(kernel)
         self.self_compliance = float(kernel[0, 0])
         self._unit = {}
+        self.iterations = 0
 
     def G(self, v):
         """G restricted to the loaded pixels, applied to ``v`` on them."""
@@ -568,6 +570,7 @@ class Body:
         for _ in range(SOLVE_MAXITER):
             if not float(np.linalg.norm(r)) > SOLVE_TOL * scale:
                 return x
+            self.iterations += 1
             q = self.G(d) + a * self.c * d
             alpha = rz / float(d @ q)
             x += alpha * d
@@ -598,13 +601,21 @@ class WearJacobian(cycle_jumping.SolveJacobian):
     """The wear Jacobian of a cycle, ball and flat blocks (their coupling through
     the contact left out: a W-method's J need only be near the stiff part)."""
 
-    def __init__(self, bodies, force_control):
+    def __init__(self, bodies, force_control, counters=None):
         self.bodies = bodies
         self.force_control = force_control
         self.sizes = np.cumsum([0] + [int(np.prod(b.shape)) for b in bodies])
+        self.counters = counters if counters is not None else {}
 
     def filter(self, gh, x):
+        t = time.perf_counter()
         out = np.empty_like(x, dtype=float)
         for b, lo, hi in zip(self.bodies, self.sizes[:-1], self.sizes[1:]):
             out[lo:hi] = b.solve(gh, x[lo:hi], self.force_control)
+        c = self.counters
+        c["jacobian_cg_iterations"] = (c.get("jacobian_cg_iterations", 0)
+                                       + sum(b.iterations for b in self.bodies))
+        for b in self.bodies:
+            b.iterations = 0
+        c["jacobian_seconds"] = c.get("jacobian_seconds", 0.0) + time.perf_counter() - t
         return out
