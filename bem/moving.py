@@ -18,10 +18,21 @@ and then f += Δ K_ball p, H_window += Δ K_flat p: both bodies lose K_body·Δ�
 per move, so V_ball/V_flat = K_ball/K_flat to round-off. A move is the time
 step: its wear must be small beside the elastic approach (recorded as
 ``largest_wear_per_move``). Every move is a contact solve (warm-started from the
-last one's pressure, steady in the ball's frame), so the cost grows with the
-sliding distance in pixels: short runs and short strokes, and the check of the
-long-stroke model (:mod:`bem.track`) in the middle of a long track. No cycle
-jumping here.
+last one's pressure, steady in the ball's frame).
+
+Long runs jump over cycles (:func:`run_jumped`, ``bem.jump_tolerance``): a cycle
+is one stroke there and back (one revolution of a disc), from offset 0 back to
+it; the wear one simulated cycle does from a state, F(y), y the ball's wear and
+the flat's map side by side, is integrated in the cycle count by
+:mod:`numerics.cycle_jumping` (ROS2, its error against the run that simulates
+every cycle held at the tolerance of the largest wear). The problem is stiff:
+a pixel worn a little deeper carries less pressure and wears less, at a rate
+per cycle of about K·s_cycle·E*/(0.58 Δ) (the half-space's stiffest,
+checkerboard, mode), 0.2–0.8 per cycle on the shipped cases at 128², so
+explicit steps would be held to a few cycles. ROS2's Jacobian is
+:class:`WearJacobian`: per body −K S C, C each pixel's loaded sliding over the
+cycle and S the elastic stiffness of the loaded pixels (G restricted to them,
+inverted), matrix-free through conjugate gradients on G + a C.
 """
 
 from __future__ import annotations
@@ -439,7 +450,7 @@ def solve(case, progress=None):
                 motion=sl.motion, tolerance=case.bem.tolerance,
                 archard_balance=track.balance(hist, model.wear_rate, model.flat_wear_rate,
                                               case.loading.force),
-                jump_tolerance=tol, **counters)
+                jump_tolerance=tol, run_moves=moves, **counters)
     if out.get("jumping") is not None:
         info["cycle_jumping"] = out["jumping"]
     remark = track.coarse_wear_remark(counters["largest_wear_per_move"], sc["d0"], "move")
