@@ -520,10 +520,31 @@ class Cycles(cycle_jumping.Problem):
     def jacobian(self, cycle):
         m = self.model
         rec = cycle.record
-        return WearJacobian([
-            Body(m.wear_rate, rec["ball_sliding"], m.op.spacing, m.op.E_star),
-            Body(m.flat_wear_rate, rec["flat_sliding"], m.op.spacing, m.op.E_star)],
-            force_control=m.force is not None, counters=self.counters)
+        kernels = self.__dict__.setdefault("_kernels", {})
+        bodies = []
+        for rate, sliding in ((m.wear_rate, rec["ball_sliding"]),
+                              (m.flat_wear_rate, rec["flat_sliding"])):
+            if sliding.shape not in kernels:
+                kernels[sliding.shape] = half_space_transform(sliding.shape, m.op.spacing,
+                                                              m.op.E_star)
+            bodies.append(Body(rate, sliding, *kernels[sliding.shape]))
+        return WearJacobian(bodies, force_control=m.force is not None,
+                            counters=self.counters)
+
+
+def half_space_transform(shape, spacing, E_star):
+    """G on a rows × cols grid of pixels by DC-FFT (zero-padded, exact on the grid):
+    the padded kernel's transform, and a pixel's own compliance."""
+    rows, cols = shape
+    di = np.arange(2 * rows)
+    di = np.where(di < rows, di, di - 2 * rows).astype(float)
+    dj = np.arange(2 * cols)
+    dj = np.where(dj < cols, dj, dj - 2 * cols).astype(float)
+    X, Y = np.meshgrid(di * spacing, dj * spacing, indexing="ij")
+    kernel = rectangle_displacement(X, Y, 0.5 * spacing, 0.5 * spacing, E_star)
+    kernel[rows, :] = 0.0
+    kernel[:, cols] = 0.0
+    return sfft.rfft2(kernel), float(kernel[0, 0])
 
 
 class Body:
@@ -540,23 +561,13 @@ class Body:
     through the jumps.
     """
 
-    def __init__(self, rate, sliding, spacing, E_star):
+    def __init__(self, rate, sliding, kernel_hat, self_compliance):
         self.rate = rate
         self.shape = sliding.shape
         self.support = np.flatnonzero(sliding.ravel() > 0.0)
         self.c = sliding.ravel()[self.support]
-        rows, cols = self.shape
-        # G on the body's rows × cols grid, DC-FFT (zero-padded, exact on the grid)
-        di = np.arange(2 * rows)
-        di = np.where(di < rows, di, di - 2 * rows).astype(float)
-        dj = np.arange(2 * cols)
-        dj = np.where(dj < cols, dj, dj - 2 * cols).astype(float)
-        X, Y = np.meshgrid(di * spacing, dj * spacing, indexing="ij")
-        kernel = rectangle_displacement(X, Y, 0.5 * spacing, 0.5 * spacing, E_star)
-        kernel[rows, :] = 0.0
-        kernel[:, cols] = 0.0
-        self.kernel_hat = sfft.rfft2(kernel)
-        self.self_compliance = float(kernel[0, 0])
+        self.kernel_hat = kernel_hat           # :func:`half_space_transform`
+        self.self_compliance = self_compliance
         self._unit = {}
         self.iterations = 0
 
