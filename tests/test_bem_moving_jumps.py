@@ -8,7 +8,7 @@ import pytest
 
 from wearcheck import bem, cases
 from wearcheck.bem import moving, track
-from wearcheck.cases import CaseError, reference
+from wearcheck.cases import CaseError, SolverError, reference
 
 BALL = "cases/ball_on_flat.toml"
 
@@ -133,3 +133,12 @@ def test_a_run_beyond_the_moves_refused_without_jumping_completes():
     assert res.history["s"][-1] == pytest.approx(282_000 * res.info["pixel"], rel=1e-12)
     assert res.info["moves"] < 0.1 * 282_000, res.info["moves"]
     assert max(res.info["archard_balance"].values()) < 1e-12
+
+
+def test_the_runaway_guard_names_the_tolerance(every_move):
+    # a jumped run that would simulate more moves than its guard stops with one
+    # line naming the key (moving.MAX_SIMULATED_MOVES in a case run)
+    mm, one, _ = every_move
+    with pytest.raises(SolverError, match=r"more than 5 cycles; raise bem.jump_tolerance"):
+        moving.run_jumped(mm, one, 100 * len(one), tolerance=0.01,
+                          max_simulated_moves=5 * len(one))
