@@ -98,8 +98,9 @@ class HalfSpace:
     def single(self, p: np.ndarray) -> np.ndarray:
         """G p as :meth:`__call__`, with the transforms in single precision (float32).
 
-        Its error is about 4e-7 of max |G p| (3.2e-7 at 256², 3.9e-7 at 512²
-        for random p): for the search directions of the contact solve, whose
+        Its error is near float32's rounding, relative to max |G p|
+        (docs/performance.md, "Measurements behind the code"): for the
+        search directions of the contact solve, whose
         displacements are increments of a displacement computed in double
         precision (:func:`contact.solve`). Returned as float64.
         """

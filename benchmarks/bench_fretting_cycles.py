@@ -7,9 +7,10 @@ The shipped case (`cases/fretting.toml`, N = 800, jump_tolerance 0.02) run to
 each cycle count, each run in a fresh process (imports and the first call's
 set-up included in the wall time, the solve's CPU time reported apart), by
 this checkout's solver ("ros2": error-controlled ROS2 steps, docs/fretting.md
-§4) and by the solver of ``--baseline-rev`` ("old": the forward-Euler jumps
-of mdr/fretting.py at that revision, loaded from ``git show`` into the
-installed package). The stage cycles are the decades up to the count.
+§4) and by the solver of ``--baseline-rev`` ("baseline": mdr/fretting.py at
+that revision, with its numerics/cycle_jumping.py where it has one, loaded
+from ``git show`` into the installed package; eee255d, the default, has the
+forward-Euler jumps). The stage cycles are the decades up to the count.
 
 Errors against references that neither solver computes:
 - every cycle simulated (``--every-cycle FILE``: the profiles at the decades
@@ -59,18 +60,34 @@ def load_case(cycles: int, tol: float):
     return cases.load(SHIPPED, over)
 
 
-def baseline_module(rev: str):
-    """mdr/fretting.py at ``rev`` as a module of the installed package."""
-    text = subprocess.run(["git", "-C", str(ROOT), "show", f"{rev}:mdr/fretting.py"],
-                          check=True, capture_output=True, text=True).stdout
-    path = Path(tempfile.mkdtemp()) / "fretting_baseline.py"
-    path.write_text(text)
-    import wearcheck.mdr  # noqa: F401  (the parent package of the relative imports)
-
-    spec = importlib.util.spec_from_file_location("wearcheck.mdr.fretting_baseline", path)
+def _module_at(rev: str, path: str, name: str):
+    """The file ``path`` at ``rev`` as the module ``name`` of the installed package,
+    or None where ``rev`` has no such file."""
+    out = subprocess.run(["git", "-C", str(ROOT), "show", f"{rev}:{path}"],
+                         capture_output=True, text=True)
+    if out.returncode:
+        return None
+    file = Path(tempfile.mkdtemp()) / (name.rsplit(".", 1)[-1] + ".py")
+    file.write_text(out.stdout)
+    spec = importlib.util.spec_from_file_location(name, file)
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module
     spec.loader.exec_module(module)
+    return module
+
+
+def baseline_module(rev: str):
+    """mdr/fretting.py at ``rev`` as a module of the installed package, with the
+    cycle jumping of ``rev`` (numerics/cycle_jumping.py) where it has one."""
+    import wearcheck.mdr  # noqa: F401  (the parent package of the relative imports)
+    import wearcheck.numerics  # noqa: F401
+
+    jumping = _module_at(rev, "numerics/cycle_jumping.py",
+                         "wearcheck.numerics.cycle_jumping_baseline")
+    module = _module_at(rev, "mdr/fretting.py", "wearcheck.mdr.fretting_baseline")
+    if jumping is not None:
+        # looked up when the solver runs: the baseline's fretting on its own jumps
+        module.cycle_jumping = jumping
     return module
 
 
@@ -147,7 +164,8 @@ def main():
             row = spawn(kind, cycles, args.baseline_rev)
             ec = every_cycle_error(row, args.every_cycle)
             est = row["error_estimate"]
-            print(f"| {cycles:.0e} | {kind} | {row['wall']:.1f} | {row['cpu']:.1f} | "
+            label = kind if kind == "ros2" else f"baseline ({args.baseline_rev})"
+            print(f"| {cycles:.0e} | {label} | {row['wall']:.1f} | {row['cpu']:.1f} | "
                   f"{row['rows']} | {row['simulated']} | "
                   f"{'—' if est is None else f'{est:.2e}'} | "
                   f"{'—' if ec is None else f'{ec:.2e}'} | {row['popov']:+.3e} |", flush=True)

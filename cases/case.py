@@ -20,6 +20,8 @@ from .schema import (BEMSettings, CCXSettings, did_you_mean, OPTIONAL_SECTIONS, 
                      key_problem,
                      section_fields, toml_string)
 from . import both_bodies
+from . import reference
+from .errors import RunWarning
 
 
 @dataclass(frozen=True)
@@ -380,7 +382,6 @@ def from_dict(raw: dict, source: str | Path = "<dict>",
     st = case.stages
     if st.cycles is not None or st.s is not None:
         # the stages in ŝ, derived once here, so every reader of stages.s_hat sees them
-        from . import reference
         per_m = reference.scales(case)["s_hat_per_m"]
         s = st.s if st.s is not None else [c * case.cycle_length for c in st.cycles]
         case = replace(case, stages=replace(st, s_hat=tuple(x * per_m for x in s)))
@@ -487,7 +488,6 @@ def _warnings(case: Case) -> tuple[str, ...]:
         if "similarity" not in _NOTED:
             _NOTED.add("similarity")
             import warnings
-            from .errors import RunWarning
             warnings.warn(out[-1] + " (said once per process; each case's own is in "
                           "case.warnings)", RunWarning, stacklevel=_outside_wearcheck())
     return tuple(out)

@@ -329,9 +329,9 @@ def predicted_scar_radius(case, s) -> float:
 
     Depth control: √2·a0 (complete wear, docs/theory.md §6). Force control: the
     long-run asymptote started from the unworn radius,
-    (a0^(2(n+1)) + 2(n+1) R K_n (F/π)^n s)^(1/(2(n+1))). Not a bound: on
-    ``ball_on_flat`` (MDR, N = 400) the scar runs up to 2.0 % beyond it (n = 1,
-    10 cycles; 1.0 % for n = 2 at 10³), and within 0.2 % from 10⁴ cycles on,
+    (a0^(2(n+1)) + 2(n+1) R K_n (F/π)^n s)^(1/(2(n+1))). Not a bound: early
+    in a run the scar runs a few percent beyond it, later within a fraction of
+    a percent (docs/performance.md, "Measurements behind the code"),
     so meshes and boxes sized on it keep a margin (``fem.contact_factor``,
     ``bem.box``). The paraboloid's law for every profile: for a sphere it is
     the larger by (b/R)²/12 (n = 1), a margin of the right sign, and the

@@ -1,14 +1,24 @@
-"""Reading a user's CSV table with units in its header: ``force [N]``, ``s [mm]``.
+"""Reading a user's CSV table with units in its header: ``force [N]``, ``s [mm]``, ``± D [um]``.
 
-One job: a header row names the columns (in any order; extra columns are kept
-aside, not read), a unit in brackets after a name is converted to SI, an
-unknown unit or a cell that is not a number is one :class:`CaseError` naming
-the file, the row and the column. Rows are counted as a spreadsheet shows
-them: the header is row 1 when it is the file's first line.
+The one parser of the tables users bring, in two parts:
+
+* what every such table shares (used by :func:`read_table` here and by
+  :mod:`wearcheck.user_tables`, the measurement sheets of ``wearcheck fit``):
+  the units of each dimension and their spellings (:func:`unit_factor`), a
+  header cell as name, unit and ± (:func:`parse_header`), the file read as
+  numbered lines with comments and blank lines skipped (:func:`read_lines`,
+  :func:`data_lines`, :func:`split_cells`), a cell as a finite number
+  (:func:`number`), and every fault one :class:`CaseError` naming the file, the
+  row and the column (rows counted as a spreadsheet shows them: the file's line
+  numbers);
+* :func:`read_table`, the reader of an FE program's results for ``wearcheck
+  verify``: the header row names the columns in any order (extra columns kept
+  aside, unread); comma, semicolon or tab separated; aliases and units the
+  caller supplies (FE exports name columns their own way).
 
 ``read_table(path, columns, required=[...])`` returns a :class:`Table` whose
-columns are SI arrays. The quantities a column may hold are the keys of
-:data:`UNITS` ("length", "force", "pressure", "volume", "number").
+columns are SI arrays. The dimensions a column may have are the keys of
+:data:`UNITS` ("length", "area", "volume", "force", "pressure", "number").
 """
 
 from __future__ import annotations
@@ -24,47 +34,142 @@ import numpy as np
 
 from .errors import CaseError
 
-#: the units each quantity may be given in, with their factor to SI. "µ" is
-#: accepted as the micro sign (U+00B5), the Greek mu (U+03BC) or "u"
+#: the units each dimension may be given in, with their factor to SI, as
+#: :func:`normal_unit` spells them ("µ" the micro sign, "²" and "³" superscripts)
 UNITS: dict[str, dict[str, float]] = {
     "length": {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "µm": 1e-6, "nm": 1e-9, "km": 1e3},
+    "area": {"m²": 1.0, "cm²": 1e-4, "mm²": 1e-6, "µm²": 1e-12, "nm²": 1e-18},
+    "volume": {"m³": 1.0, "cm³": 1e-6, "mm³": 1e-9, "µm³": 1e-18, "nm³": 1e-27},
     "force": {"N": 1.0, "kN": 1e3, "mN": 1e-3, "µN": 1e-6},
     "pressure": {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9, "N/m²": 1.0,
                  "N/mm²": 1e6},
-    "volume": {"m³": 1.0, "cm³": 1e-6, "mm³": 1e-9, "µm³": 1e-18},
     "number": {"": 1.0, "-": 1.0, "1": 1.0},
 }
-#: the SI unit of each quantity, as error messages name it
-SI_UNIT = {"length": "m", "force": "N", "pressure": "Pa", "volume": "m³", "number": ""}
-
-# a unit is the last bracketed group at the end: "Force Reaction (Z) [N]" is the force
-# reaction (z) in N (the way ANSYS and COMSOL export tables)
-_HEADER = re.compile(r"^(?P<name>.*?)\s*[\[\(](?P<unit>[^\[\]\(\)]*)[\]\)]\s*$")
+#: the SI unit of each dimension, as error messages name it
+SI_UNIT = {"length": "m", "area": "m²", "volume": "m³", "force": "N", "pressure": "Pa",
+           "number": ""}
 
 
 def normal_unit(text: str) -> str:
-    """A unit as :data:`UNITS` spells it: µ for the Greek mu or u, ³ and ² for ^3 and ^2."""
-    t = text.strip().replace("\u03bc", "µ").replace("^3", "³").replace("^2", "²")
-    t = t.replace("**3", "³").replace("**2", "²")
-    if t.startswith("u") and len(t) > 1 and t[1:] in ("m", "N", "m³"):
+    """A unit as :data:`UNITS` spells it: µ for the Greek mu or a leading u (``um``,
+    ``uN``), ² and ³ for ``^2``, ``**2`` or a trailing 2 after a letter (``mm3``)."""
+    t = text.strip().replace("\u03bc", "µ")
+    for power, sup in (("3", "³"), ("2", "²")):
+        t = t.replace(f"**{power}", sup).replace(f"^{power}", sup)
+        t = re.sub(rf"(?<=[A-Za-zµ]){power}$", sup, t)
+    if t.startswith("u") and len(t) > 1 and any("µ" + t[1:] in units for units in UNITS.values()):
         t = "µ" + t[1:]
     return t
 
 
-def unit_factor(unit: str, quantity: str) -> float | None:
-    """The factor from ``unit`` to SI for ``quantity``, or None when it is not one of its units."""
-    return UNITS[quantity].get(normal_unit(unit))
+def unit_factor(unit: str, quantity: str,
+                units: Mapping[str, Mapping[str, float]] = UNITS) -> float | None:
+    """The factor from ``unit`` to SI for the dimension ``quantity`` (of ``units``: a
+    caller may allow fewer), or None when it is not one of its units."""
+    return units[quantity].get(normal_unit(unit))
+
+
+# a unit is the last bracketed group at the end: "Force Reaction (Z) [N]" is the force
+# reaction (z) in N (the way ANSYS and COMSOL export tables)
+_HEADER = re.compile(r"^(?P<name>.*?)\s*[\[\(](?P<unit>[^\[\]\(\)]*)[\]\)]\s*$")
+# an uncertainty column: "± D [um]", "+- D", "+/- D"
+_UNCERTAINTY = re.compile(r"^(±|\+/-|\+-)\s*")
+
+
+@dataclass(frozen=True)
+class Header:
+    """A header cell: ``text`` as written (stripped), ``name`` without the unit and the ±
+    (its case kept), ``unit`` as written or None, ``uncertainty`` for a ± column."""
+
+    text: str
+    name: str
+    unit: str | None
+    uncertainty: bool = False
+
+
+def parse_header(cell: str) -> Header:
+    """``"± D [um]"`` -> Header("± D [um]", "D", "um", True); ``"Force Reaction (Z) [N]"`` ->
+    name "Force Reaction (Z)", unit "N"; ``"s"`` -> name "s", no unit."""
+    text = cell.strip()
+    m = _UNCERTAINTY.match(text)
+    rest = text[m.end():] if m else text
+    h = _HEADER.match(rest)
+    if h is None or not h.group("name").strip():
+        return Header(text, rest.strip(), None, m is not None)
+    return Header(text, h.group("name").strip(), h.group("unit").strip(), m is not None)
 
 
 def split_header(cell: str) -> tuple[str, str | None]:
     """``"force [N]"`` -> ("force", "N"); ``"Force Reaction (Z) [N]"`` -> ("force reaction
-    (z)", "N"); ``"s"`` -> ("s", None). Names come out in lower case."""
+    (z)", "N"); ``"s"`` -> ("s", None). Names come out in lower case (a ± stays in it)."""
     text = cell.strip()
     m = _HEADER.match(text)
     if m is None or not m.group("name").strip():
         return text.lower(), None
     return m.group("name").strip().lower(), m.group("unit").strip()
 
+
+def read_lines(path: str | Path, where: str) -> list[str]:
+    """The lines of a UTF-8 text file (a byte-order mark dropped); a directory, a file
+    that does not exist or cannot be read, or bytes that are not UTF-8: one line
+    starting with ``where`` (e.g. "file 'x.csv'")."""
+    path = Path(path)
+    if path.is_dir():
+        raise CaseError(f"{where} is a directory, not a CSV file")
+    try:
+        with open(path, newline="", encoding="utf-8-sig") as fh:
+            return fh.read().splitlines()
+    except FileNotFoundError:
+        raise CaseError(f"{where} does not exist") from None
+    except UnicodeDecodeError as exc:
+        raise CaseError(f"{where} is not UTF-8 text ({exc.reason} at byte {exc.start}); save "
+                        "it as UTF-8") from None
+    except OSError as exc:
+        raise CaseError(f"{where} cannot be read: {exc.strerror or exc}") from None
+
+
+def data_lines(lines: list[str]) -> list[tuple[int, str]]:
+    """(line number from 1, text) of the lines that are neither blank nor comments (#)."""
+    return [(i, line) for i, line in enumerate(lines, start=1)
+            if line.strip() and not line.lstrip().startswith("#")]
+
+
+def split_cells(numbered: list[tuple[int, str]], delimiter: str,
+                where: str) -> list[tuple[int, list[str]]]:
+    """Each numbered line split into its cells (CSV quoting; spaces after a delimiter
+    skipped)."""
+    out = []
+    for line, text in numbered:
+        try:
+            out.append((line, next(csv.reader([text], delimiter=delimiter,
+                                              skipinitialspace=True), [])))
+        except csv.Error as exc:
+            raise CaseError(f"{where}, row {line}: cannot be read as CSV: {exc}") from None
+    return out
+
+
+def sniff_delimiter(line: str) -> str:
+    """The most frequent of comma, semicolon and tab in a header line (comma if none)."""
+    counts = {d: line.count(d) for d in (",", ";", "\t")}
+    best = max(counts, key=counts.get)
+    return best if counts[best] else ","
+
+
+def number(text: str, at: str, comma_hint: bool = True) -> float:
+    """A cell as a finite number; else one line starting with ``at`` (file, row,
+    column). ``comma_hint``: say "a decimal comma?" of a cell like 1,5."""
+    try:
+        value = float(text)
+    except ValueError:
+        hint = (" (a decimal comma? write 1.5, not 1,5)"
+                if comma_hint and re.fullmatch(r"[+-]?\d+,\d+", text.strip()) else "")
+        raise CaseError(f"{at}: '{text}' is not a number{hint}") from None
+    if not math.isfinite(value):
+        raise CaseError(f"{at}: '{text}' is not a finite number")
+    return value
+
+
+# -- the FE results' reader -------------------------------------------------------------
 
 @dataclass
 class Table:
@@ -91,13 +196,7 @@ class Table:
 
     def where(self, i: int, name: str) -> str:
         """'FILE, row R, column 'NAME'' of entry i of column ``name``."""
-        return f"{self.path}, row {int(self.rows[i])}, column '{name}'"
-
-
-def _delimiter(line: str) -> str:
-    counts = {d: line.count(d) for d in (",", ";", "\t")}
-    best = max(counts, key=counts.get)
-    return best if counts[best] else ","
+        return f"file '{self.path}', row {int(self.rows[i])}, column '{name}'"
 
 
 def read_table(path: str | Path, columns: Mapping[str, str], *,
@@ -131,32 +230,16 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
         no header, a missing column, an unknown unit, a cell that is not a
         finite number, a row with fewer cells than the header.
     """
-    path = Path(path)
+    where_file = f"file '{path}'"
     aliases = {k.strip().lower(): v for k, v in (aliases or {}).items()}
     given_units = dict(units or {})
-    if path.is_dir():
-        raise CaseError(f"{path}: is a directory, not a CSV file")
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except FileNotFoundError:
-        raise CaseError(f"{path}: file does not exist") from None
-    except UnicodeDecodeError as exc:
-        raise CaseError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); save "
-                        "the table as UTF-8") from None
-    except OSError as exc:
-        raise CaseError(f"{path}: cannot be read: {exc.strerror or exc}") from None
-    lines = text.splitlines()
-    header_at = next((i for i, line in enumerate(lines)
-                      if line.strip() and not line.lstrip().startswith("#")), None)
-    if header_at is None:
-        raise CaseError(f"{path}: empty (expected a header row naming the columns, e.g. "
-                        + ",".join(_example(columns, required)) + ")")
-    delim = _delimiter(lines[header_at])
-    try:
-        header = next(csv.reader([lines[header_at]], delimiter=delim))
-    except csv.Error as exc:
-        raise CaseError(f"{path}, row {header_at + 1}: cannot be read as CSV: {exc}") from None
+    numbered = data_lines(read_lines(path, where_file))
+    if not numbered:
+        raise CaseError(f"{where_file} is empty (expected a header row naming the columns, "
+                        "e.g. " + ",".join(_example(columns, required)) + ")")
+    header_at, header_text = numbered[0]
+    delim = sniff_delimiter(header_text)
+    header = split_cells([numbered[0]], delim, where_file)[0][1]
     where: dict[str, int] = {}
     units: dict[str, str | None] = {}
     ignored = []
@@ -178,17 +261,17 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
                 ignored.append(cell.strip())
             continue
         if name in where:
-            raise CaseError(f"{path}, row {header_at + 1}: column '{name}' appears twice "
+            raise CaseError(f"{where_file}, row {header_at}: column '{name}' appears twice "
                             f"(columns {where[name] + 1} and {j + 1})")
         quantity = columns[name]
         if unit is not None and unit_factor(unit, quantity) is None:
             allowed = ", ".join(u or "(none)" for u in UNITS[quantity] if u not in ("-", "1"))
-            raise CaseError(f"{path}, row {header_at + 1}, column '{cell.strip()}': unknown "
+            raise CaseError(f"{where_file}, row {header_at}, column '{cell.strip()}': unknown "
                             f"unit '{unit}' for a {quantity}; allowed: {allowed}")
         where[name] = j
         units[name] = unit
     if not where and _numeric(header):
-        raise CaseError(f"{path}, row {header_at + 1}: no header row (the first row holds "
+        raise CaseError(f"{where_file}, row {header_at}: no header row (the first row holds "
                         "numbers); add one naming the columns, e.g. "
                         + ",".join(_example(columns, required)))
     for need in required:
@@ -197,50 +280,34 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
             said = " or ".join(f"'{o}'" for o in options) if len(options) < 3 else \
                 ", ".join(f"'{o}'" for o in options[:-1]) + f" or '{options[-1]}'"
             found = ", ".join(f"'{c.strip()}'" for c in header if c.strip()) or "none"
-            raise CaseError(f"{path}: no column {said} (columns found: {found})")
+            raise CaseError(f"{where_file}: no column {said} (columns found: {found})")
     values = {name: [] for name in where}
     rows = []
-    reader = csv.reader(lines[header_at + 1:], delimiter=delim)
-    try:
-        for offset, cells in enumerate(reader):
-            row = header_at + 2 + offset
-            if not cells or not any(c.strip() for c in cells) or cells[0].lstrip().startswith("#"):
+    for row, cells in split_cells(numbered[1:], delim, where_file):
+        for name, j in where.items():
+            at = f"{where_file}, row {row}, column '{header[j].strip()}'"
+            if j >= len(cells):
+                raise CaseError(f"{at}: missing (the row has {len(cells)} cells, the header "
+                                f"{len(header)})")
+            cell = cells[j].strip()
+            if cell.lower() == "nan" and not _is_required(name, required):
+                cell = ""              # written for "no value" (wearcheck writes it too)
+            if not cell:
+                if _is_required(name, required):
+                    raise CaseError(f"{at}: empty")
+                values[name].append(math.nan)
                 continue
-            for name, j in where.items():
-                if j >= len(cells):
-                    raise CaseError(f"{path}, row {row}, column '{header[j].strip()}': missing "
-                                    f"(the row has {len(cells)} cells, the header {len(header)})")
-                cell = cells[j].strip()
-                if cell.lower() == "nan" and not _is_required(name, required):
-                    cell = ""              # written for "no value" (wearcheck writes it too)
-                if not cell:
-                    if _is_required(name, required):
-                        raise CaseError(f"{path}, row {row}, column '{header[j].strip()}': "
-                                        "empty")
-                    values[name].append(math.nan)
-                    continue
-                try:
-                    v = float(cell)
-                except ValueError:
-                    hint = (" (a decimal comma? write 1.5, not 1,5)"
-                            if delim == ";" and re.fullmatch(r"-?\d+,\d+", cell) else "")
-                    raise CaseError(f"{path}, row {row}, column '{header[j].strip()}': "
-                                    f"'{cell}' is not a number{hint}") from None
-                if not math.isfinite(v):
-                    raise CaseError(f"{path}, row {row}, column '{header[j].strip()}': "
-                                    f"'{cell}' is not a finite number")
-                values[name].append(v)
-            rows.append(row)
-    except csv.Error as exc:
-        raise CaseError(f"{path}: cannot be read as CSV: {exc}") from None
+            values[name].append(number(cell, at, comma_hint=delim == ";"))
+        rows.append(row)
     if not rows:
-        raise CaseError(f"{path}: the header row is followed by no data rows")
+        raise CaseError(f"{where_file}: the header row is followed by no data rows")
     out = {}
     for name, vals in values.items():
         unit = units[name]
         factor = 1.0 if unit is None else unit_factor(unit, columns[name])
         out[name] = np.asarray(vals, float) * factor
-    return Table(columns=out, rows=np.asarray(rows), units=units, ignored=ignored, path=path)
+    return Table(columns=out, rows=np.asarray(rows), units=units, ignored=ignored,
+                 path=Path(path))
 
 
 def _is_required(name: str, required) -> bool:

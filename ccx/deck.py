@@ -3,9 +3,10 @@
 Decks are in millimetres, newtons and megapascals (CalculiX has no units; this
 is the usual consistent set). Metres would fail on fine meshes: CalculiX
 refuses an element whose Jacobian determinant is below 1e-20 in the deck's
-units, an absolute threshold that the small elements next to the axis cross
-in metres (measured: the sphere at 1001 contact nodes, "nonpositive
-jacobian"); in millimetres it lies 1e9 lower. Every number fits CalculiX's
+units, an absolute threshold that the small elements next to the axis of a
+fine mesh cross in metres ("nonpositive jacobian"; docs/performance.md,
+"Measurements behind the code", ``ccx/deck.py``); in millimetres it lies 1e9
+lower. Every number fits CalculiX's
 20 characters per field (longer fields are refused).
 
 Every deck reads the sphere from ``sphere.inp`` (``*INCLUDE``): nodes, CAX6
@@ -137,12 +138,13 @@ def gap_step(sphere, clearance, *, control: str, value: float, stiffness: float,
     depth_guess : force control: a first step lowers the top face by this
         depth [m] (the last known depth); the force step starts from its
         solution. Started from nothing, the sphere hangs free until a gap
-        closes and Newton's method cuts back for minutes (measured).
+        closes and Newton's method cuts back again and again (docs/performance.md,
+        "Measurements behind the code", ``ccx/deck.py``).
     fields : also write U and S to the .frd file.
     iterations : most Newton iterations of the increment before CalculiX
-        cuts it back (its default, 16, was enough at 101-501 contact nodes:
-        8-10 iterations measured; raised for meshes whose contact edge moves
-        by a node or two per iteration).
+        cuts it back (its default, 16, was enough on the meshes tried; raised
+        for meshes whose contact edge moves by a node or two per iteration;
+        docs/performance.md, "Measurements behind the code", ``ccx/deck.py``).
 
     Ground node Np + i sits on the plane under contact node i (i >= 1); gap
     element Ne + i joins them with direction -z: it closes when the contact

@@ -38,7 +38,8 @@ from .output import dat_blocks, select
 #: the penalty's largest sinking into the plane, relative to the depth scale d0
 PENETRATION = 1e-6
 #: an open gap element's pull at infinite opening, relative to F0/180 (CalculiX's
-#: default of 1e-3 N pulled every open node: measured -5.6 % of the force on the paper case)
+#: default of 1e-3 N pulls every open node and lowers the force: docs/performance.md,
+#: "Measurements behind the code", ``ccx/in_loop.py`` ``TENSION``)
 TENSION = 1e-12
 #: |Σ f - top reaction| allowed, relative to F0 (the .dat's seven digits allow ~1e-6)
 EQUILIBRIUM_TOLERANCE = 1e-5

@@ -19,7 +19,8 @@ from .model import cax6_sphere
 from .output import dat_blocks, select, stage_fields
 
 #: implicit Euler's and BDF2's step in ŝ when sliding.step_hat = "auto": the FEM's
-#: (fem/solver.py, measured there), since the mesh and the superelement are the same
+#: (fem/solver.py; docs/performance.md, "Measurements behind the code"), since the
+#: mesh and the superelement are the same
 IMPLICIT_AUTO_STEP_HAT = 0.02
 BDF2_AUTO_STEP_HAT = 0.01
 #: fewest arc nodes required inside the unworn contact radius

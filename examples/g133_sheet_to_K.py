@@ -140,6 +140,51 @@ fig.tight_layout()
 fig.savefig("g133_sheet_to_K.png", dpi=120)
 
 # %%
+# The flat too
+# ------------
+# G133 asks for the flat's wear as well. A profilometer traced the track's
+# cross-section in its middle at the same cycle counts: its depth [µm] and
+# its area [µm²], each ± 3 %. With ``[counterface] wears = true`` the fit runs
+# the BEM's long-stroke model of both bodies wearing (the ball in its frame,
+# a groove along the track) and fits the flat's K_flat, the ball's K held at
+# the value fitted above (``wearcheck fit ... --fit counterface.specific_rate``).
+# Under a constant force both bodies' wear scales with K·s alike, so one BEM
+# run per ratio K_flat/K_ball serves every overall scale: the fit scans that
+# ratio, a few runs (docs: *Fitting wear coefficients*, "Both bodies"). The
+# ball's K above assumed an unworn flat; ``keys=["wear.specific_rate",
+# "counterface.specific_rate"]`` fits both against the BEM together (a sheet
+# with the scars and the track), at about the same cost.
+Path("g133_track.csv").write_text("""\
+# the flat's track, profilometer across its middle, ± 3 %
+cycles, track depth [um], ± track depth [um], track area [um^2], ± track area [um^2]
+50,     0.104,  0.003,  19,   1
+100,    0.170,  0.005,  40,   1
+250,    0.368,  0.011,  95,   3
+500,    0.600,  0.018,  194,  6
+1000,   1.005,  0.030,  382,  12
+2000,   1.729,  0.051,  782,  23
+""", encoding="utf-8")
+both = case.derive({"wear.specific_rate": K["value"], "sliding.motion": "reciprocating",
+                    "counterface.wears": True, "counterface.specific_rate": 1e-14,
+                    "counterface.hardness": 2e9, "bem.grid": 64})
+flat = wearcheck.fit(both, "g133_track.csv", "counterface.specific_rate")
+K_flat = flat.parameters["counterface.specific_rate"]
+print(f"flat fit:    K_flat = {K_flat['value']:.4g} m³/(N·m), 95 % interval "
+      f"[{K_flat['ci95'][0]:.4g}, {K_flat['ci95'][1]:.4g}]")
+print(f"lab formula: K_flat = {flat.lab['track_area']['K']:.4g} m³/(N·m) from the area "
+      f"(L·A/(F s)), {flat.lab['track_depth']['K']:.4g} from the depth (the unworn ball's "
+      "groove)")
+print(f"model: {len(flat.model['runs'])} BEM runs at K_flat/K_ball = "
+      + ", ".join(f"{r['ratio']:.3g}" for r in flat.model["runs"])
+      + f"; {sum(r['seconds'] for r in flat.model['runs']):.0f} s")
+
+# %%
+# The area gives K_flat almost directly (the flat loses K_flat·F·s, and the
+# model's track volume is the pass length times its cross-section); the depth
+# read as the unworn ball's groove understates it, as the ball is worn flat
+# and cuts a shallower, wider groove.
+
+# %%
 # With the pressure exponent free
 # -------------------------------
 # ``keys=["wear.specific_rate", "wear.pressure_exponent"]`` fits n of

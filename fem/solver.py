@@ -16,22 +16,20 @@ from wearcheck.numerics import stepping, superelement
 from .model import build
 
 #: growth of the element size away from the contact arc, per element order:
-#: linear triangles need a gentler grading for the same bulk compliance
-#: (measured: F/F_Hertz − 1 at a0/R = 0.01 is 0.58 % with P2 at 0.25 and
-#: 0.66 % with P1 at 0.05, against a converged 0.565 %)
+#: linear triangles need a gentler grading for the same bulk compliance; each
+#: value brings the Hertz force near its converged value
+#: (docs/performance.md, "Measurements behind the code", ``GROWTH``)
 GROWTH = {1: 0.05, 2: 0.25}
-#: implicit Euler step in ŝ when sliding.step_hat = "auto": against a
-#: time-converged run (bdf2, Δŝ = 0.0025) on the paper case, 251 nodes,
-#: ŝ <= 4, it errs by 1.6e-3 F0 in force and 1.9e-3 d in profile (error ∝ Δŝ),
-#: ten times the mesh's spatial error; 554 steps to F < 1 % F0
-#: (benchmarks/bench_fem.py --steps)
+#: implicit Euler step in ŝ when sliding.step_hat = "auto": chosen for speed,
+#: its time error (first order in Δŝ) stays above the default mesh's spatial
+#: error; bdf2 is the accurate choice (docs/performance.md, "Measurements
+#: behind the code", ``IMPLICIT_AUTO_STEP_HAT``)
 IMPLICIT_AUTO_STEP_HAT = 0.02
-#: bdf2 step in ŝ when sliding.step_hat = "auto", chosen for accuracy: on
-#: the same comparison it errs by 1.9e-5 F0 and 3.4e-5 d, about 1/8 of the
-#: default mesh's spatial error (251 against 1001 nodes: 1.5e-4 F0, 2.3e-4 d);
-#: in a little more time than implicit Euler at 0.02 (docs/performance.md,
-#: "Measurements behind the code"). Δŝ = 0.02 would err by half the spatial
-#: error, 0.005 by 1/20 at twice the steps.
+#: bdf2 step in ŝ when sliding.step_hat = "auto", chosen for accuracy: its
+#: time error is well below the default mesh's spatial error, in little more
+#: time than implicit Euler; a larger step would bring the two errors close, a
+#: smaller one double the steps for little (docs/performance.md, "Measurements
+#: behind the code", ``BDF2_AUTO_STEP_HAT``)
 BDF2_AUTO_STEP_HAT = 0.01
 #: fewest arc nodes required inside the unworn contact radius
 MIN_NODES_IN_CONTACT = 5
@@ -63,8 +61,9 @@ def supports(case) -> str | None:
         return ("indenter.rigid = true: the FEM body is the elastic sphere; a rigid "
                 "indenter has nothing to deform (use the MDR solver)")
     if ind.poisson_ratio > MAX_POISSON_RATIO:
-        # displacement elements lock volumetrically as ν → 0.5 (measured on hertz.toml:
-        # F/F0 = 1.0078 at ν = 0.45, 1.0081 at 0.495, 1.037 at 0.49999; 0.5 divides by 0)
+        # displacement elements lock volumetrically as ν → 0.5 (0.5 divides by 0); the
+        # limit is where the Hertz force still holds (docs/performance.md,
+        # "Measurements behind the code", ``MAX_POISSON_RATIO``)
         return (f"key 'indenter.poisson_ratio' = {ind.poisson_ratio!r}: the FEM "
                 f"(displacement elements) accepts ν <= {MAX_POISSON_RATIO}; nearly "
                 "incompressible material locks (use the MDR solver)")

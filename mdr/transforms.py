@@ -66,9 +66,9 @@ def _spectrum(kernel: np.ndarray, nfft: int, key) -> np.ndarray:
 def _pocketfft():
     """scipy's own pocketfft entry points (r2c, c2r), or None.
 
-    scipy.fft's wrappers check and pad their arguments in Python: 35 µs of a
-    50-µs convolution of 800 points, against 16 µs calling the transforms
-    directly (most of an implicit step's to_1d at N = 800). A private module,
+    scipy.fft's wrappers check and pad their arguments in Python, most of the
+    time of a small convolution (docs/performance.md, "Measurements behind the code";
+    most of an implicit step's to_1d at N = 800 is such convolutions). A private module,
     so it is used only when it reproduces scipy.fft on a test convolution;
     otherwise scipy.fft serves (both paths are tested).
     """
@@ -140,6 +140,7 @@ def _fftw_plan(nfft: int, single: bool = False):
     plan = plans.pop((nfft, single), None)
     if plan is None:
         try:
+            # lazy (a): pyFFTW, the optional "fftw" extra
             import pyfftw
         except ImportError:         # found but broken: pocketfft from now on
             global FFT

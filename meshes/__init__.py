@@ -33,7 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
-from wearcheck.cases import CaseError, SolverError
+from wearcheck.cases import CaseError, SolverError, reference
+from wearcheck.extras import need
 
 #: bump when the geometry or meshing recipe changes (invalidates the cache)
 RECIPE = 1
@@ -94,7 +95,6 @@ def cache_dir() -> Path:
 
 def _generate(params: SphereMeshParameters, msh_path: Path) -> dict:
     """Mesh with gmsh (headless), write ``msh_path`` (.msh 4.1), return the arrays."""
-    from wearcheck.extras import need
     gmsh = need("gmsh", "meshing the FEM's sphere")
 
     R, rc, n = params.radius, params.contact_radius, params.contact_edges
@@ -295,8 +295,6 @@ def contact_arc(case, section: str, element_order: int, growth: float,
     unworn contact, fewer than ``min_nodes_in_contact`` nodes inside it, an
     arc past the sphere's equator.
     """
-    from wearcheck.cases import CaseError, reference
-
     keys, R = getattr(case, section), case.indenter.radius
     factor, nodes = keys.contact_factor, keys.contact_nodes
     a0 = reference.scales(case)["a0"]

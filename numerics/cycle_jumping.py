@@ -30,20 +30,26 @@ its ends, (3/2)h k1 + (1/2)h k2 − (h/2)(F(y) + F(y_new)), filtered through
 (I − γhJ)⁻¹ where J acts (Shampine's filter: on stiff modes the trapezoidal
 rule is no reference). The estimates are carried through the scheme's own
 linearised dynamics, e ← R(hJ) e + est (R the stability function: stiff
-errors are damped as the contact damps them), and max|e| is the global error
-estimate. A step may take LOCAL_SHARE of the room tol·Y − max|R e| (Y =
-max|y − y(0)|, the change so far), so max|e| <= tol·Y throughout; a rejected
+errors are damped as the contact damps them), and max|e| + max|d| is the
+global error estimate, d the map drift carried alike (below). A step may take
+LOCAL_SHARE of the room tol·Y − max|R e| − max|R d| (Y = max|y − y(0)|, the
+change so far), so max|e| + max|d| <= tol·Y throughout; a rejected
 step is retried shorter. The step grows by up to GROWTH per step, so where the
 rate varies smoothly the cycles simulated grow with log N. Steps land where
 a simulated cycle must end (``Plan.landings``).
 
-What is integrated is the ODE, not the map of the cycles: their solutions part
-by about λ²N/2 on a mode of rate λ per cycle (of the map y ← y + F(y)), which
-no step's estimate sees; it stays below λ_max/2 of the change, and fast modes
-relax. The series correction F − ½JF was tried: right on maps whose J is
-exact, but fretting's J is the rate's, not the cycle's (a simulated cycle
-relaxes the stiff nodes within itself), and the correction broke the shipped
-case near 10⁶ cycles, capped or not.
+What is integrated is the ODE, not the map of the cycles y ← y + F(y): the
+map follows dy/dN = log(I + J)/J · F ≈ F − ½JF, so on a mode of rate λ per
+cycle the two part by about λ²N/2 (at most λ/2 of the change), which the
+comparison with the trapezoidal rule does not see. Each step's share of it is
+counted: ½(I − γhJ)⁻¹ J Δy (Δy the step's increment; ½λΔy where hλ is small,
+fading as 1/(γh) on modes the step relaxes, where both solutions have
+decayed), carried like the local estimates and held with them under the
+tolerance (``map_drift_estimate``). It is known only where J is: entries
+outside the Jacobian count none. Integrating F − ½JF instead was tried:
+right on maps whose J is exact, but fretting's J is the rate's, not the
+cycle's (a simulated cycle relaxes the stiff nodes within itself), and the
+correction broke the shipped case near 10⁶ cycles, capped or not.
 """
 
 from __future__ import annotations
@@ -69,10 +75,11 @@ ERROR_MEANING = (
     "estimated error of the integrated variable against the run that simulates every cycle, "
     "max norm over its largest change so far, the largest over the run: the steps' local "
     "error estimates (against the trapezoidal rule, filtered where stiff) carried through the "
-    "scheme's linearised dynamics; kept at most the tolerance. final_error_estimate: the same "
-    "at the last cycle (damped where the limit attracts; in fretting it misses errors along "
-    "the limit's neutral directions). local_error_sum: the estimates' norms summed, nothing "
-    "damped")
+    "scheme's linearised dynamics, plus the averaged ODE's parting from the map of the cycles "
+    "(map_drift_estimate, carried alike); kept at most the tolerance. final_error_estimate: "
+    "the same at the last cycle (damped where the limit attracts; in fretting it misses "
+    "errors along the limit's neutral directions). local_error_sum: the local estimates' "
+    "norms summed, nothing damped")
 
 
 @dataclass
@@ -215,6 +222,27 @@ def ros2_propagate(e: np.ndarray, h: float, jac: Jacobian | None) -> np.ndarray:
     return out
 
 
+def map_drift(increment: np.ndarray, h: float, jac) -> np.ndarray:
+    """½(I − γhJ)⁻¹ J Δy: a step's share of the averaged ODE's parting from the map
+    of the cycles (zero where J is not known).
+
+    The map y ← y + F(y) follows the flow of F − ½JF + O(J²F), so over a step
+    whose increment is Δy the ODE dy/dN = F gains about ½JΔy on it; filtered as
+    the local estimate is, so that on modes the step relaxes (hλ ≫ 1, where
+    both solutions have decayed) it fades as 1/(γh) instead of standing at λ/2.
+    ``jac`` needs only ``filter``: (I − gJ)⁻¹J x = ((I − gJ)⁻¹x − x)/g.
+    """
+    if jac is None:
+        return np.zeros_like(increment)
+    g = GAMMA * h
+    if isinstance(jac, Jacobian):
+        out = np.zeros_like(increment)
+        if len(jac.index):
+            out[jac.index] = 0.5 * jac.solve(g, jac.matrix @ increment[jac.index])
+        return out
+    return (jac.filter(g, increment) - increment) / (2.0 * g)
+
+
 @dataclass
 class Outcome:
     """A run's end and its counts (``info`` for meta.json)."""
@@ -229,8 +257,10 @@ class Outcome:
     inadmissible_steps: int = 0    # of them: rejected by Problem.admissible
     largest_step: int = 0          # cycles covered by a step
     error_sum: float = 0.0         # Σ max|est| of the accepted steps
-    propagated_error: float = 0.0  # max|e| at the end
-    largest_error: float = 0.0     # max over the run of max|e|/Y (Y at that cycle)
+    propagated_error: float = 0.0  # max|e| + max|d| at the end
+    propagated_drift: float = 0.0  # max|d| at the end: the ODE's parting from the map
+    largest_drift: float = 0.0     # max over the run of max|d|/Y
+    largest_error: float = 0.0     # max over the run of (max|e| + max|d|)/Y (Y then)
     largest_change: float = 0.0    # Y = max|y − y(0)| at the end
     tolerance: float = 0.0
 
@@ -245,6 +275,8 @@ class Outcome:
                     final_error_estimate=self.propagated_error / Y if Y > 0 else 0.0,
                     tolerance=self.tolerance, meaning=ERROR_MEANING,
                     local_error_sum=self.error_sum / Y if Y > 0 else 0.0,
+                    map_drift_estimate=self.largest_drift,
+                    final_map_drift_estimate=self.propagated_drift / Y if Y > 0 else 0.0,
                     scheme="ROS2 (L-stable Rosenbrock W-method, order 2)",
                     simulated_cycles=self.simulated, recorded_cycles=self.rows,
                     stage_cycles=self.stage_cycles, steps=self.steps,
@@ -252,13 +284,17 @@ class Outcome:
                     inadmissible_steps=self.inadmissible_steps, largest_step=self.largest_step)
 
 
-def _factor(err: float, allowed: float) -> float:
-    """The step's factor from its error estimate, which grows as h³."""
+def _factor(err: float, allowed: float, parting: float = 0.0) -> float:
+    """The step's factor from its error estimate ``err``, which grows as h³ but for
+    its part ``parting`` (the map drift), which grows as h."""
     if err <= 0.0:
         return GROWTH
     if not (allowed > 0.0 and math.isfinite(err)):
         return SHRINK
-    return min(GROWTH, max(SHRINK, SAFETY * (allowed / err) ** (1.0 / 3.0)))
+    f = SAFETY * (allowed / err) ** (1.0 / 3.0)
+    if parting > 0.0:
+        f = min(f, SAFETY * allowed / parting)
+    return min(GROWTH, max(SHRINK, f))
 
 
 def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
@@ -276,6 +312,7 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
     y0 = np.array(problem.variable(state), dtype=float, copy=True)
     out = Outcome(state=state, tolerance=tol)
     error = np.zeros_like(y0)      # the global error estimate (signed, carried)
+    drift = np.zeros_like(y0)      # of it: the averaged ODE's parting from the map
     h_ctrl = 2.0
     last_report = -1.0
 
@@ -338,10 +375,16 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
                    else Jacobian(*index_matrix))
         while h >= 2:
             carried = ros2_propagate(error, h, jac)
-            allowed = LOCAL_SHARE * (tol * Y - float(np.max(np.abs(carried))))
+            carried_drift = ros2_propagate(drift, h, jac)
+            allowed = LOCAL_SHARE * (tol * Y - float(np.max(np.abs(carried)))
+                                     - float(np.max(np.abs(carried_drift))))
             increment, new, check, est = attempt(origin, n_origin, cyc, h, jac)
-            err = float(np.max(np.abs(est))) if est is not None else math.inf
-            if not math.isfinite(err) or not np.all(np.isfinite(carried)):
+            local = float(np.max(np.abs(est))) if est is not None else math.inf
+            step_drift = map_drift(increment, h, jac) if est is not None else None
+            parting = float(np.max(np.abs(step_drift))) if est is not None else 0.0
+            err = local + parting
+            if not math.isfinite(err) or not (np.all(np.isfinite(carried))
+                                              and np.all(np.isfinite(carried_drift))):
                 err = math.inf
             if err <= allowed:
                 accepted = True
@@ -350,7 +393,7 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
             if est is None:
                 h = h // 2
             else:
-                h = min(int(h * _factor(err, allowed)), h - 1)
+                h = min(int(h * _factor(err, allowed, parting)), h - 1)
             h_ctrl = max(2.0, h)
         if not accepted:
             # one cycle as simulated: its error is nil, the carried error unchanged
@@ -361,19 +404,23 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
             continue
         out.steps += 1
         out.largest_step = max(out.largest_step, h)
-        out.error_sum += err
+        out.error_sum += local
         error = carried + est
-        f = _factor(err, allowed)
+        drift = carried_drift + step_drift
+        f = _factor(err, allowed, parting)
         if h >= int(h_ctrl):
             h_ctrl = max(2.0, h_ctrl * f)
         else:                           # a step cut short to land does not lengthen the next
             h_ctrl = min(h_ctrl, max(2.0, h * f))
         origin, n_origin = new, n_origin + h
         cyc, n = check, n_origin + 1
-        out.largest_error = max(out.largest_error,
-                                float(np.max(np.abs(error))) / max(change(origin), 1e-300))
+        Y_new = max(change(origin), 1e-300)
+        out.largest_error = max(out.largest_error, (float(np.max(np.abs(error)))
+                                                    + float(np.max(np.abs(drift)))) / Y_new)
+        out.largest_drift = max(out.largest_drift, float(np.max(np.abs(drift))) / Y_new)
         keep(cyc, n)
     out.state, out.cycles = cyc.state, n
     out.largest_change = change(cyc.state)
-    out.propagated_error = float(np.max(np.abs(error)))
+    out.propagated_drift = float(np.max(np.abs(drift)))
+    out.propagated_error = float(np.max(np.abs(error))) + out.propagated_drift
     return out

@@ -214,9 +214,9 @@ def explicit_limit(C: np.ndarray, area: np.ndarray, rate: float) -> float:
     The wear map δw ← (I − rate Δs A⁻¹ S) δw with S = C_AA⁻¹ is stable while
     rate Δs λ_max(A⁻¹ S) < 2. Over the whole candidate arc λ_max is an upper
     bound for any active subset (Schur complement), so the limit is safe.
-    λ_max(A⁻¹ C⁻¹) = 1 / λ_min(A^½ C A^½), of order E*/h for node spacing h:
-    measured Δŝ_max = (1.05-1.18) h/a0 with P2 and 1.46 h/a0 with P1, i.e.
-    Δs_max ≈ 1.1 h σ0 / (k μ E*) (docs/theory.md §7 with C = O(1)).
+    λ_max(A⁻¹ C⁻¹) = 1 / λ_min(A^½ C A^½), of order E*/h for node spacing h,
+    i.e. Δs_max ≈ C h σ0 / (k μ E*) with C of order one (docs/theory.md §7; the
+    constants measured: docs/performance.md, "Measurements behind the code").
     """
     sa = np.sqrt(area)
     lam_min = linalg.eigvalsh(sa[:, None] * C * sa[None, :], subset_by_index=[0, 0])[0]

@@ -32,6 +32,10 @@ from pathlib import Path
 import numpy as np
 
 from wearcheck.cases import Case, CaseError, RunResult, profiles, reference
+from wearcheck.cases.case import to_dict
+from wearcheck.cases.schema import SECTIONS, section_fields
+from wearcheck.comparisons.analysis import metrics
+from wearcheck import cases
 
 #: the history columns a reference holds (SI), as history.csv names them
 HISTORY = ("s", "force", "depth", "contact_radius", "wear_center", "wear_volume")
@@ -67,7 +71,6 @@ def unworn_profile(case: Case, r) -> np.ndarray:
 
 def physics(case: Case) -> dict:
     """The case keys that make the problem (:data:`PHYSICS`), as a plain dict."""
-    from wearcheck.cases.case import to_dict
     raw = to_dict(case)
     out = {}
     for section, keys in PHYSICS.items():
@@ -83,7 +86,6 @@ def _default(section: str, key: str):
     """A case key's default (None when it has none or is unknown): a key missing from one
     side of a comparison counts as its default, so that a key added to the schema later
     (with the default that keeps the old behaviour) does not orphan the shipped files."""
-    from wearcheck.cases.schema import SECTIONS, section_fields
     if section not in SECTIONS:
         return None
     for name, f in section_fields(section):
@@ -319,7 +321,6 @@ class Reference:
         """Per stored stage: ŝ (and cycles where defined) and each check's band relative
         to the stage's own scale, floored, as the verdict judges a difference
         (``[compare]`` of the reference's case)."""
-        from wearcheck.comparisons.analysis import metrics
         sc = self.scales
         case = self.case
         tol = dataclasses.asdict(case.compare)
@@ -423,7 +424,6 @@ def read(path: str | Path, case: Case | None = None) -> Reference:
         the file is damaged, of another format, or made for other physics than
         ``case`` (naming the first key that differs).
     """
-    from wearcheck import cases
     path = Path(path)
     try:
         with np.load(path, allow_pickle=False) as z:
@@ -456,7 +456,6 @@ def read(path: str | Path, case: Case | None = None) -> Reference:
 
 def load(name: str) -> Reference:
     """The shipped reference of benchmark ``name`` (a shipped case's name)."""
-    from wearcheck import cases
     path = DATA_DIR / f"{cases.shipped(name).stem}.npz" if name not in names() \
         else DATA_DIR / f"{name}.npz"
     if not path.is_file():

@@ -37,6 +37,8 @@ from wearcheck.cases import reference as closed
 from wearcheck import registry
 
 from . import certified
+from wearcheck import cases
+from wearcheck.studies import compare as cmp
 
 #: Roache's safety factor of the grid convergence index with three levels
 SAFETY = 1.25
@@ -318,7 +320,6 @@ def derive(plan: Plan, *, dimensions=None, spread=None, changes=None, quiet=Fals
     shipped case first (a shorter run: the tests derive coarse versions);
     ``solve(case, solver)`` defaults to the registry's.
     """
-    from wearcheck import cases
     solve = solve or (lambda c, name: registry.solve(c, name))
     case = cases.load(cases.shipped(plan.name))
     if changes:
@@ -603,7 +604,6 @@ def as_reference(data, case) -> certified.Reference:
 def _spread(plan, case, data, solvers, solve, say) -> dict:
     """Each other solver at the case's own settings against the reference, per stage
     and check (relative to the stage's scale, as the verdict judges)."""
-    from wearcheck.studies import compare as cmp
     ref = as_reference(data, case)
     out = {}
     for name in solvers:

@@ -150,3 +150,17 @@ def test_g133_sheet_to_K(tmp_path):
     written = json.loads((tmp_path / "runs" / "g133-fit" / "fit.json").read_text())
     assert written["parameters"]["wear.specific_rate"]["value"] == pytest.approx(K, rel=1e-3)
     assert (tmp_path / "g133_sheet_to_K.png").stat().st_size > 10_000
+    # the flat: its worn volume is K_flat F s, and the model's is the pass length (the
+    # 10 mm stroke) times the cross-section; the areas alone give K_flat by least
+    # squares, recomputed here from the sheet. The fit (depths and areas) agrees with
+    # it within 5 % (six areas ± 3 %: the line's standard error about 1.2 %), and the
+    # depths read as the unworn ball's groove understate it (the ball is worn flat)
+    flat = re.search(r"flat fit: +K_flat = ([\d.e+-]+) m³/\(N·m\), 95 % interval "
+                     r"\[([\d.e+-]+), ([\d.e+-]+)\]", out)
+    K_flat, lo_f, hi_f = (float(g) for g in flat.groups())
+    A = np.array([19, 40, 95, 194, 382, 782.0]) * 1e-12
+    V = 0.010 * A
+    assert K_flat == pytest.approx(V @ Fs / (Fs @ Fs), rel=0.05)
+    assert lo_f < K_flat < hi_f
+    from_depth = float(re.search(r", ([\d.e+-]+) from the depth", out).group(1))
+    assert from_depth < lo_f

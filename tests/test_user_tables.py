@@ -52,6 +52,18 @@ def test_a_history_in_newtons_and_millimetres(tmp_path):
         == pytest.approx(0.02)
 
 
+def test_track_columns_in_their_units(tmp_path):
+    # (a track column was refused here until the both-bodies fit came: tests/test_fit_track.py)
+    # independent: 1 µm² = 1e-12 m², 1 mm³ = 1e-9 m³
+    path = write(tmp_path, "cycles, track width [um], track area [um^2], ± track area [um2], "
+                           "track volume [mm3]\n10, 250, 40, 2, 0.004\n")
+    t = read_table(path, MEASUREMENTS)
+    assert t["track_width"].values == pytest.approx([250e-6], rel=1e-15)
+    assert t["track_area"].values == pytest.approx([40e-12], rel=1e-15)
+    assert t["track_area"].uncertainty == pytest.approx([2e-12], rel=1e-15)
+    assert t["track_volume"].values == pytest.approx([0.004e-9], rel=1e-15)
+
+
 def test_columns_from_python_read_as_a_file():
     t = from_columns({"cycles": [10, 100], "D [um]": np.array([100.0, 150.0]),
                       "+- D": [2, 2]}, MEASUREMENTS)
@@ -79,8 +91,6 @@ BAD = [
     ("cycles; D [um]\n10; 100\n", r"row 1: columns are separated by commas, not semicolons"),
     ("cycles, D [um]\n10, \"100,5\"\n", r"row 2, column 'D \[um\]': '100,5' is not a number "
                                         r"\(a decimal comma\?"),
-    ("cycles, track width [um]\n10, 100\n", r"column 2 'track width \[um\]': a track quantity: "
-                                            r"the both-bodies model .* not available yet"),
     ("", r"is empty"),
     ("# only a comment\ncycles, D [um]\n", r"has a header but no rows of numbers"),
 ]

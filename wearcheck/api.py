@@ -23,6 +23,11 @@ from wearcheck import cases
 from wearcheck.cases import ArgumentError, Case, CaseError, RunResult
 from wearcheck.cases import reference as closed_forms
 from wearcheck import registry, rundir
+from wearcheck.comparisons.present import frames
+from wearcheck.comparisons.present.progress import ProgressBar
+from wearcheck.references import certified
+from wearcheck.external import parse_mapping
+from wearcheck.comparisons.present.vtk import export_run
 
 __all__ = ["load_case", "shipped_cases", "solvers", "solve", "Result", "read_run", "compare",
            "refine", "sweep", "fit", "export_vtk", "reference", "verify"]
@@ -120,7 +125,6 @@ class Result:
             return (f"<table><caption style='text-align:left'>{caption}</caption>{body}"
                     "</table>")
 
-        from wearcheck.comparisons.present import frames
         hu = frames.dictionary(self)["history_csv"]
         end = [(k, f"{float(np.asarray(v)[-1]):.6g}", hu.get(k, {}).get("unit", ""))
                for k, v in h.items() if np.size(v)]
@@ -148,19 +152,16 @@ class Result:
         """The history as a pandas DataFrame indexed by the sliding distance s [m];
         ``attrs`` holds each column's unit and meaning, the solver and the scales
         (needs pandas: ``pip install "wearcheck[xarray]"``)."""
-        from wearcheck.comparisons.present import frames
         return frames.history_frame(self)
 
     def to_xarray(self):
         """History and stages as an xarray Dataset with units, meanings and provenance
         as attributes (needs xarray: ``pip install "wearcheck[xarray]"``)."""
-        from wearcheck.comparisons.present import frames
         return frames.to_xarray(self)
 
     def to_netcdf(self, path: str | Path) -> Path:
         """Write :meth:`to_xarray` as a netCDF file (atomically; never over a file that
         is not a wearcheck netCDF file)."""
-        from wearcheck.comparisons.present import frames
         return frames.write_netcdf(self, path)
 
     def write(self, out: str | Path) -> Path:
@@ -191,7 +192,6 @@ def _progress(progress, label):
     if callable(progress):
         return (lambda fraction, text="": progress(fraction)), None
     if progress:
-        from wearcheck.comparisons.present.progress import ProgressBar
         bar = ProgressBar(label)
         return bar, bar
     return None, None
@@ -260,7 +260,6 @@ def reference(name: str) -> Result:
     (method, levels, observed orders, the other solvers' spread, provenance).
     ``result.write(path)`` writes it as a run directory.
     """
-    from wearcheck.references import certified
     ref = certified.load(name)
     run = ref.run_result()
     sc = ref.scales
@@ -287,10 +286,11 @@ def verify(case: str | Path | Case, results: str | Path, out: str | Path, *,
     ``["p [MPa]=CONTACT.CPRESS"]`` as ``--map``. Returns the metrics as in
     ``metrics.json``; ``["passed"]`` is the verdict.
     """
-    from wearcheck.external import parse_mapping
-    from wearcheck.studies.verify import verify as _verify
     if mapping is not None and not isinstance(mapping, Mapping):
         mapping = parse_mapping([mapping] if isinstance(mapping, str) else list(mapping))
+    # lazy (b): the studies' modules made `import wearcheck` 1.10x slower (measured:
+    # docs/performance.md, "Measurements behind the code")
+    from wearcheck.studies.verify import verify as _verify
     return _verify(load_case(case), results, out, mapping=dict(mapping or {}),
                    reference_solver=reference_solver, quiet=quiet)
 
@@ -306,7 +306,6 @@ def compare(case: str | Path | Case, out: str | Path, *, solvers: Iterable[str] 
 
     Returns the metrics as in ``metrics.json``; ``["passed"]`` is the verdict.
     """
-    from wearcheck.studies.compare import compare as _compare
     if isinstance(solvers, str):
         # "mdr,fem" as on the command line (--solvers)
         solvers = [name.strip() for name in solvers.split(",") if name.strip()] or [solvers]
@@ -315,6 +314,9 @@ def compare(case: str | Path | Case, out: str | Path, *, solvers: Iterable[str] 
         if not solvers:
             raise CaseError("solvers = []: name at least two solvers, or None for every "
                             "solver that supports the case")
+    # lazy (b): the studies' modules made `import wearcheck` 1.10x slower (measured:
+    # docs/performance.md, "Measurements behind the code")
+    from wearcheck.studies.compare import compare as _compare
     return _compare(load_case(case), out, solvers=solvers,
                     reference_solver=reference_solver, edge=edge_study, sphere=sphere_sweep,
                     render=render, quiet=quiet)
@@ -326,6 +328,8 @@ def refine(case: str | Path | Case, out: str | Path, solver: str = "mdr", *,
            quiet: bool = True) -> dict:
     """A refinement study on Dask (paper Fig. 4): returns its summary (observed orders,
     Richardson's estimate, coarsest converged level); run directories go to ``out``."""
+    # lazy (b): the studies load asyncio (refine also scipy.optimize), which `import
+    # wearcheck` leaves out (tests/test_cli_startup.py; docs/performance.md, "Start-up")
     from wearcheck.studies.refine import refine as _refine
     case = load_case(case)
     levels = None if levels is None else [_plain(v) for v in _listed(levels, "levels")]
@@ -348,6 +352,8 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
     Returns the rows of ``sweep.csv`` (the varied values, final ŝ, F/F0, wear
     depth, status per run).
     """
+    # lazy (b): the studies load asyncio (refine also scipy.optimize), which `import
+    # wearcheck` leaves out (tests/test_cli_startup.py; docs/performance.md, "Start-up")
     from wearcheck.studies.sweep import sweep as _sweep
     case = load_case(case)
     if isinstance(vary, str):
@@ -361,7 +367,8 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
 def fit(case: str | Path | Case, data, keys: str | Iterable[str] = ("wear.specific_rate",), *,
         out: str | Path | None = None, exponents: Iterable[float] | None = None,
         scheduler: str | None = None, workers: int | None = None, quiet: bool = True):
-    """Fit a ball's wear coefficients to measurements, as ``wearcheck fit`` does.
+    """Fit a ball's (and a wearing counterface's) wear coefficients to measurements, as
+    ``wearcheck fit`` does.
 
     Parameters
     ----------
@@ -372,7 +379,10 @@ def fit(case: str | Path | Case, data, keys: str | Iterable[str] = ("wear.specif
         (a pandas DataFrame works).
     keys : ``"wear.specific_rate"``, optionally with ``"wear.pressure_exponent"``
         (then one run per exponent of ``exponents``, default 1, 1.25, ..., 4, on
-        Dask: ``scheduler``, ``workers`` as for :func:`sweep`).
+        Dask: ``scheduler``, ``workers`` as for :func:`sweep`); with a counterface
+        that wears, ``"counterface.specific_rate"`` and/or ``"wear.specific_rate"``
+        against the BEM's long-stroke model (one run per ratio K_flat/K_ball of a
+        scan; on Dask when ``scheduler`` or ``workers`` is given).
     out : also write a fit directory there (fit.json, measurements.csv, fit.png,
         the fitted case, meta.json).
 
@@ -390,6 +400,8 @@ def fit(case: str | Path | Case, data, keys: str | Iterable[str] = ("wear.specif
     CaseError
         bad keys, case or data (one message naming the file, row and column).
     """
+    # lazy (b): loads numerics.stepping and the fit's tables, which `import wearcheck` and
+    # listing the solvers leave out (tests/test_registry_entries.py)
     from wearcheck.studies import fit as _fit
     result = _fit.fit(load_case(case), data, keys, exponents=exponents, scheduler=scheduler,
                       workers=workers, quiet=quiet)
@@ -428,5 +440,4 @@ def export_vtk(run_dir: str | Path, revolve: int = 0) -> Path:
 
     ``revolve`` N >= 3 also writes the FEM fields revolved into a 3D solid.
     """
-    from wearcheck.comparisons.present.vtk import export_run
     return export_run(run_dir, revolve=revolve)

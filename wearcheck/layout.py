@@ -257,14 +257,16 @@ FIT_COLUMNS = (
     Item("row", "", "the row of the measurement file (its line number)"),
     Item("cycles", "", "cycles (empty when neither the sheet nor the stroke gives them)"),
     Item("s", "m", "sliding distance"),
-    Item("quantity", "", "scar_diameter, ball_volume or wear_center"),
-    Item("unit", "", "the unit of measured, uncertainty and model: m or m^3"),
+    Item("quantity", "", "scar_diameter, ball_volume, wear_center, track_width, track_depth, "
+                         "track_area or track_volume"),
+    Item("unit", "", "the unit of measured, uncertainty and model: m, m^2 or m^3"),
     Item("measured", "(unit)", "the measured value"),
     Item("uncertainty", "(unit)", "its ± uncertainty (empty when the sheet gives none)"),
     Item("model", "(unit)", "the fitted model's value"),
     Item("residual", "", "(measured − model)/uncertainty, or ln(measured/model) without "
                          "uncertainties"),
-    Item("lab_K", "m^3/(N m)", "the lab formula's K = V_lab/(F s) of this measurement"),
+    Item("lab_K", "m^3/(N m)", "the lab formula's K = V_lab/(F s) of this measurement (the "
+                               "counterface's for a track quantity)"),
 )
 
 

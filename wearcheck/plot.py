@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from wearcheck.extras import need
+from wearcheck.comparisons.present import frames
 
 __all__ = ["history", "stages"]
 
@@ -52,7 +53,6 @@ def _label(name: str, unit: str, scaled: bool) -> str:
 
 
 def _units(result) -> dict:
-    from wearcheck.comparisons.present import frames
     d = frames.dictionary(result)
     return {**{k: v.get("unit", "") for k, v in d["stages_npz"].items()},
             **{k: v.get("unit", "") for k, v in d["history_csv"].items()}}

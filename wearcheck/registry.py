@@ -31,6 +31,7 @@ import numpy as np
 from wearcheck import extras
 from wearcheck.cases import Case, CaseError, RunResult, SolverError
 from wearcheck.cases.result import Item  # noqa: F401  (registrations import it from here)
+from wearcheck.cases.schema import SECTIONS
 
 __all__ = ["Item", "Solver", "register", "unregister", "get", "names", "supporting", "solve",
            "lazy_attributes"]
@@ -180,7 +181,6 @@ def register(solver: Solver, *, replace: bool = False) -> Solver:
     """
     import re
 
-    from wearcheck.cases.schema import SECTIONS
     if not re.fullmatch(r"[a-z][a-z0-9_-]*", solver.name or ""):
         raise ValueError(f"solver name '{solver.name}': use lower-case letters, digits, '_' "
                          "and '-', starting with a letter (it names directories and keys)")

@@ -15,6 +15,7 @@ import shutil
 from pathlib import Path
 
 from wearcheck import cases
+from wearcheck import registry
 
 #: share of the available memory one run may plan to use (the estimates are
 #: rough, and the OS, Dask and the other workers need some)
@@ -34,6 +35,7 @@ def available_memory() -> float:
     except (OSError, ValueError, IndexError):
         pass
     try:
+        # lazy (a): psutil is optional (with the "dask" extra); also (b): 0.1 s of start-up
         import psutil
         return float(psutil.virtual_memory().available)
     except Exception:  # psutil comes with distributed; be safe without it
@@ -65,7 +67,6 @@ def _estimator(solver: str):
     """The solver package's ``resources`` module (next to its ``solve``), or None."""
     module = f"wearcheck.{solver}"
     try:
-        from wearcheck import registry
         module = registry.get(solver).module or module
     except Exception:  # an unknown name: the solve reports it
         pass

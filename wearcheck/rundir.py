@@ -28,6 +28,8 @@ from wearcheck import cases, extras, layout
 from wearcheck.cases import reference
 from wearcheck.cases.result import HISTORY_COLUMNS, RunResult
 from wearcheck.outputs import atomic_directory
+from wearcheck import registry
+from wearcheck.outputs import is_partial, read_marker, recover
 
 #: the packages whose versions every output records: the core's, then the extras'
 #: (None when not installed)
@@ -191,7 +193,6 @@ def write_run_files(directory: Path, case: cases.Case, result: RunResult, solver
 
 
 def _registered(solver: str):
-    from wearcheck import registry
     try:
         return registry.get(solver)
     except cases.CaseError:  # e.g. a stand-in solver of a test
@@ -212,7 +213,6 @@ class Run:
     """A run directory read back: case, history, stages, meta."""
 
     def __init__(self, path: str | Path):
-        from wearcheck.outputs import is_partial, recover
         self.path = Path(path)
         if is_partial(self.path):
             raise cases.CaseError(f"'{self.path}' is an incomplete run directory (a .partial "
@@ -314,7 +314,6 @@ def _refuse_other_output(path: Path) -> None:
     Their ``meta.json`` (a study's) or ``metrics.json`` would otherwise be read
     as a damaged run, which sends the user looking for damage that is not there.
     """
-    from wearcheck.outputs import read_marker
     marker = read_marker(path)
     kind = marker.get("kind") if marker else None
     if kind in (None, "run", "legacy"):

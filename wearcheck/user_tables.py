@@ -21,7 +21,6 @@ column. Used by ``wearcheck fit`` and meant for every reader of user tables.
 
 from __future__ import annotations
 
-import csv
 import math
 import re
 from dataclasses import dataclass, field
@@ -31,30 +30,18 @@ from typing import Iterable, Mapping
 import numpy as np
 
 from wearcheck.cases import CaseError
+from wearcheck.cases import tables as shared
 
-_PREFIXES = {"": 1.0, "k": 1e3, "c": 1e-2, "m": 1e-3, "u": 1e-6, "µ": 1e-6, "μ": 1e-6,
-             "n": 1e-9}
-_POWERS = {1: ("",), 2: ("^2", "2", "²", "**2"), 3: ("^3", "3", "³", "**3")}
-
-
-def _metre_units(power: int) -> dict[str, float]:
-    out = {}
-    for prefix, factor in _PREFIXES.items():
-        if prefix == "k":
-            continue
-        for written in _POWERS[power]:
-            out[f"{prefix}m{written}"] = factor ** power
-    return out
-
-
-#: the units each dimension accepts, with their factor to SI
+_PREFIXES = {"": 1.0, "c": 1e-2, "m": 1e-3, "u": 1e-6, "µ": 1e-6, "μ": 1e-6, "n": 1e-9}
+#: the units each dimension accepts here, with their factor to SI: the shared table
+#: (:data:`wearcheck.cases.tables.UNITS`) without kilometres and their squares and cubes
+#: (no lab measures a scar or a track in them: a km there is a slip of the unit).
+#: Spellings as :func:`wearcheck.cases.tables.normal_unit` reads them: ``um``, ``µm``,
+#: ``μm``; ``mm^3``, ``mm3``, ``mm³``
 UNITS: dict[str, dict[str, float]] = {
-    "length": _metre_units(1),
-    "area": _metre_units(2),
-    "volume": _metre_units(3),
-    "force": {"N": 1.0, "mN": 1e-3, "kN": 1e3, "uN": 1e-6, "µN": 1e-6, "μN": 1e-6},
-    "count": {"": 1.0, "1": 1.0, "-": 1.0},
-}
+    dim: {u: f for u, f in shared.UNITS[dim].items() if not u.startswith("km")}
+    for dim in ("length", "area", "volume", "force")}
+UNITS["count"] = dict(shared.UNITS["number"])
 #: how each dimension's SI unit is written in messages
 SI = {"length": "m", "area": "m^2", "volume": "m^3", "force": "N", "count": "1"}
 
@@ -114,10 +101,6 @@ def _key(text: str) -> str:
     return re.sub(r"[\s_\-]+", "", text).lower()
 
 
-_HEADER = re.compile(r"^\s*(?P<pm>±|\+-|\+/-)?\s*(?P<name>[^\[\]]*?)\s*"
-                     r"(?:\[\s*(?P<unit>[^\[\]]*?)\s*\])?\s*$")
-
-
 def _lookup(name: str, quantities: Iterable[Quantity]) -> Quantity | None:
     k = _key(name)
     for q in quantities:
@@ -130,37 +113,33 @@ def _parse_header(cells: list[str], quantities: list[Quantity], where: str):
     """[(column index, quantity, is_uncertainty, unit text, factor, header text)]."""
     out, seen = [], {}
     for j, text in enumerate(cells):
-        header = text.strip()
-        at = f"{where}, column {j + 1} '{header}'"
-        m = _HEADER.match(header)
-        if not header or m is None or not m.group("name"):
+        h = shared.parse_header(text)
+        at = f"{where}, column {j + 1} '{h.text}'"
+        if not h.name:
             raise CaseError(f"{at}: a header must be a quantity and its unit, e.g. 'D [um]'; "
                             "known: " + _known(quantities))
-        q = _lookup(m.group("name"), quantities)
+        q = _lookup(h.name, quantities)
         if q is None:
-            raise CaseError(f"{at}: unknown column '{m.group('name')}'; known: "
-                            + _known(quantities))
+            raise CaseError(f"{at}: unknown column '{h.name}'; known: " + _known(quantities))
         if q.refused:
             raise CaseError(f"{at}: {q.refused}")
-        pm = m.group("pm") is not None
-        unit = m.group("unit")
+        pm, unit = h.uncertainty, h.unit
         if unit is None and not pm and q.dimension != "count":
-            raise CaseError(f"{at}: no unit; write it in brackets, e.g. '{m.group('name')} "
+            raise CaseError(f"{at}: no unit; write it in brackets, e.g. '{h.name} "
                             f"[{_example_unit(q.dimension)}]' (allowed: "
                             f"{_allowed(q.dimension)})")
         factor = None
         if unit is not None:
-            units = UNITS[q.dimension]
-            if unit not in units:
+            factor = shared.unit_factor(unit, q.dimension, UNITS)
+            if factor is None:
                 raise CaseError(f"{at}: unknown unit '{unit}' for {q.meaning or q.name} "
                                 f"({q.dimension}); allowed: {_allowed(q.dimension)}")
-            factor = units[unit]
         slot = (q.name, pm)
         if slot in seen:
             raise CaseError(f"{at}: {'an uncertainty of ' if pm else ''}'{q.name}' is also "
                             f"column {seen[slot] + 1}; give each column once")
         seen[slot] = j
-        out.append((j, q, pm, unit, factor, header))
+        out.append((j, q, pm, unit, factor, h.text))
     for j, q, pm, unit, factor, header in out:
         if pm and (q.name, False) not in seen:
             raise CaseError(f"{where}, column {j + 1} '{header}': an uncertainty without its "
@@ -187,19 +166,6 @@ def _example_unit(dimension: str) -> str:
     return {"length": "um", "area": "um^2", "volume": "mm^3", "force": "N"}.get(dimension, "")
 
 
-def _number(text: str, at: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        hint = ""
-        if re.fullmatch(r"[+-]?\d+,\d+", text.strip()):
-            hint = " (a decimal comma? write a point: the comma separates columns)"
-        raise CaseError(f"{at}: '{text}' is not a number{hint}") from None
-    if not math.isfinite(value):
-        raise CaseError(f"{at}: '{text}' is not a finite number")
-    return value
-
-
 def read_table(path: str | Path, quantities: Iterable[Quantity]) -> Table:
     """Read a CSV whose header names each column as a quantity and its unit.
 
@@ -218,23 +184,13 @@ def read_table(path: str | Path, quantities: Iterable[Quantity]) -> Table:
     CaseError
         one line naming the file, the row and the column of the fault.
     """
-    path = Path(path)
     where = f"file '{path}'"
-    if path.is_dir():
-        raise CaseError(f"{where} is a directory, not a CSV file")
-    if not path.is_file():
-        raise CaseError(f"{where} does not exist")
-    try:
-        with open(path, newline="", encoding="utf-8-sig") as fh:
-            lines = list(csv.reader(fh, skipinitialspace=True))
-    except UnicodeDecodeError as exc:
-        raise CaseError(f"{where} is not UTF-8 text ({exc.reason} at byte {exc.start}); save "
-                        "it as UTF-8") from None
-    except (OSError, csv.Error) as exc:
-        raise CaseError(f"{where} cannot be read: {exc}") from None
-    numbered = [(i, row) for i, row in enumerate(lines, start=1)
-                if any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
-    return _table(where, numbered, list(quantities))
+    numbered = shared.data_lines(shared.read_lines(path, where))
+    head = numbered[:1]
+    if head and any(sep in head[0][1] for sep in (";", "\t")) and "," not in head[0][1]:
+        sep = "semicolons" if ";" in head[0][1] else "tabs"
+        raise CaseError(f"{where}, row {head[0][0]}: columns are separated by commas, not {sep}")
+    return _table(where, shared.split_cells(numbered, ",", where), list(quantities))
 
 
 def from_columns(data: Mapping[str, Iterable], quantities: Iterable[Quantity],
@@ -264,9 +220,6 @@ def _table(where: str, numbered: list, quantities: list[Quantity]) -> Table:
         raise CaseError(f"{where} is empty: it needs a header row and at least one row of "
                         "numbers")
     head_line, head = numbered[0]
-    if len(head) == 1 and any(sep in head[0] for sep in (";", "\t")):
-        sep = "semicolons" if ";" in head[0] else "tabs"
-        raise CaseError(f"{where}, row {head_line}: columns are separated by commas, not {sep}")
     spec = _parse_header(head, quantities, f"{where}, row {head_line}")
     width = len(head)
     values = {j: [] for j, *_ in spec}
@@ -284,7 +237,7 @@ def _table(where: str, numbered: list, quantities: list[Quantity]) -> Table:
             if not text:
                 values[j].append(math.nan)
                 continue
-            value = _number(text, at)
+            value = shared.number(text, at)
             if value < 0:
                 raise CaseError(f"{at}: {text} is negative; {q.meaning or q.name} "
                                 f"{'uncertainties are' if pm else 'is'} at least 0")
@@ -300,7 +253,8 @@ def _table(where: str, numbered: list, quantities: list[Quantity]) -> Table:
     for j, q, pm, unit, factor, header in spec:
         if pm:
             col = columns[q.name]
-            scale = factor if factor is not None else UNITS[q.dimension].get(col.unit, 1.0)
+            scale = factor if factor is not None else (
+                shared.unit_factor(col.unit, q.dimension, UNITS) or 1.0)
             u = np.asarray(values[j], float) * scale
             col.uncertainty, col.uncertainty_header = u, header
     table = Table(where, columns, np.asarray(rows, int))

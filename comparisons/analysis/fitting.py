@@ -31,17 +31,26 @@ from dataclasses import dataclass
 import numpy as np
 import scipy
 
-from wearcheck.cases import reference
-from wearcheck.comparisons.analysis import scar
+from wearcheck.cases import both_bodies, reference
+from wearcheck.comparisons.analysis import scar, track
 
 #: the quantities a ball's measurements may hold, and the long-run growth of each
 #: with sliding (worn sphere under a constant force: b ∝ s^(1/(2(n+1)))):
 #: exponents of b in D = 2b, V = π b⁴/4R, h = b²/2R
-QUANTITIES = ("scar_diameter", "ball_volume", "wear_center")
+BALL_QUANTITIES = ("scar_diameter", "ball_volume", "wear_center")
+#: the counterface's track (both bodies wearing: the BEM's long-stroke model)
+TRACK_QUANTITIES = ("track_width", "track_depth", "track_area", "track_volume")
+QUANTITIES = BALL_QUANTITIES + TRACK_QUANTITIES
 #: how each quantity is named in tables, and its SI unit
 LABELS = {"scar_diameter": ("scar diameter D", "m"), "ball_volume": ("ball volume V", "m^3"),
-          "wear_center": ("central wear depth h", "m")}
+          "wear_center": ("central wear depth h", "m"),
+          "track_width": ("track width w", "m"), "track_depth": ("track depth", "m"),
+          "track_area": ("track cross-section A", "m^2"),
+          "track_volume": ("track volume", "m^3")}
 _B_POWER = {"scar_diameter": 1.0, "ball_volume": 4.0, "wear_center": 2.0}
+#: the widths: at the start of wear the unworn contact's (constant in ŝ); every other
+#: quantity grows ∝ ŝ there (the unworn contact's pressure wears both bodies)
+_WIDTHS = ("scar_diameter", "track_width")
 #: the 95 % level of every interval
 LEVEL = 0.95
 #: the level below which a goodness-of-fit p-value says the model does not fit
@@ -56,14 +65,17 @@ class Curves:
 
     ``s_hat`` (M,) increasing and positive; ``values[name]`` (M,) positive.
     Read with :meth:`__call__`: inside the run a monotone cubic (PCHIP) in
-    ln ŝ – ln y; below it the start of wear (the scar the unworn contact,
-    volume and depth ∝ ŝ); beyond it the long-run power law
-    y ∝ ŝ^(p/(2(n+1))) (p = 1, 4, 2 for D, V, h).
+    ln ŝ – ln y; below it the start of wear (the widths the unworn contact's,
+    volumes, depths and areas ∝ ŝ); beyond it, with ``tail = "law"`` (the
+    ball alone), the long-run power law y ∝ ŝ^(p/(2(n+1))) (p = 1, 4, 2 for D,
+    V, h); with ``tail = "local"`` (both bodies wearing, no such law) the
+    power law of the run's last step.
     """
 
     s_hat: np.ndarray
     values: dict
     exponent: float
+    tail: str = "law"
 
     def __post_init__(self):
         s = np.asarray(self.s_hat, float)
@@ -88,9 +100,13 @@ class Curves:
         lo, hi = math.log(self.s_hat[0]), math.log(self.s_hat[-1])
         y = self._fits[name](np.clip(x, lo, hi))
         below, above = x < lo, x > hi
-        if name != "scar_diameter":   # V, h ∝ ŝ at the start of wear
+        if name not in _WIDTHS:   # V, h, the track's depth and area ∝ ŝ at the start of wear
             y = np.where(below, y + (x - lo), y)
-        slope = _B_POWER[name] / (2.0 * (self.exponent + 1.0))
+        if self.tail == "law":
+            slope = _B_POWER[name] / (2.0 * (self.exponent + 1.0))
+        else:
+            ln_s, ln_y = np.log(self.s_hat[-2:]), np.log(np.asarray(self.values[name][-2:], float))
+            slope = float((ln_y[1] - ln_y[0]) / (ln_s[1] - ln_s[0]))
         y = np.where(above, y + slope * (x - hi), y)
         return np.exp(y)
 
@@ -102,6 +118,33 @@ class ExponentCurves:
 
     exponents: np.ndarray
     curves: tuple
+
+
+@dataclass(frozen=True)
+class RatioCurves:
+    """Both bodies wearing (n = 1, a constant force): curves at several ratios
+    ρ = K_flat/K_ball (``log_ratios`` ln ρ, increasing, at least 4), each against
+    ŝ = K_ball E* s/a0, read between them by a cubic spline across ln ρ of ln y
+    (:func:`predict_rates`).
+
+    Scaling both rates by c is scaling s by c (each body wears by K_body ∫ p ds
+    from the same contact), so at a fixed ratio the worn state is a function of
+    K_ball·s: one run per ratio serves every overall scale.
+    """
+
+    log_ratios: np.ndarray
+    curves: tuple
+
+    def __post_init__(self):
+        # the spline is linear in the values it interpolates: its cardinal functions,
+        # built once, give it at any ln ρ as weights on the runs' values
+        object.__setattr__(self, "_cardinal", scipy.interpolate.CubicSpline(
+            np.asarray(self.log_ratios, float), np.eye(len(self.curves)), axis=0))
+
+    def weights(self, log_ratio: float) -> np.ndarray:
+        """The spline's weights on the runs at ln ρ = log_ratio: Σ_j w_j y_j is the
+        not-a-knot cubic spline through (ln ρ_j, y_j) there."""
+        return self._cardinal(log_ratio)
 
 
 # -- the misfit -----------------------------------------------------------------
@@ -147,6 +190,21 @@ def predict_between(family: ExponentCurves, data: Data, log_K: float, n: float,
     ln m (not-a-knot), from each run's prediction at the same K."""
     logs = np.array([np.log(predict(c, data, log_K, s_hat_per_K_m)) for c in family.curves])
     return np.exp(scipy.interpolate.CubicSpline(family.exponents, logs, axis=0)(n))
+
+
+def predict_rates(family: RatioCurves, data: Data, log_K_ball: float, log_K_flat: float,
+                  s_hat_per_K_m: float) -> np.ndarray:
+    """Both bodies wearing: the prediction at K_ball = exp(log_K_ball) and K_flat =
+    exp(log_K_flat), a cubic spline across ln ρ (not-a-knot) of ln m, from each run's
+    prediction at the same K_ball."""
+    return _across_ratios(family, data, log_K_ball, s_hat_per_K_m)(log_K_flat - log_K_ball)
+
+
+def _across_ratios(family: RatioCurves, data: Data, log_K_ball: float, s_hat_per_K_m: float):
+    """r -> the prediction at ln ρ = r and this K_ball (the runs read once)."""
+    logs = np.array([np.log(predict(c, data, log_K_ball, s_hat_per_K_m))
+                     for c in family.curves])
+    return lambda r: np.exp(family.weights(r) @ logs)
 
 
 def residuals(data: Data, model: np.ndarray) -> np.ndarray:
@@ -260,6 +318,26 @@ def lab_volume(quantity: str, y, R: float) -> np.ndarray:
     return y
 
 
+def lab_track_volume(quantity: str, y, R: float, sliding) -> np.ndarray:
+    """The counterface's worn volume as labs compute it, as if the ball were unworn:
+    from the track width w the G133 flat (stroke·A_seg(w, R) plus the ends' cap) or the
+    G99 disc (2π R_track·A_seg(w, R)) (:mod:`comparisons.analysis.track`); from the
+    depth δ the same groove of sagitta δ over the pass length L; from the
+    cross-section A, L·A (a profilometer's reading); the volume itself when measured."""
+    y = np.asarray(y, float)
+    L = both_bodies.pass_length(sliding)
+    if quantity == "track_width":
+        if sliding.motion == "unidirectional":
+            return track.disc_volume(y, R, sliding.track_radius)
+        return track.flat_volume(y, R, sliding.stroke)
+    if quantity == "track_depth":
+        width = 2.0 * np.sqrt(np.maximum(2.0 * R * y - y**2, 0.0))
+        return L * track.segment_area(width, R)
+    if quantity == "track_area":
+        return L * y
+    return y
+
+
 def lab_rate(V_lab, force: float, s) -> tuple[np.ndarray, float]:
     """The specific wear rates K = V/(F s) of each measurement, and the least-squares
     line V = K·F·s through the origin over all of them."""
@@ -355,6 +433,117 @@ def fit_rate_and_exponent(family: ExponentCurves, data: Data, s_hat_per_K_m: flo
                 misfit=s_min, level=level,
                 model=predict_between(family, data, u, n, s_hat_per_K_m),
                 goodness_of_fit=_goodness(data, s_min, trend, 2))
+
+
+def fit_rates(family: RatioCurves, data: Data, s_hat_per_K_m: float, free: tuple,
+              log_K_ball: float, log_K_flat: float, lo: float, hi: float) -> dict:
+    """Fit the rates of both bodies wearing, or one of them with the other held.
+
+    Parameters
+    ----------
+    family : the runs at several ratios ρ = K_flat/K_ball.
+    free : the rates fitted, a non-empty subset of ("ball", "flat").
+    log_K_ball, log_K_flat : ln K of each (the value of a held one; a free one's is unused).
+    lo, hi : the range of ln K_ball searched (when it is free).
+
+    The ratio stays within the family's: ln ρ in [r0, r1]. Each interval is the
+    profile of its parameter (the other minimised where free). Returns log_K_ball,
+    log_K_flat, intervals {"ball"/"flat": (a, b)} of the free ones (an end None
+    where the profile stays below the level within the range: at the end of the
+    ratio scan, or of [lo, hi]), ``log_ratios`` (ln ρ at the estimate and at each
+    interval end: the study extends its scan where they reach its ends), the least
+    misfit, the model at the estimate and the goodness of fit.
+    """
+    free = tuple(f for f in ("ball", "flat") if f in free)
+    if not free:
+        raise ValueError("free: at least one of 'ball', 'flat'")
+    r0, r1 = float(family.log_ratios[0]), float(family.log_ratios[-1])
+
+    def S(u, r):
+        return misfit(data, predict_rates(family, data, u, u + r, s_hat_per_K_m))
+    intervals, reached = {}, []
+    if free == ("flat",):
+        u = log_K_ball
+        at_u = _across_ratios(family, data, u, s_hat_per_K_m)
+
+        def S_r(r):
+            return misfit(data, at_u(r))
+        r, s_min = minimise(S_r, r0, r1)
+        level = threshold(data, s_min, 1)
+        a, b = interval(S_r, r, level, r0, r1)
+        intervals["flat"] = (None if a is None else u + a, None if b is None else u + b)
+        reached = [r] + [e if e is not None else (r0 if k == 0 else r1)
+                         for k, e in enumerate((a, b))]
+
+        def trend():
+            return minimise(lambda x: trend_rss(data, at_u(x)), r0, r1, points=41)[1]
+    elif free == ("ball",):
+        v = log_K_flat
+        u_lo, u_hi = max(lo, v - r1), min(hi, v - r0)
+        if not u_lo < u_hi:
+            raise ValueError("the held K_flat leaves no K_ball within the ratio scan")
+
+        def S_u(x):
+            return S(x, v - x)
+        u, s_min = minimise(S_u, u_lo, u_hi)
+        r = v - u
+        level = threshold(data, s_min, 1)
+        a, b = interval(S_u, u, level, u_lo, u_hi)
+        intervals["ball"] = (a, b)
+        reached = [r, v - (b if b is not None else u_hi), v - (a if a is not None else u_lo)]
+
+        def trend():
+            return minimise(lambda x: trend_rss(data, predict_rates(
+                family, data, x, v, s_hat_per_K_m)), max(u_lo, u - 3.0), min(u_hi, u + 3.0),
+                points=31)[1]
+    else:
+        starts = []
+        for j, cv in enumerate(family.curves):
+            x, f = minimise(lambda y: misfit(data, predict(cv, data, y, s_hat_per_K_m)), lo, hi,
+                            points=121)
+            starts.append((f, x, float(family.log_ratios[j])))
+        f0, u, r = min(starts)
+        res = scipy.optimize.minimize(lambda t: S(t[0], t[1]), [u, r], method="Nelder-Mead",
+                                      bounds=[(lo, hi), (r0, r1)],
+                                      options=dict(xatol=1e-9, fatol=1e-14, maxiter=4000))
+        s_min = f0
+        if res.fun < f0:
+            u, r, s_min = float(res.x[0]), float(res.x[1]), float(res.fun)
+        level = threshold(data, s_min, 2)
+
+        def profile_ball(x):          # (ln ρ, the least misfit) at ln K_ball = x, over ln ρ
+            at_x = _across_ratios(family, data, x, s_hat_per_K_m)
+            return minimise(lambda y: misfit(data, at_x(y)), r0, r1, points=25)
+
+        def profile_flat(w):          # (ln ρ, the least misfit) at ln K_flat = w, over K_ball
+            a_, b_ = max(lo, w - r1), min(hi, w - r0)
+            if not a_ < b_:
+                return r0, math.inf
+            x, f = minimise(lambda y: S(y, w - y), a_, b_, points=25)
+            return w - x, f
+        a, b = interval(lambda x: profile_ball(x)[1], u, level, lo, hi)
+        intervals["ball"] = (a, b)
+        v = u + r
+        c_, d_ = interval(lambda w: profile_flat(w)[1], v, level, lo + r0, hi + r1)
+        intervals["flat"] = (c_, d_)
+        reached = [r]
+        for end, edge in ((a, r0), (b, r1)):
+            reached.append(profile_ball(end)[0] if end is not None else edge)
+        for end, edge in ((c_, r0), (d_, r1)):
+            reached.append(profile_flat(end)[0] if end is not None else edge)
+
+        def trend():
+            t = scipy.optimize.minimize(
+                lambda p: trend_rss(data, predict_rates(family, data, p[0], p[0] + p[1],
+                                                        s_hat_per_K_m)),
+                [u, r], method="Nelder-Mead", bounds=[(lo, hi), (r0, r1)],
+                options=dict(xatol=1e-9, fatol=1e-14, maxiter=4000))
+            return float(t.fun)
+    log_K_flat = u + r
+    return dict(log_K_ball=u, log_K_flat=log_K_flat, intervals=intervals,
+                log_ratios=[float(x) for x in reached], misfit=s_min, level=level,
+                model=predict_rates(family, data, u, log_K_flat, s_hat_per_K_m),
+                goodness_of_fit=_goodness(data, s_min, trend, len(free)))
 
 
 def _goodness(data: Data, s_min: float, trend, n_parameters: int) -> dict:

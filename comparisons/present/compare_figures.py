@@ -111,6 +111,7 @@ def try_render(run_dirs) -> dict:
     """
     notes = []
     try:
+        # lazy (a): the renderer (pyvista, the optional "vtk" extra); a failure is a note
         from wearcheck.comparisons.present import render as render_mod
     except Exception as exc:  # noqa: BLE001 - a missing or broken renderer is a note
         render_mod = None

@@ -22,6 +22,7 @@ MAX_MARKERS = 70
 def _pyplot():
     matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
+    # lazy (a): matplotlib, the optional "plot" extra
     import matplotlib.pyplot as plt
     return plt
 

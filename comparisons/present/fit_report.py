@@ -8,20 +8,35 @@ import math
 import numpy as np
 
 from wearcheck.extras import need
+from wearcheck.comparisons.analysis.fitting import LABELS, lab_track_volume
 
 #: how each quantity is drawn: label, unit shown and factor from SI
 _SHOWN = {"scar_diameter": ("scar diameter D", "µm", 1e6),
           "ball_volume": ("ball volume V", "mm³", 1e9),
-          "wear_center": ("central wear depth h", "µm", 1e6)}
+          "wear_center": ("central wear depth h", "µm", 1e6),
+          "track_width": ("track width w", "µm", 1e6),
+          "track_depth": ("track depth", "µm", 1e6),
+          "track_area": ("track cross-section A", "µm²", 1e12),
+          "track_volume": ("track volume", "mm³", 1e9)}
 
 
-def _lab_line(quantity, K_lab, s, R, F):
-    """The lab formula's quantity for V = K F s (inverting π D⁴/64R, π h²(3R − h)/3 ≈ π R h²)."""
-    V = K_lab * F * s
+def _lab_line(quantity, K_lab, s, case):
+    """The lab formula's quantity for V = K F s (inverting π D⁴/64R, π h²(3R − h)/3 ≈ π R h²,
+    and the track's formulas, the width's and depth's numerically)."""
+    R, F = case.indenter.radius, case.loading.force
+    V = K_lab * F * np.asarray(s, float)
     if quantity == "scar_diameter":
         return (64.0 * R * V / math.pi) ** 0.25
     if quantity == "wear_center":
         return np.sqrt(V / (math.pi * R))
+    if quantity in ("track_width", "track_depth"):
+        # the formula's volume grows monotonically with w (δ) up to the ball's 2R (R)
+        top = 2.0 * R if quantity == "track_width" else R
+        grid = np.geomspace(top * 1e-7, top, 4000)
+        return np.interp(V, lab_track_volume(quantity, grid, R, case.sliding), grid,
+                         right=np.nan)
+    if quantity == "track_area":
+        return V / lab_track_volume("track_area", 1.0, R, case.sliding)
     return V
 
 
@@ -35,6 +50,7 @@ def figure(result, path=None, axes=None):
     matplotlib = need("matplotlib", "drawing figures")
     if axes is None and path is not None:
         matplotlib.use("Agg", force=False)
+    # lazy (a): matplotlib, the optional "plot" extra
     import matplotlib.pyplot as plt
     rows = result.measurements
     quantities = [q for q in _SHOWN if any(r["quantity"] == q for r in rows)]
@@ -46,8 +62,11 @@ def figure(result, path=None, axes=None):
     x_of = (lambda s: np.asarray(s) * case.cycles_per_metre) if cycles else (lambda s: s)
     xlabel = "cycles" if cycles else "sliding distance s [m]"
     s_curve, model = result.curve
-    K = result.parameters["wear.specific_rate"]["value"]
+    solver = result.model["solver"].upper()
+    fitted = result.fitted_case
     for ax, q in zip(axes, quantities):
+        track = q.startswith("track_")
+        K = fitted.counterface_wear_rate if track else fitted.wear_rate
         label, unit, f = _SHOWN[q]
         mine = [r for r in rows if r["quantity"] == q]
         s = np.array([r["s"] for r in mine])
@@ -55,12 +74,12 @@ def figure(result, path=None, axes=None):
         err = [r["uncertainty"] for r in mine]
         ax.errorbar(x_of(s), y * f, yerr=None if err[0] is None else np.array(err) * f,
                     fmt="o", ms=4, color="k", label="measured")
+        name = "K_flat" if track else "K"
         ax.plot(x_of(s_curve), model[q] * f, "-", color="C0",
-                label=f"MDR, K = {K:.3g} m³/(N·m)")
+                label=f"{solver}, {name} = {K:.3g} m³/(N·m)")
         K_lab = result.lab[q]["K"]
-        ax.plot(x_of(s_curve), _lab_line(q, K_lab, s_curve, case.indenter.radius,
-                                         case.loading.force) * f, "--", color="C1",
-                label=f"lab formula, K = {K_lab:.3g}")
+        ax.plot(x_of(s_curve), _lab_line(q, K_lab, s_curve, case) * f, "--", color="C1",
+                label=f"lab formula, {name} = {K_lab:.3g}")
         ax.set(xscale="log", yscale="log", xlabel=xlabel, ylabel=f"{label} [{unit}]")
         ax.legend(fontsize=8)
     ax = axes[len(quantities)]
@@ -96,10 +115,11 @@ def _g(v, spec=".4g"):
 
 def text(result) -> str:
     """The text ``wearcheck fit`` prints: parameters, the lab formula, the residuals."""
-    from wearcheck.comparisons.analysis.fitting import LABELS
     runs = result.model["runs"]
+    against = ("the MDR, the ball alone" if result.model["solver"] == "mdr" else
+               "the BEM, both bodies wearing (long-stroke model)")
     lines = [f"fit of {', '.join(result.keys)} to {len(result.measurements)} measurements "
-             f"({result.source}) against the MDR, the ball alone: {len(runs)} run(s), "
+             f"({result.source}) against {against}: {len(runs)} run(s), "
              f"{sum(r['seconds'] for r in runs):.3g} s of {result.seconds:.3g} s",
              "", f"{'parameter':<24} {'value':>11}  95 % interval"]
     for key, p in result.parameters.items():
@@ -109,7 +129,8 @@ def text(result) -> str:
                      f"{_g(hi) if hi is not None else 'open'}]{unit}")
     lines.append(f"  ({result.interval_method})")
     for q, lab in result.lab.items():
-        lines.append(f"lab formula from {LABELS[q][0]}: K = {_g(lab['K'])} m^3/(N m)  "
+        name = "K_flat" if q.startswith("track_") else "K"
+        lines.append(f"lab formula from {LABELS[q][0]}: {name} = {_g(lab['K'])} m^3/(N m)  "
                      f"({lab['formula']})")
     gof = result.goodness_of_fit
     if gof["test"] == "chi2":
@@ -131,7 +152,7 @@ def text(result) -> str:
                      f"{LABELS[m['quantity']][0]:<22} {_g(m['measured']):>11} "
                      f"{_g(m['uncertainty'], '.3g'):>9} {_g(m['model']):>11} {res:>9} "
                      f"{_g(m['lab_K'], '.3g'):>10}")
-    lines.append("(SI: m, m^3; residual (measured − model)/±" if weighted else
-                 "(SI: m, m^3; residual ln(measured/model)")
+    lines.append("(SI: m, m^2, m^3; residual (measured − model)/±" if weighted else
+                 "(SI: m, m^2, m^3; residual ln(measured/model)")
     lines[-1] += "; lab K = V_lab/(F s) of each measurement)"
     return "\n".join(lines)

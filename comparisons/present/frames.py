@@ -19,6 +19,7 @@ from wearcheck import cases
 from wearcheck.cases import CaseError, reference
 from wearcheck import layout, registry
 from wearcheck.extras import need
+from wearcheck import rundir
 
 #: the global attribute that marks a netCDF file as wearcheck's (only such a file is
 #: ever replaced)
@@ -62,7 +63,6 @@ def _provenance(result) -> dict:
     provenance when read from one, else this process's."""
     if result.meta and "command" in result.meta:   # meta.json holds it at its top level
         return result.meta
-    from wearcheck import rundir
     return rundir.provenance()
 
 

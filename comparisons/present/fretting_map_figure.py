@@ -16,11 +16,11 @@ import numpy as np
 from wearcheck.extras import need
 
 from wearcheck.rundir import provenance
+from wearcheck.cases.schema import section_fields
 
 
 def _label(name: str) -> str:
     """``section.key [unit]`` from the key's declaration."""
-    from wearcheck.cases.schema import section_fields
     section, _, key = name.partition(".")
     unit = dict(section_fields(section))[key].metadata["unit"]
     return f"{name} [{unit}]" if unit and unit != "1" else name
@@ -30,6 +30,7 @@ def write_figure(rows, names, path: Path) -> Path:
     """The map: regime by marker, wear volume per cycle by colour."""
     matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
+    # lazy (a): matplotlib, the optional "plot" extra
     import matplotlib.pyplot as plt
 
     x = np.array([float(r[names[0]]) for r in rows])

@@ -74,6 +74,7 @@ def unworn_checks(case, result) -> dict:
 def _figures(directory: Path, case, result, checks) -> list[str]:
     matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
+    # lazy (a): matplotlib, the optional "plot" extra
     import matplotlib.pyplot as plt
 
     h, fields = result.history, result.fields or {}

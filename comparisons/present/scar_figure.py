@@ -17,6 +17,7 @@ def scar_figure(path, tables: dict, *, title: str = "") -> Path:
     """
     matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
+    # lazy (a): matplotlib, the optional "plot" extra
     import matplotlib.pyplot as plt
 
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(11, 4.2))

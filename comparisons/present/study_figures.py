@@ -70,6 +70,7 @@ def write_figures(out: str | Path) -> list[Path]:
     """Draw the four study figures into ``out``; return their paths."""
     matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
+    # lazy (a): matplotlib, the optional "plot" extra
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 

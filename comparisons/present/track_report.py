@@ -79,6 +79,7 @@ def write_flat_map(directory: Path, case, result) -> Path:
 def _figure(directory: Path, result, cycles) -> str:
     matplotlib = need("matplotlib", "drawing figures")
     matplotlib.use("Agg")
+    # lazy (a): matplotlib, the optional "plot" extra
     import matplotlib.pyplot as plt
     y = np.asarray(result.fields["y"], float)
     fig, ax = plt.subplots(figsize=(6.4, 3.6))

@@ -52,6 +52,8 @@ from wearcheck.cases.schema import NON_AXISYMMETRIC
 
 from wearcheck.outputs import atomic_directory
 from wearcheck.rundir import Run
+from wearcheck import registry
+from wearcheck.resources import check_export
 
 FIELD_KEYS = ("points", "cells", "displacement", "stress", "contact_nodes",
               "contact_pressure", "wear_depth")
@@ -465,7 +467,6 @@ def _solver_export(name: str):
     """The registry's VTK writer for a solver's own fields (None: none)."""
     import importlib
 
-    from wearcheck import registry
     try:
         target = registry.get(name).export_vtk
     except CaseError:
@@ -515,7 +516,6 @@ def export_run(run_dir, revolve: int = 0) -> Path:
     need("pyvista", "writing ParaView files")
     run = Run(run_dir)
     target = run.path / "vtk"
-    from wearcheck.resources import check_export
     # the FEM's section mesh is what a revolution multiplies; other fields are small
     check_export(len(run.fields["points"]) if run.fields and "points" in run.fields else 0,
                  len(run.stages["r"]), revolve or SURFACE_SEGMENTS, len(run.stages["s"]),

@@ -27,6 +27,8 @@ import sys
 import warnings
 
 from wearcheck.cases import ArgumentError, WearcheckError
+from wearcheck.rundir import set_command
+from wearcheck.extras import missing
 
 #: exit codes beyond those of the WearcheckError classes
 EXIT_IO, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_TERMINATED = 4, 70, 130, 143
@@ -55,8 +57,8 @@ SUBCOMMANDS = {
     "cases": "list the shipped cases, or print one",
     "compare": "run every solver that supports a case and compare them",
     "export": "write ParaView files (VTU/PVD) of a run directory",
-    "fit": "fit K (and n) of a ball to measured scars, volumes or depths, with 95 %% "
-           "intervals",
+    "fit": ("fit K (and n) of a ball, and K of a counterface that wears, to measured "
+            "scars, tracks, volumes or depths, with 95 %% intervals"),
     "fretting-map": "running-condition map of a fretting case (partial/gross slip, "
                     "wear per cycle), on Dask",
     "mesh": "generate (or fetch from the cache) the FEM mesh of a case",
@@ -254,7 +256,6 @@ def main(argv=None) -> int:
     args, extra = parser.parse_known_args(argv)
     if extra:
         _unrecognized(args.command, argv, extra)
-    from wearcheck.rundir import set_command
     set_command(["wearcheck", *argv])
     name = f"wearcheck {args.command}"
     previous = None
@@ -296,7 +297,6 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return EXIT_IO
     except Exception as exc:
-        from wearcheck.extras import missing
         found = missing("this command", exc)   # an optional module not imported by need()
         if found is not None:
             print(f"{name}: error: {_one_line(found)}", file=sys.stderr)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import sys
 
 from wearcheck import cases
+from wearcheck.cases.json_schema import SCHEMA_FILE
 
 
 def add_parser(sub):
@@ -26,7 +27,6 @@ def add_parser(sub):
 
 def main(args) -> int:
     if args.schema:
-        from wearcheck.cases.json_schema import SCHEMA_FILE
         print(SCHEMA_FILE)
         return 0
     available = cases.shipped_cases()

@@ -16,6 +16,7 @@ from wearcheck.comparisons.present.compare_report import print_summary
 from wearcheck.studies.compare import compare
 from wearcheck.studies.sphere_sweep import SPHERE_RATIOS
 from ._common import add_case_arguments, load_case, print_json, verdict
+from wearcheck.comparisons.analysis import diagnosis
 
 
 def _ratios(text):
@@ -81,7 +82,6 @@ def main(args) -> int:
     if not m["passed"]:
         print(f"wearcheck compare: the comparison FAILED (see {out}/report.md)", file=sys.stderr)
         if args.quiet and m.get("diagnosis"):   # the summary, which names it, was not printed
-            from wearcheck.comparisons.analysis import diagnosis
             print(f"most likely fix: {diagnosis.sentence(m['diagnosis'])}", file=sys.stderr)
         return 1
     return 0

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from wearcheck.comparisons.present.vtk import export_run
 
 
 def add_parser(sub):
@@ -17,7 +18,6 @@ def add_parser(sub):
 
 
 def main(args) -> int:
-    from wearcheck.comparisons.present.vtk import export_run
     out = export_run(args.run_dir, revolve=args.revolve)
     if not any(out.glob("*.pvd")):
         print("export: note: the run stored no stage; nothing to export", file=sys.stderr)

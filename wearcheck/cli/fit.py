@@ -1,12 +1,15 @@
-"""``wearcheck fit CASE MEASUREMENTS.csv --fit wear.specific_rate [--fit wear.pressure_exponent]``.
+"""``wearcheck fit CASE MEASUREMENTS.csv --fit KEY [--fit KEY]``.
 
 Fits the ball's specific wear rate K (and the wear law's pressure exponent n)
 to measured scar diameters, ball volumes or central wear depths by least
-squares against the MDR (the ball alone, its elastic contact included), with
-95 % intervals, each measurement's residual, the lab formula's K beside it and
-a warning when the residuals say the model does not fit (exit code 1, as a
-failed comparison). The CSV names its columns with units, e.g.
-``cycles, D [um], ± D [um]`` (docs/fitting.md).
+squares against the MDR (the ball alone, its elastic contact included); with
+a counterface that wears, the ball's K and the counterface's K_flat
+(counterface.specific_rate) to the ball's and the track's measurements (track
+width, depth, cross-section, volume) against the BEM's long-stroke model of
+both bodies wearing. With 95 % intervals, each measurement's residual, the
+lab formula's K beside it and a warning when the residuals say the model does
+not fit (exit code 1, as a failed comparison). The CSV names its columns with
+units, e.g. ``cycles, D [um], ± D [um], track depth [um]`` (docs/fitting.md).
 
 Examples:
 
@@ -14,6 +17,8 @@ Examples:
     wearcheck fit ball_on_flat sheet.csv --fit wear.specific_rate --json
     wearcheck fit my_ball.toml sheet.csv --fit wear.specific_rate \\
         --fit wear.pressure_exponent --out runs/my-fit
+    wearcheck fit ball_on_flat_steel g133.csv --fit wear.specific_rate \\
+        --fit counterface.specific_rate --set bem.grid=64
 """
 
 from __future__ import annotations
@@ -28,16 +33,19 @@ from .refine import add_cluster_arguments
 
 
 def add_parser(sub):
-    p = sub.add_parser("fit", help="fit K (and n) of a ball to measured scars, volumes or "
-                                   "depths, with 95 %% intervals",
+    p = sub.add_parser("fit", help="fit K (and n) of a ball, and K of a counterface that "
+                                   "wears, to measured scars, tracks, volumes or depths, "
+                                   "with 95 %% intervals",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_case_arguments(p)
     p.add_argument("measurements", type=Path, metavar="MEASUREMENTS.csv",
-                   help="the measurement sheet: cycles or s, and any of D, V, h with units, "
-                        "e.g. 'cycles, D [um], ± D [um]'")
+                   help="the measurement sheet: cycles or s, and any of D, V, h (and the "
+                        "track's width, depth, area, volume) with units, e.g. 'cycles, "
+                        "D [um], ± D [um]'")
     p.add_argument("--fit", dest="keys", action="append", required=True, metavar="KEY",
                    help="a case key to fit (repeatable): wear.specific_rate, and optionally "
-                        "wear.pressure_exponent (a scan over n on Dask)")
+                        "wear.pressure_exponent (a scan over n on Dask); "
+                        "counterface.specific_rate (a scan over K_flat/K_ball, BEM runs)")
     p.add_argument("--exponents", type=_exponents, default=None, metavar="N1,N2,...",
                    help="with --fit wear.pressure_exponent: the exponents of the scan, at "
                         "least 4 in [1, 4] (default 1,1.25,...,4; each is one MDR run, and "

@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import sys
 from ._common import add_case_arguments, add_json_argument, load_case, print_json
+from wearcheck import meshes
+from wearcheck.cases import reference
+from wearcheck.outputs import check_output_file, write_file
+from wearcheck.resources import check_memory
 
 
 def add_parser(sub):
@@ -18,16 +22,11 @@ def add_parser(sub):
 
 
 def main(args) -> int:
-    from wearcheck import meshes
-    from wearcheck.cases import reference
-
+    # lazy (a): the FEM's module loads scikit-fem, the optional "fem" extra
     from wearcheck.fem.solver import mesh_parameters
-
-    from wearcheck.outputs import check_output_file, write_file
     case = load_case(args)
     if args.out is not None:
         check_output_file(args.out, "mesh")  # before meshing
-    from wearcheck.resources import check_memory
     check_memory(case, "fem")  # the mesh is the FEM's: refuse one it could never solve
     params = mesh_parameters(case)
     mesh = meshes.sphere_mesh(params)

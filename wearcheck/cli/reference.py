@@ -13,6 +13,8 @@ import sys
 from pathlib import Path
 
 from wearcheck.cases import CaseError
+from wearcheck.api import reference
+from wearcheck.references import certified
 
 
 def add_parser(sub):
@@ -29,8 +31,6 @@ def add_parser(sub):
 
 
 def main(args) -> int:
-    from wearcheck.api import reference
-    from wearcheck.references import certified
     if args.list:
         for name in certified.names():
             ref = certified.load(name)

@@ -19,6 +19,7 @@ from wearcheck import registry
 from wearcheck.studies.refine import refine, table
 
 from ._common import add_case_arguments, add_json_argument, load_case, print_json
+from . import Terminated
 
 
 def add_parser(sub):
@@ -83,7 +84,6 @@ def main(args) -> int:
                          tolerance=args.tolerance, stage=args.stage,
                          scheduler=args.scheduler, workers=args.workers, quiet=args.quiet)
     except KeyboardInterrupt as exc:
-        from . import Terminated
         written = getattr(exc, "summary_written", False)
         print(f"wearcheck refine: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}"
               f"; the levels finished are in {out}, "

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
+from wearcheck.comparisons.present.render import render_run
 
 
 def add_parser(sub):
@@ -15,7 +16,6 @@ def add_parser(sub):
 
 
 def main(args) -> int:
-    from wearcheck.comparisons.present.render import render_run
     paths = render_run(args.run_dir)
     if not paths:
         print("render: note: the run stored no stage; nothing to draw", file=sys.stderr)

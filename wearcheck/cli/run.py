@@ -13,6 +13,10 @@ from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.rundir import write_run_files
 from wearcheck import registry
 from ._common import add_case_arguments, load_case, print_json
+from wearcheck.extras import need
+from wearcheck.comparisons.present.vtk import export_run
+from wearcheck.cases import reference
+from wearcheck import layout
 
 
 def add_parser(sub):
@@ -38,7 +42,6 @@ def main(args) -> int:
         raise CaseError(f"--revolve {args.revolve}: need 0 (no solid) or at least 3 segments")
     args.vtk = args.vtk or args.revolve > 0
     if args.vtk:   # said before the solve
-        from wearcheck.extras import need
         need("pyvista", "writing ParaView files (--vtk)")
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-{args.solver}"
@@ -57,7 +60,6 @@ def main(args) -> int:
     with atomic_directory(out, "run") as tmp:
         write_run_files(tmp, case, result, args.solver)
         if args.vtk:
-            from wearcheck.comparisons.present.vtk import export_run
             export_run(tmp, revolve=args.revolve)
     if not args.quiet:
         for text in result.info.get("warnings", []):   # the solver's remarks on the run
@@ -79,8 +81,6 @@ def main(args) -> int:
 def summary(case, result, solver: str, out: Path) -> dict:
     """What ``--json`` prints: the run's counts, the last history row (units
     from the run's data dictionary) and the scales."""
-    from wearcheck.cases import reference
-    from wearcheck import layout
 
     entry = registry.get(solver) if solver in registry.names() else None
     units = layout.run_dictionary(entry, list(result.history))["history_csv"]

@@ -19,6 +19,7 @@ from wearcheck.studies.sweep import sweep
 from ._common import (add_case_arguments, add_json_argument, load_case, print_json, study_exit,
                       varied)
 from .refine import add_cluster_arguments
+from . import Terminated
 
 
 def add_parser(sub):
@@ -44,7 +45,6 @@ def main(args) -> int:
         rows = sweep(case, vary, args.solver, out, scheduler=args.scheduler,
                      workers=args.workers, quiet=args.quiet)
     except KeyboardInterrupt as exc:
-        from . import Terminated
         print(f"wearcheck sweep: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}"
               f"; the runs finished are in {out}, no sweep.csv was written", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130

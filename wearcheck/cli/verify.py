@@ -21,6 +21,8 @@ from pathlib import Path
 from wearcheck import registry
 from wearcheck.external import parse_mapping
 from ._common import add_case_arguments, load_case, print_json, verdict
+from wearcheck.comparisons.present.verify_report import print_summary
+from wearcheck.studies.verify import verify
 
 
 def add_parser(sub):
@@ -47,8 +49,6 @@ def add_parser(sub):
 
 
 def main(args) -> int:
-    from wearcheck.comparisons.present.verify_report import print_summary
-    from wearcheck.studies.verify import verify
     case = load_case(args)
     mapping = parse_mapping(args.mapping)
     out = args.out or Path("runs") / f"verify-{args.case.stem}"

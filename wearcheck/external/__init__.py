@@ -23,6 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from wearcheck.cases import CaseError
+from wearcheck.cases.tables import parse_quantity
+from wearcheck.cases.tables import split_header
 
 #: the history quantities a user may give (besides the sliding distance), with their kind
 HISTORY_QUANTITIES = {"force": "force", "contact_radius": "length", "wear_center": "length",
@@ -111,14 +113,17 @@ def read(path: str | Path, mapping: dict | None = None) -> External:
         raise CaseError(f"results '{path}' do not exist")
     if path.is_dir():
         if (path / "history.csv").is_file() or (path / "stages.csv").is_file():
+            # lazy (c): the readers import this module's names (DISTANCES, External, ...)
             from .tables_dir import read as read_dir
             return read_dir(path, mapping)
         pvd = sorted(path.glob("*.pvd"))
         if len(pvd) == 1:
+            # lazy (c): the readers import this module's names (DISTANCES, External, ...)
             from .vtk_series import read as read_vtk
             return read_vtk(pvd[0], mapping)
         ccx = sorted(path.glob("*.frd")) + sorted(path.glob("*.dat"))
         if ccx:
+            # lazy (c): the readers import this module's names (DISTANCES, External, ...)
             from .calculix import read as read_ccx
             return read_ccx(ccx[0], mapping)
         raise CaseError(f"results '{path}': no history.csv, no single .pvd, no CalculiX "
@@ -126,9 +131,11 @@ def read(path: str | Path, mapping: dict | None = None) -> External:
                         "formats)")
     suffix = path.suffix.lower()
     if suffix in (".pvd", ".vtu"):
+        # lazy (c): the readers import this module's names (DISTANCES, External, ...)
         from .vtk_series import read as read_vtk
         return read_vtk(path, mapping)
     if suffix in (".frd", ".dat"):
+        # lazy (c): the readers import this module's names (DISTANCES, External, ...)
         from .calculix import read as read_ccx
         return read_ccx(path, mapping)
     if suffix == ".csv":
@@ -145,7 +152,6 @@ AXES = {"x": 0, "y": 1, "z": 2}
 def geometry_mapping(name: str, key: str, value: str, where: str) -> tuple[str, object]:
     """``--map axis=z`` -> ("axis", "z"); ``--map 'r [mm]=points'`` -> ("r", 1e-3): the
     symmetry axis and the unit of the coordinates, for the formats with points."""
-    from wearcheck.cases.tables import parse_quantity
     if name == "axis":
         if value.lower() not in AXES:
             raise CaseError(f"{where}: the axis is x, y or z")
@@ -158,7 +164,6 @@ def geometry_mapping(name: str, key: str, value: str, where: str) -> tuple[str, 
 
 def check_unused(mapping: dict, used: set, fmt: str) -> None:
     """A --map name that the format does not know is an error, not ignored."""
-    from wearcheck.cases.tables import split_header
     unknown = [k for k in mapping if split_header(k)[0] not in used]
     if unknown:
         raise CaseError(f"--map '{unknown[0]}={mapping[unknown[0]]}': '{split_header(unknown[0])[0]}' "

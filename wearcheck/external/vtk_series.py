@@ -36,6 +36,7 @@ from wearcheck.extras import need
 
 from . import (AXES, DISTANCES, HISTORY_QUANTITIES, External, Stage, check_unused,
                geometry_mapping)
+from .tables_dir import read as read_dir
 
 DEFAULT_ARRAYS = {"f": "f", "wear": "wear_depth", "p": "pressure"}
 KINDS = {"f": "length", "wear": "length", "p": "pressure"}
@@ -230,7 +231,6 @@ def read(path: Path, mapping: dict) -> External:
         raise CaseError(f"{path}: two data sets at the same time {times}")
     beside = path.parent / "history.csv"
     if beside.is_file():
-        from .tables_dir import read as read_dir
         hist = read_dir(path.parent, {})
         notes.append(f"history from {beside.name} beside {path.name}")
         return External(kind=hist.kind, history=hist.history, history_origin=hist.history_origin,

@@ -39,6 +39,10 @@ from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.studies import scheduler as scheduler_mod
 from wearcheck.rundir import jsonable, write_run
 from wearcheck.extras import need
+from wearcheck import registry
+from wearcheck.resources import check_memory
+from wearcheck.outputs import (OUTPUT_MARKER, remove_output, study_directory, study_lock,
+                               write_study_text)
 
 #: seconds between two samples of a task's resident set size
 RSS_INTERVAL = 0.01
@@ -121,6 +125,7 @@ class _PeakRSS:
     """
 
     def __enter__(self):
+        # lazy (a): psutil comes with the optional "dask" extra
         import psutil  # a dependency of distributed
         self._proc = psutil.Process()
         self.start = self.peak = self._proc.memory_info().rss
@@ -143,6 +148,7 @@ class _PeakRSS:
 def _progress_sender(topic: str | None, name: str):
     """A solver progress callback that reports to the client, throttled."""
     try:
+        # lazy (a): dask's "distributed", the optional "dask" extra
         from distributed import get_worker
         worker = get_worker()
     except (ImportError, ValueError):
@@ -167,8 +173,7 @@ def execute(base: cases.Case, changes: dict, solver: str, name: str,
     ``solve(case, solver, progress)`` defaults to ``wearcheck.registry.solve``.
     """
     if solve is None:
-        from wearcheck import registry
-        from wearcheck.registry import solve
+        solve = registry.solve
         try:  # a worker's first import of the solver is not part of its cost
             # (a solver package imports its numerics with its solve, on first use)
             getattr(importlib.import_module(registry.get(solver).module), "solve")
@@ -176,6 +181,7 @@ def execute(base: cases.Case, changes: dict, solver: str, name: str,
             pass  # solve() meets the same failure below and reports it
     out = dict(ok=False, message="", case=None, result=None, traceback="")
     try:
+        # lazy (a): dask's "distributed", the optional "dask" extra
         from distributed import get_worker
         out["worker"] = get_worker().address
     except (ImportError, ValueError):
@@ -184,7 +190,6 @@ def execute(base: cases.Case, changes: dict, solver: str, name: str,
     with _PeakRSS() as rss:
         try:
             case = base.derive(changes) if changes else base
-            from wearcheck.resources import check_memory
             check_memory(case, solver)  # this worker's memory, before allocating
             result = solve(case, solver, _progress_sender(topic, name))
             out.update(ok=True, case=case, result=result)
@@ -207,6 +212,7 @@ class _Client:
 
     def __init__(self, scheduler: str | None, workers: int | None, n_tasks: int):
         dask = need("dask", "a study (sweep, refine, fretting-map, fit: on Dask)")
+        # lazy (a): dask's "distributed", the optional "dask" extra
         from distributed import Client, LocalCluster
         self.cluster = None
         self._quiet = None
@@ -357,7 +363,6 @@ class _Reporter:
 
 def _unclaim(out: Path, remove_directory: bool) -> None:
     """Remove the study marker of ``out`` (and ``out``) if it holds nothing else."""
-    from wearcheck.outputs import OUTPUT_MARKER
     try:
         if [p.name for p in out.iterdir()] == [OUTPUT_MARKER]:
             (out / OUTPUT_MARKER).unlink()
@@ -384,12 +389,12 @@ def run_cases(case: cases.Case, tasks: list[Task], out: str | Path, *,
     """
     # the studies run on Dask: said before anything is checked or started
     need("distributed", "a study (sweep, refine, fretting-map, fit: on Dask)")
+    # lazy (a): dask's "distributed", the optional "dask" extra
     from distributed import KilledWorker, as_completed
 
     check_workers(scheduler, workers)
     if scheduler:
         scheduler_mod.check_address(scheduler)  # before the study directory is made
-    from wearcheck.outputs import study_directory
     names = [t.name for t in tasks]
     if len(set(names)) != len(names):
         raise cases.CaseError("two runs would share a directory: " + ", ".join(names))
@@ -506,7 +511,6 @@ def run_cases(case: cases.Case, tasks: list[Task], out: str | Path, *,
 
 def discard_run(path: Path) -> None:
     """Remove an earlier run directory at ``path`` (only ever a wearcheck run)."""
-    from wearcheck.outputs import remove_output
     remove_output(path, "run")
 
 
@@ -530,7 +534,6 @@ def record_study(out: Path, study: str, case, prov, arguments: dict | None = Non
     A study of the same name recorded before (a re-run, or a sweep that adds
     values) stays, under ``earlier`` in the new entry, latest first.
     """
-    from wearcheck.outputs import study_lock, write_study_text
     with study_lock(out):       # read and written by one study at a time
         meta = study_meta(out)
         studies = meta.setdefault("studies", {})

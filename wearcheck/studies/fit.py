@@ -29,16 +29,14 @@ from wearcheck.numerics.stepping import ADAPTIVE_MAX_S_HAT
 from wearcheck.user_tables import Quantity, from_columns, read_table
 
 #: the keys ``fit`` can fit, with their unit
-FIT_KEYS = {"wear.specific_rate": "m^3/(N m)", "wear.pressure_exponent": "1"}
-_BOTH_BODIES = ("the both-bodies model (the flat worn too: the laboratory-test work, issue "
-                "24) is not available yet; wearcheck fit fits the ball alone (its scar "
-                "diameter, volume or central wear depth)")
+FIT_KEYS = {"wear.specific_rate": "m^3/(N m)", "wear.pressure_exponent": "1",
+            "counterface.specific_rate": "m^3/(N m)"}
 #: keys refused with a reason
-REFUSED_KEYS = {"counterface.specific_rate": _BOTH_BODIES,
-                "wear.k": "fit wear.specific_rate, the lab's K; k follows as K·σ0/μ"}
+REFUSED_KEYS = {"wear.k": "fit wear.specific_rate, the lab's K; k follows as K·σ0/μ",
+                "counterface.k": "fit counterface.specific_rate, the lab's K of the "
+                                 "counterface; k follows as K·σ0/μ"}
 
-_TRACK = f"a track quantity: {_BOTH_BODIES}"
-#: the columns a measurement sheet may hold (the track's are named and refused)
+#: the columns a measurement sheet may hold (the track's need a counterface that wears)
 MEASUREMENTS = (
     Quantity("cycles", "count", ("cycle", "n", "number of cycles", "N cycles"),
              "number of cycles (needs sliding.stroke: s = 2·stroke·cycles)"),
@@ -52,12 +50,13 @@ MEASUREMENTS = (
     Quantity("wear_center", "length", ("h", "central wear depth", "wear depth",
                                        "central wear", "ball wear depth"),
              "central wear depth of the ball"),
-    Quantity("track_width", "length", ("track width",), "track width", refused=_TRACK),
-    Quantity("track_depth", "length", ("track depth",), "track depth", refused=_TRACK),
+    Quantity("track_width", "length", ("track width", "w"), "track width"),
+    Quantity("track_depth", "length", ("track depth",), "track depth"),
     Quantity("track_area", "area", ("track cross-section area", "track cross section area",
-                                    "track area", "cross-section area"),
-             "track cross-section area", refused=_TRACK),
-    Quantity("track_volume", "volume", ("track volume",), "track volume", refused=_TRACK),
+                                    "track area", "cross-section area", "A"),
+             "track cross-section area"),
+    Quantity("track_volume", "volume", ("track volume", "flat volume", "disc volume",
+                                        "counterface volume"), "track volume"),
 )
 
 #: the first stage of a forward run, in ŝ, at most: below it a measurement is read as
@@ -128,7 +127,8 @@ class FitResult:
 # -- input -------------------------------------------------------------------------
 
 def check_keys(keys) -> tuple[str, ...]:
-    """The keys to fit, checked: wear.specific_rate, optionally wear.pressure_exponent."""
+    """The keys to fit, checked: wear.specific_rate (optionally with wear.pressure_exponent),
+    counterface.specific_rate, or both rates."""
     if isinstance(keys, str):
         keys = [keys]
     keys = tuple(dict.fromkeys(str(k) for k in keys))
@@ -138,9 +138,13 @@ def check_keys(keys) -> tuple[str, ...]:
         if key not in FIT_KEYS:
             raise CaseError(f"--fit {key}: not a key wearcheck fit can fit; allowed: "
                             + ", ".join(FIT_KEYS))
-    if "wear.specific_rate" not in keys:
+    if "wear.pressure_exponent" in keys and "counterface.specific_rate" in keys:
+        raise CaseError("--fit wear.pressure_exponent with counterface.specific_rate: both "
+                        "bodies wear by Reye–Archard's law (n = 1) in the BEM; fit the rates "
+                        "with n held")
+    if "wear.specific_rate" not in keys and "counterface.specific_rate" not in keys:
         raise CaseError("--fit: wear.specific_rate must be among the keys fitted (the "
-                        "exponent alone does not set the wear)")
+                        "exponent alone does not set the wear), or counterface.specific_rate")
     return keys
 
 
@@ -181,22 +185,31 @@ def read_measurements(data, case: cases.Case) -> tuple[fitting.Data, list, str]:
     measured = [q for q in fitting.QUANTITIES if q in table]
     if not measured:
         raise CaseError(f"{where}: no measured column; give one or more of scar diameter "
-                        "'D [um]', ball volume 'V [mm^3]', central wear depth 'h [um]'")
+                        "'D [um]', ball volume 'V [mm^3]', central wear depth 'h [um]' (and "
+                        "with a counterface that wears track width, depth, area, volume)")
+    track = [q for q in measured if q in fitting.TRACK_QUANTITIES]
+    if track and case.counterface_wear_rate is None:
+        raise CaseError(f"{table.where(0, track[0]).rsplit(', row', 1)[0]}, column "
+                        f"'{table[track[0]].header}': a track quantity, but the case's "
+                        "counterface does not wear; set [counterface] wears = true with its "
+                        "specific_rate (docs/both-bodies.md)")
     weighted = [q for q in measured if table[q].uncertainty is not None]
     if weighted and len(weighted) != len(measured):
         bare = [table[q].header for q in measured if table[q].uncertainty is None]
         raise CaseError(f"{where}: uncertainties (± columns) for some measured columns but not "
                         f"for {', '.join(repr(b) for b in bare)}; give them for all or none")
     x = table[given[0]]
-    if given[0] == "cycles" and case.sliding.stroke is None:
+    if given[0] == "cycles" and case.cycle_length is None:
         raise CaseError(f"{where}: the measurements are in cycles; the case needs "
-                        "'sliding.stroke' (one cycle slides 2·stroke)")
-    s_all = x.values * 2.0 * case.sliding.stroke if given[0] == "cycles" else x.values
+                        "'sliding.stroke' (one cycle slides 2·stroke; a disc's revolution "
+                        "2π·sliding.track_radius)")
+    s_all = x.values * case.cycle_length if given[0] == "cycles" else x.values
     # a ball worn to its centre is the most there is to measure: a larger value is a unit
     # slip (D in mm written as µm), and the model could only fail to reach it
     R = case.indenter.radius
     ball_bound = dict(scar_diameter=2.0 * R, wear_center=R,
-                      ball_volume=2.0 / 3.0 * math.pi * R**3)
+                      ball_volume=2.0 / 3.0 * math.pi * R**3, track_width=2.0 * R,
+                      track_depth=R, track_area=math.inf, track_volume=math.inf)
     s, names, y, sigma, rows = [], [], [], [], []
     for i in range(len(table.rows)):
         if not np.isfinite(x.values[i]):
@@ -215,7 +228,7 @@ def read_measurements(data, case: cases.Case) -> tuple[fitting.Data, list, str]:
                 raise CaseError(f"{table.where(i, q)}: {v:g}; a measured {col.quantity.meaning} "
                                 "must be > 0")
             if not v <= ball_bound[q]:
-                unit = "m^3" if q == "ball_volume" else "m"
+                unit = fitting.LABELS[q][1]
                 raise CaseError(f"{table.where(i, q)}: {v:g} {unit}; the values imply a scar "
                                 f"larger than the ball (indenter.radius R = {R:g} m: a "
                                 f"{col.quantity.meaning} is at most {ball_bound[q]:.4g} "
@@ -298,7 +311,7 @@ def plan(case: cases.Case, data: fitting.Data, c: float, n: float) -> tuple[floa
     return start, top
 
 
-def _solve_here(case: cases.Case, quiet: bool, label: str):
+def solve_here(case: cases.Case, quiet: bool, label: str, solver: str = "mdr"):
     from wearcheck import registry
     from wearcheck.comparisons.present.progress import ProgressBar
     bar = ProgressBar(label, quiet=quiet)
@@ -307,7 +320,7 @@ def _solve_here(case: cases.Case, quiet: bool, label: str):
             # a forward run's remarks are on its own ŝ range, past the measurements;
             # the fit judges the fitted model over the measured range (_validity_remarks)
             warnings.simplefilter("ignore", RunWarning)
-            return registry.solve(case, "mdr", progress=bar)
+            return registry.solve(case, solver, progress=bar)
     finally:
         bar.close()
 
@@ -339,6 +352,10 @@ def fit(case: cases.Case, data, keys=("wear.specific_rate",), *, exponents=None,
     keys = check_keys(keys)
     check_case(case)
     data, rows, source = read_measurements(data, case)
+    if case.counterface_wear_rate is not None or "counterface.specific_rate" in keys:
+        from . import fit_track     # both bodies wearing: the BEM's long-stroke model
+        return fit_track.fit(case, data, rows, source, keys, scheduler=scheduler,
+                             workers=workers, quiet=quiet, t0=t0)
     free_n = "wear.pressure_exponent" in keys
     n_parameters = 2 if free_n else 1
     if not data.weighted and len(data) < n_parameters + 1:
@@ -375,7 +392,7 @@ def _fit_rate(case, data, c, quiet, notes):
     for attempt in range(MOST_RUNS):
         forward = case.derive(forward_changes(case, n, top, start))
         t = time.perf_counter()
-        result = _solve_here(forward, quiet, f"mdr n = {n:g}")
+        result = solve_here(forward, quiet, f"mdr n = {n:g}")
         runs.append(_run_info(n, top, result, time.perf_counter() - t))
         curves = curves_of(result.history, n)
         lo, hi = _rate_range(case, data, c, n, curves.top)
@@ -423,7 +440,7 @@ def _resolution(case, data, c, n, span, curves, lo, hi, quiet) -> dict:
                                          "MDR accepts for this case")
     changes = dict(forward_changes(case, n, span[1], span[0]), **{"mdr.elements": M})
     t = time.perf_counter()
-    coarse = _solve_here(case.derive(changes), quiet, f"mdr N = {M}")
+    coarse = solve_here(case.derive(changes), quiet, f"mdr N = {M}")
     seconds = time.perf_counter() - t
     K_M = math.exp(fitting.fit_rate(curves_of(coarse.history, n), data, c, lo, hi)["log_K"])
     return dict(exponent=float(n), elements=[M, N], specific_rate=[K_M, K],
@@ -533,42 +550,13 @@ def _result(case, keys, data, rows, source, found, runs, family, c, notes, secon
     if note:
         notes.append(note)
     fitted = case.derive({"wear.specific_rate": K, "wear.pressure_exponent": float(n)})
-    R, F = case.indenter.radius, case.loading.force
-    lab, lab_K = {}, np.full(len(data), np.nan)
-    for q in fitting.QUANTITIES:
-        at = data.quantity == q
-        if not np.any(at):
-            continue
-        per, pooled = fitting.lab_rate(fitting.lab_volume(q, data.y[at], R), F, data.s[at])
-        lab_K[at] = per
-        formula = {"scar_diameter": "V = π D⁴/(64 R)", "ball_volume": "V measured",
-                   "wear_center": "V = π h² (3R − h)/3"}[q]
-        lab[q] = dict(K=pooled, formula=f"{formula}; K = V/(F s), least squares through the "
-                                        "origin over the measurements (n = 1)")
-    model = found["model"]
-    r = fitting.residuals(data, model)
-    measurements = []
-    for i in range(len(data)):
-        measurements.append(dict(rows[i], quantity=str(data.quantity[i]),
-                                 unit=fitting.LABELS[str(data.quantity[i])][1],
-                                 measured=float(data.y[i]),
-                                 uncertainty=float(data.sigma[i]) if data.weighted else None,
-                                 model=float(model[i]), residual=float(r[i]),
-                                 lab_K=float(lab_K[i])))
+    lab, lab_K = lab_formulas(case, data)
+    measurements = measurement_rows(data, rows, found["model"], lab_K)
     gof = found["goodness_of_fit"]
-    if not gof["fits"]:
-        what = (f"χ² = {gof['statistic']:.4g} for {gof['dof']} degrees of freedom"
-                if gof["test"] == "chi2" else
-                f"a trend of the residuals with ln s, F = {gof['statistic']:.4g} on "
-                f"{gof['dof'][0]} and {gof['dof'][1]} degrees of freedom")
-        notes.insert(0, f"the residuals say the model does not fit: {what}, p = "
-                        f"{gof['p_value']:.3g} < {fitting.MISFIT_P:g}; the wear law (or the "
-                        "uncertainties) do not describe these measurements, and the "
-                        "intervals are then too narrow")
-    method = ("profile likelihood: {θ: χ²_profile(θ) − χ²_min ≤ 3.84} (χ²₁ at 95 %), with the "
-              "uncertainties given" if data.weighted else
-              "profile t (nonlinear regression, Bates & Watts 1988 §6.1): relative errors of "
-              "one unknown scatter, {θ: RSS_profile(θ) ≤ RSS_min (1 + F₁,ν(0.95)/ν)}, ν = N − P")
+    warning = misfit_warning(gof)
+    if warning:
+        notes.insert(0, warning)
+    method = interval_method(data)
     curve = _curve(family, data, found, c)
     notes += _validity_remarks(fitted, family, data, found, c)
     model_info = dict(solver="mdr", body="the ball alone (the flat does not wear)",
@@ -581,6 +569,74 @@ def _result(case, keys, data, rows, source, found, runs, family, c, notes, secon
                      measurements=measurements, lab=lab, goodness_of_fit=gof, model=model_info,
                      interval_method=method, source=source, seconds=seconds, warnings=notes,
                      curve=curve)
+
+
+#: the lab's formula of each quantity's volume (the ball's, or the counterface's)
+LAB_FORMULAS = {"scar_diameter": "V = π D⁴/(64 R)", "ball_volume": "V measured",
+                "wear_center": "V = π h² (3R − h)/3",
+                "track_width": "the unworn ball's groove of width w, G133's flat: "
+                               "stroke·A_seg(w, R) + the ends' cap",
+                "track_width_disc": "the unworn pin's groove of width w, G99's disc: "
+                                    "2π R_track·A_seg(w, R)",
+                "track_depth": "L·A_seg of the unworn ball's groove of depth δ",
+                "track_area": "V = L·A (profilometer)", "track_volume": "V measured"}
+
+
+def lab_formulas(case: cases.Case, data: fitting.Data) -> tuple[dict, np.ndarray]:
+    """The lab formula's K per quantity (V = K F s, least squares through the origin) and
+    each measurement's own V_lab/(F s); the track's K is the counterface's."""
+    R, F = case.indenter.radius, case.loading.force
+    lab, lab_K = {}, np.full(len(data), np.nan)
+    for q in fitting.QUANTITIES:
+        at = data.quantity == q
+        if not np.any(at):
+            continue
+        if q in fitting.TRACK_QUANTITIES:
+            V = fitting.lab_track_volume(q, data.y[at], R, case.sliding)
+        else:
+            V = fitting.lab_volume(q, data.y[at], R)
+        per, pooled = fitting.lab_rate(V, F, data.s[at])
+        lab_K[at] = per
+        body = "K_flat" if q in fitting.TRACK_QUANTITIES else "K"
+        disc = q == "track_width" and case.sliding.motion == "unidirectional"
+        formula = LAB_FORMULAS["track_width_disc" if disc else q]
+        lab[q] = dict(K=pooled, formula=f"{formula}; {body} = V/(F s), least squares "
+                                        "through the origin over the measurements (n = 1)")
+    return lab, lab_K
+
+
+def measurement_rows(data: fitting.Data, rows: list, model, lab_K) -> list[dict]:
+    """One dict per measurement: its row, quantity, value, the model's, residual, lab K."""
+    r = fitting.residuals(data, model)
+    out = []
+    for i in range(len(data)):
+        out.append(dict(rows[i], quantity=str(data.quantity[i]),
+                        unit=fitting.LABELS[str(data.quantity[i])][1],
+                        measured=float(data.y[i]),
+                        uncertainty=float(data.sigma[i]) if data.weighted else None,
+                        model=float(model[i]), residual=float(r[i]), lab_K=float(lab_K[i])))
+    return out
+
+
+def misfit_warning(gof: dict) -> str | None:
+    """The warning when the goodness of fit says the model does not fit, else None."""
+    if gof["fits"]:
+        return None
+    what = (f"χ² = {gof['statistic']:.4g} for {gof['dof']} degrees of freedom"
+            if gof["test"] == "chi2" else
+            f"a trend of the residuals with ln s, F = {gof['statistic']:.4g} on "
+            f"{gof['dof'][0]} and {gof['dof'][1]} degrees of freedom")
+    return (f"the residuals say the model does not fit: {what}, p = {gof['p_value']:.3g} < "
+            f"{fitting.MISFIT_P:g}; the wear law (or the uncertainties) do not describe these "
+            "measurements, and the intervals are then too narrow")
+
+
+def interval_method(data: fitting.Data) -> str:
+    """How the intervals were made (with or without the uncertainties)."""
+    return ("profile likelihood: {θ: χ²_profile(θ) − χ²_min ≤ 3.84} (χ²₁ at 95 %), with the "
+            "uncertainties given" if data.weighted else
+            "profile t (nonlinear regression, Bates & Watts 1988 §6.1): relative errors of "
+            "one unknown scatter, {θ: RSS_profile(θ) ≤ RSS_min (1 + F₁,ν(0.95)/ν)}, ν = N − P")
 
 
 def _model_at(family, found, quantity: str, s, c) -> np.ndarray:

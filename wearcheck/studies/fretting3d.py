@@ -25,6 +25,7 @@ import numpy as np
 from wearcheck.bem import contact as bem_contact
 from wearcheck.bem import tangential
 from wearcheck.bem.operator import HalfSpace
+from wearcheck.mdr import fretting as F
 
 
 def pixel_grid(contact_radius: float, n: int, box: float):
@@ -102,7 +103,6 @@ def mdr_fretting(case, f) -> dict:
     the stick radius of the last stroke, the energy per cycle, the contact
     radius and the tangential force at +u0.
     """
-    from wearcheck.mdr import fretting as F
 
     model, _ = F.build_model(case)
     model = replace(model, f0=np.asarray(f, dtype=float), k_over_hardness=0.0)

@@ -26,6 +26,7 @@ from wearcheck.rundir import provenance
 from wearcheck.studies.distributed import record_study, run_cases
 from wearcheck.studies.sweep import (check_varied, csv_cell, tasks_for,
                                                  varied_column, varied_values)
+from wearcheck.comparisons.present.fretting_map_figure import write_figure
 
 COLUMNS = tuple(c.name for c in FRETTING_MAP_COLUMNS)
 
@@ -94,6 +95,5 @@ def fretting_map(case: cases.Case, vary, out, *, scheduler=None, workers=None,
     write_table(out, "fretting_map.csv", "\n".join(head + body) + "\n",
                 title="wearcheck fretting-map", command=prov["command"], notes=notes,
                 describe=lambda c: varied_column(c) if "." in c else describe(c))
-    from wearcheck.comparisons.present.fretting_map_figure import write_figure
     write_study_file(out, "fretting_map.png", lambda tmp: write_figure(rows, names, tmp))
     return rows

@@ -30,6 +30,8 @@ describe = describer(REFINEMENT_COLUMNS, [("F/F0 at s_hat=", next(
     c for c in REFINEMENT_COLUMNS if c.name.startswith("F/F0 at s_hat=")))])
 from wearcheck.comparisons.present.study_figures import FIGURES
 from wearcheck.rundir import jsonable, provenance
+from wearcheck.comparisons.present.study_figures import write_figures
+from wearcheck.cases.reference import scales as case_scales
 
 
 def refine(case: cases.Case, solver: str, out, *, levels=None, steps=None, tolerance=0.01,
@@ -88,7 +90,6 @@ def refine(case: cases.Case, solver: str, out, *, levels=None, steps=None, toler
             write_table(out, "refinement.csv", combined_csv_text(out),
                         title="wearcheck refine: every study in the directory",
                         command=command, notes=combined_notes(out), describe=describe)
-            from wearcheck.comparisons.present.study_figures import write_figures
             write_figures(out)
     except KeyboardInterrupt as exc:
         exc.summary_written = written  # for the CLI's message: what is on disk
@@ -98,7 +99,6 @@ def refine(case: cases.Case, solver: str, out, *, levels=None, steps=None, toler
 
 def summarize(case, solver, lvls, outcomes, varied, tolerance, stage) -> dict:
     """Differences to the finest level, orders, Richardson, converged level."""
-    from wearcheck.cases.reference import scales as case_scales
     sols = [rf.scaled(o.result, case_scales(o.case)) if o.ok else None for o in outcomes]
     ok = [i for i, s in enumerate(sols) if s is not None]
     stages = list(case.stages.s_hat)

@@ -37,6 +37,7 @@ def answer_timeout(worker_timeout: float) -> float:
 def check_address(address: str) -> dict:
     """Refuse (CaseError, exit 2) an address this machine cannot use; return the
     connection arguments (TLS context) for it."""
+    # lazy (a): dask's "distributed", the optional "dask" extra
     from distributed.comm import parse_address
     from distributed.comm.registry import get_backend
     from distributed.comm.addressing import parse_host_port
@@ -66,6 +67,7 @@ def check_address(address: str) -> dict:
         if not 0 < int(port) < 65536:
             raise cases.CaseError(f"--scheduler '{address}': port {port} is not a TCP port "
                                   "(1 to 65535)")
+    # lazy (a): dask's "distributed", the optional "dask" extra
     from distributed.security import Security
     try:
         args = Security().get_connection_args("client")
@@ -103,6 +105,7 @@ def _in_thread(coroutine_function, timeout: float):
 
 def _greeting(address: str) -> str:
     """The first bytes a TCP server at ``address`` sends unasked (its banner), printable."""
+    # lazy (a): dask's "distributed", the optional "dask" extra
     from distributed.comm import parse_address
     from distributed.comm.addressing import parse_host_port
     try:
@@ -120,6 +123,7 @@ def _reach(address: str, timeout: float) -> None:
     """A TCP connection to the address's host and port, first: what fails there (an unknown
     host, a refused or unanswered connection) is told apart from a peer that is no
     scheduler."""
+    # lazy (a): dask's "distributed", the optional "dask" extra
     from distributed.comm import parse_address
     from distributed.comm.addressing import parse_host_port
     scheme, location = parse_address(address)
@@ -146,6 +150,7 @@ def _reach(address: str, timeout: float) -> None:
 def probe(address: str, timeout: float, connection_args: dict) -> dict:
     """Connect to ``address``, exchange Dask's handshake and ask the peer who it is,
     within ``timeout`` s. Returns its identity; SchedulerError naming what failed."""
+    # lazy (a): dask's "distributed", the optional "dask" extra
     from distributed.comm import connect
 
     async def identity():
@@ -188,6 +193,7 @@ def probe(address: str, timeout: float, connection_args: dict) -> dict:
 def client(address: str, timeout: float, connection_args: dict):
     """A ``distributed.Client`` on the scheduler at ``address`` (probed first), made
     within ``timeout`` s: a scheduler that stops answering in between is a SchedulerError."""
+    # lazy (a): dask's "distributed", the optional "dask" extra
     from distributed import Client
     probe(address, timeout, connection_args)
     box = {}

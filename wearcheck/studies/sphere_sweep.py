@@ -1,7 +1,7 @@
 """The finite sphere against the half-space (docs/theory.md §13): the FEM body is a
 clamped sphere of radius R, stiffer than the half-space that MDR and BEM model by
-ΔF/F ≈ C·(2/π)·a0/R, C of order one (measured 0.54-0.62 a0/R at a0/R <= 0.02). The
-sweep measures that offset at several a0/R.
+ΔF/F ≈ C·(2/π)·a0/R, C of order one (its measured values: docs/performance.md,
+"Measurements behind the code"). The sweep measures that offset at several a0/R.
 """
 
 from __future__ import annotations

@@ -29,6 +29,10 @@ from wearcheck.csv_metadata import describer, sidecar_name, write_table
 from wearcheck.layout import SWEEP_COLUMNS
 from wearcheck.outputs import study_lock
 from wearcheck.rundir import provenance
+from wearcheck import registry
+from wearcheck.outputs import read_marker
+from wearcheck.studies.distributed import base_difference, study_meta
+from wearcheck.cases.result import Item
 
 
 def plain(value):
@@ -131,7 +135,6 @@ def refuse_unsupported(case, solver: str, runs, every: bool = False) -> None:
     refinement varies only the resolution, which never makes a case
     supported). A combination the case rejects is left to its row.
     """
-    from wearcheck import registry
     entry = registry.get(solver)
     reasons = []
     for changes in runs:
@@ -183,7 +186,6 @@ def sweep(case: cases.Case, vary: Mapping[str, Iterable], solver: str, out, *,
     The rows hold the varied values (typed; a relative ``indenter.file`` made
     absolute), the status, times and the end of each run in its own scales.
     """
-    from wearcheck import registry
     registry.get(solver)  # an unknown solver is refused before the cluster starts
     values = varied_values(vary)
     check_varied(case, values)
@@ -242,8 +244,6 @@ def earlier_rows(out: Path, solver: str, case) -> list[dict]:
     with its ``--set``): refused, before the cluster starts, otherwise, as one
     table would present the runs of two different studies as one.
     """
-    from wearcheck.outputs import read_marker
-    from wearcheck.studies.distributed import base_difference, study_meta
     marker = read_marker(out) if Path(out).is_dir() else None
     if not marker or marker.get("kind") != "study":
         return []
@@ -320,7 +320,6 @@ def table_notes(earlier: list[dict], keys, solver: str, prov) -> list[str]:
 
 def varied_column(key: str):
     """The sidecar's description of a varied case key's column."""
-    from wearcheck.cases.result import Item
     return Item(key, "(case units)", f"the case key {key} of the run, in the case file's "
                                      "units (docs: the case reference)")
 

@@ -32,13 +32,17 @@ from wearcheck.cases import CaseError, reference as closed
 from wearcheck import external, layout, outputs, registry, rundir
 from wearcheck.comparisons.analysis import verification
 from wearcheck.studies import compare as compare_mod
+from wearcheck.comparisons.present.progress import ProgressBar
+from wearcheck.references.certified import unworn_profile
+from wearcheck.outputs import check_output
+from wearcheck.references import certified
+from wearcheck.comparisons.present import report, verify_figures, verify_report
 
 #: the name of the user's results in outputs and reports
 RESULTS = "results"
 
 
 def _solve(case, name, quiet):
-    from wearcheck.comparisons.present.progress import ProgressBar
     bar = ProgressBar(name, quiet=quiet)
     try:
         return registry.solve(case, name, progress=bar)
@@ -59,7 +63,6 @@ def read_results(case, ext, cycles_to_s=None) -> tuple[dict, list]:
                                            cycles_to_s)[0])
         f = st.f
         if f is None and st.wear is not None:
-            from wearcheck.references.certified import unworn_profile
             f = unworn_profile(case, st.r) + st.wear
         stages.append(dict(s=s, r=st.r, f=f, p=st.p, origin=st.origin))
     if any(not np.isfinite(st["s"]) for st in stages) or not np.all(np.isfinite(hist["s"])):
@@ -136,8 +139,6 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
 
     Returns the metrics (as in metrics.json); ``["passed"]`` is the verdict.
     """
-    from wearcheck.outputs import check_output
-    from wearcheck.references import certified
     t0 = time.perf_counter()
     check_output(out, "comparison")
     sc = closed.scales(case)
@@ -228,7 +229,6 @@ def _diagnosis(pair, factor, cmp) -> dict | None:
 
 
 def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, certified_ref):
-    from wearcheck.comparisons.present import report, verify_figures, verify_report
     prov = rundir.provenance(argv)
     out = Path(out)
     with outputs.atomic_directory(out, "comparison") as tmp:
