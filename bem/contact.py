@@ -140,30 +140,38 @@ def contact_window(candidates: np.ndarray, margin: int):
 def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
           g_scale=1.0, tol=1e-8, maxiter=5000, precondition=True,
           stroke_mean=False, single=True, displacement=None,
-          displacement_error=0.0, window=True) -> Contact:
+          displacement_error=0.0, window=True, whole_box=True) -> Contact:
     """Constrained CG contact solve (Polonsky–Keer), warm-started from ``p_init``.
 
     With ``window`` (and an operator that has windows, :meth:`bem.operator.
-    HalfSpace.window`) the CG runs on a square window of the box that holds
-    the starting pressure's pixels with a margin (an eighth of their extent,
-    at least :data:`WINDOW_MARGIN`; without one, those with h < d under depth
-    control, which are all that may touch as G and σ are non-negative, or
-    the first guess's under force control). G's coefficients depend on the offset
-    only, so with all the pressure inside, the window's solve is the box's.
-    The displacement on the whole box is then updated (one convolution of
-    the change of pressure) and the complementarity residual checked on the
-    whole box; a pixel outside that overlaps joins the window and the solve
-    is repeated (:data:`WINDOW_TRIES` times, then on the whole box).
-    Parameters and result as :func:`solve_box`.
+    HalfSpace.window`) the CG runs on a square window of the box. G's
+    coefficients depend on the offset only, so with all the pressure inside,
+    the window's solve is the box's. No pixel with h >= d can touch (G and σ
+    are non-negative, so is the displacement of p >= 0): under depth control
+    the window holds every pixel with h < d when it can
+    (:data:`WINDOW_MAX_FRACTION`), and nothing outside it needs checking.
+    Otherwise (force control, or a reach too wide) it holds the starting
+    pressure's pixels with a margin (an eighth of their extent, at least
+    :data:`WINDOW_MARGIN`; without a start, the first guess's); after the
+    solve the pixels outside with h < d at the solved approach are checked
+    on the whole box's displacement (the last one plus one convolution of
+    the change of pressure), and one that overlaps joins the window and the
+    solve is repeated (:data:`WINDOW_TRIES` times, then on the whole box).
+
+    ``whole_box``: the returned gap and displacement cover the whole box.
+    False: when no pixel outside the window may touch, they are NaN outside
+    it (the displacement there is not computed; a later solve given it
+    convolves where it is NaN); the gap there is h - d + G p, as p = 0. The
+    pressure, approach, force and residual are the box's in either case.
+    Parameters and result otherwise as :func:`solve_box`.
     """
     if (depth is None) == (force is None):
         raise ValueError("give depth or force")
-    n = h.shape[0]
     if not (window and not stroke_mean and hasattr(op, "window") and h.shape == (op.n, op.n)):
         return solve_box(op, h, depth=depth, force=force, sigma=sigma, p_init=p_init,
                          p_scale=p_scale, g_scale=g_scale, tol=tol, maxiter=maxiter,
                          precondition=precondition, stroke_mean=stroke_mean, single=single,
-                         displacement=displacement, displacement_error=displacement_error)
+                         displacement=_known(displacement), displacement_error=displacement_error)
     per_pixel = np.ndim(sigma) > 0
     sigma = np.asarray(sigma, dtype=float) if per_pixel else float(sigma)
     p = None
@@ -171,6 +179,19 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
         p = np.maximum(np.asarray(p_init, dtype=float), 0.0)
     if p is None:
         displacement = None
+    settings = dict(p_scale=p_scale, g_scale=g_scale, tol=tol, maxiter=maxiter,
+                    precondition=precondition, single=single)
+    box = contact_window(h < depth, 0) if depth is not None else None
+    if box is not None:
+        # every pixel that may touch is inside: the window's solve is the box's
+        c = _solve_window(op, h, box, depth, force, sigma, p, displacement,
+                          displacement_error, settings)
+        result = _on_box(op, h, box, c, p, displacement, displacement_error, sigma, tol,
+                         single, g_scale, p_scale, whole_box, False)[0]
+        # nothing outside may touch: the window's residual is the box's (the
+        # box's gap adds the rounding of the displacement's update there)
+        result.residual = c.residual
+        return result
     if p is not None:
         candidates = p > 0
     elif depth is not None:
@@ -188,54 +209,95 @@ def solve(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
         box = contact_window(candidates, margin)
         if box is None:
             break
-        sub = op.window(box[0].stop - box[0].start)
-        counts = sub.applications, sub.single_applications
-        try:
-            c = solve_box(sub, h[box], depth=depth, force=force,
-                          sigma=sigma[box] if per_pixel else sigma,
-                          p_init=None if p is None else p[box], p_scale=p_scale,
-                          g_scale=g_scale, tol=tol, maxiter=maxiter,
-                          precondition=precondition, single=single,
-                          displacement=None if displacement is None else displacement[box],
-                          displacement_error=displacement_error)
-        finally:
-            op.applications += sub.applications - counts[0]
-            op.single_applications += sub.single_applications - counts[1]
+        c = _solve_window(op, h, box, depth, force, sigma, p, displacement,
+                          displacement_error, settings)
         iterations += c.iterations
-        p_new = np.zeros_like(h)
-        p_new[box] = c.pressure
-        # the displacement on the box: the last one plus that of the change
-        # (in single precision under the running bound while that stays
-        # small against the tolerance, else one double convolution)
-        u, drift = None, 0.0
-        if displacement is not None and single and tol >= SINGLE_MIN_TOL:
-            change = op.single(p_new - p)
-            drift = displacement_error + SINGLE_ERROR * float(np.max(np.abs(change)))
-            if 2.0 * drift / g_scale < 0.5 * tol:
-                u = displacement + change
-        if u is None:
-            u, drift = op(p_new), 0.0
-        on = p_new > 0.0
-        d = float(np.mean((h + u + sigma * p_new)[on])) if force is not None else depth
-        gap = h - d + u + sigma * p_new
-        res = complementarity_residual(p_new, gap, p_scale, g_scale)
-        p, displacement, displacement_error = p_new, u, drift
-        if res + 2.0 * drift / g_scale < tol:
-            return Contact(pressure=p, gap=gap, depth=d, force=c.force,
-                           iterations=iterations, residual=res, displacement=u,
-                           displacement_error=drift)
+        c.iterations = iterations
         outside = np.ones(h.shape, dtype=bool)
         outside[box] = False
-        overlap = outside & (gap < 0.0)
+        reach = outside & (h < c.depth)
+        if not whole_box and not np.any(reach):
+            return _on_box(op, h, box, c, p, displacement, displacement_error, sigma, tol,
+                           single, g_scale, p_scale, False, False)[0]
+        result, drift = _on_box(op, h, box, c, p, displacement, displacement_error, sigma,
+                                tol, single, g_scale, p_scale, True, force is not None)
+        p, displacement, displacement_error = (result.pressure, result.displacement,
+                                               result.displacement_error)
+        if result.residual + 2.0 * drift / g_scale < tol:
+            return result
+        overlap = reach & (result.gap < 0.0)
         if not np.any(overlap):
             break       # the window's solve and the box's residual differ at rounding
-        candidates = candidates | overlap | on
+        candidates = candidates | overlap | (p > 0.0)
     c = solve_box(op, h, depth=depth, force=force, sigma=sigma, p_init=p, p_scale=p_scale,
                   g_scale=g_scale, tol=tol, maxiter=maxiter, precondition=precondition,
-                  single=single, displacement=displacement,
+                  single=single, displacement=_known(displacement),
                   displacement_error=displacement_error)
     c.iterations += iterations
     return c
+
+
+def _known(displacement, box=None):
+    """The displacement (on ``box``) when it is known there (no NaN), else None."""
+    if displacement is None:
+        return None
+    part = displacement if box is None else displacement[box]
+    return part if np.isfinite(part).all() else None
+
+
+def _solve_window(op, h, box, depth, force, sigma, p, displacement, displacement_error,
+                  settings) -> Contact:
+    """:func:`solve_box` on the window ``box`` (its own operator; applications counted as the box's)."""
+    sub = op.window(box[0].stop - box[0].start)
+    counts = sub.applications, sub.single_applications
+    try:
+        return solve_box(sub, h[box], depth=depth, force=force,
+                         sigma=sigma[box] if np.ndim(sigma) else sigma,
+                         p_init=None if p is None else p[box],
+                         displacement=None if p is None else _known(displacement, box),
+                         displacement_error=displacement_error, **settings)
+    finally:
+        op.applications += sub.applications - counts[0]
+        op.single_applications += sub.single_applications - counts[1]
+
+
+def _on_box(op, h, box, c, p, displacement, displacement_error, sigma, tol, single, g_scale,
+            p_scale, whole_box, force_control):
+    """The window's contact ``c`` on the whole box, and the bound on its displacement's error.
+
+    ``whole_box``: the displacement on the box is the last one plus that of
+    the change of pressure (in single precision under the running bound
+    while that stays small against the tolerance, else one double
+    convolution); the gap and residual are the box's (under force control
+    with the approach recomputed on it). Otherwise the window's displacement
+    and gap, NaN outside it.
+    """
+    p_new = np.zeros_like(h)
+    p_new[box] = c.pressure
+    if not whole_box:
+        u = np.full_like(h, np.nan)
+        u[box] = c.displacement
+        gap = np.full_like(h, np.nan)
+        gap[box] = c.gap
+        return Contact(pressure=p_new, gap=gap, depth=c.depth, force=c.force,
+                       iterations=c.iterations, residual=c.residual, displacement=u,
+                       displacement_error=c.displacement_error), c.displacement_error
+    u, drift = None, 0.0
+    if displacement is not None and p is not None and single and tol >= SINGLE_MIN_TOL:
+        change = op.single(p_new - p)
+        drift = displacement_error + SINGLE_ERROR * float(np.max(np.abs(change)))
+        if 2.0 * drift / g_scale < 0.5 * tol:
+            u = displacement + change
+            if not np.isfinite(u).all():
+                u = None
+    if u is None:
+        u, drift = op(p_new), 0.0
+    on = p_new > 0.0
+    d = float(np.mean((h + u + sigma * p_new)[on])) if force_control else c.depth
+    gap = h - d + u + sigma * p_new
+    res = complementarity_residual(p_new, gap, p_scale, g_scale)
+    return Contact(pressure=p_new, gap=gap, depth=d, force=c.force, iterations=c.iterations,
+                   residual=res, displacement=u, displacement_error=drift), drift
 
 
 def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=1.0,
@@ -313,19 +375,25 @@ def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=
     # Each CG iteration's elementwise work is a few dozen passes over the
     # box; those below are skipped or fused where the result is the same:
     # no wear compliance for σ = 0, h - d once under depth control, the
-    # inner products and the restriction to the free pixels in one pass each
+    # inner products in one pass each (einsum), and every array of the
+    # iteration written into one allocated before it: a fresh array of a
+    # window's size is mapped from the system and faulted in page by page
+    # (measured: twice the time of the pass itself, docs/performance.md)
     has_compliance = stroke_mean or per_pixel or sigma != 0.0
     h_minus_d = h - depth if depth is not None else None
 
     t = np.zeros_like(p)
+    gap, g, z, work = (np.empty_like(p) for _ in range(4))
+    on, free, free_old = (np.empty(p.shape, dtype=bool) for _ in range(3))
     gz_old = 1.0
-    free_old = None
+    restart = True
     d = depth
     res = np.inf
     u = None
     drift = 0.0          # bound on the error single-precision increments left in u [m]
     single = single and tol >= SINGLE_MIN_TOL
     best, since = np.inf, 0
+    ratio = p_scale / g_scale
     if displacement is not None:
         u = displacement + compliance(p)
         drift = displacement_error
@@ -333,12 +401,23 @@ def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=
         if u is None or it % REFRESH == 0:
             u = op(p) + compliance(p)
             drift = 0.0
-        on = p > 0.0
+            # the gap jumps by the error the recomputation removed: the
+            # conjugate directions' recurrence no longer holds (after a
+            # displacement off by 2e-5 d the iteration stalled for hundreds
+            # of iterations without this restart)
+            restart = True
+        np.greater(p, 0.0, out=on)
         if force is not None:
             # the approach: the mean of h + u over the contact (zero gap there)
             d = float(np.mean((h + u)[on]))
-        gap = u + h_minus_d if force is None else h - d + u
-        res = complementarity_residual(p, gap, p_scale, g_scale)
+            np.subtract(h, d, out=gap)
+            gap += u
+        else:
+            np.add(u, h_minus_d, out=gap)
+        # the complementarity residual (:func:`complementarity_residual`)
+        np.multiply(gap, ratio, out=work)
+        np.minimum(p, work, out=work)
+        res = float(max(work.max(), -work.min())) / p_scale
         if res < tol:
             if res + 2.0 * drift / g_scale < tol:
                 return Contact(pressure=p, gap=gap, depth=float(d),
@@ -359,38 +438,42 @@ def solve_box(op, h, *, depth=None, force=None, sigma=0.0, p_init=None, p_scale=
                     continue
         # the free pixels of the bound-constrained problem: loaded, or
         # unloaded and overlapping (their gradient points into p > 0)
-        free = on | (gap < 0.0)
-        g = np.where(free, gap, 0.0)
+        np.less(gap, 0.0, out=free)
+        free |= on
+        np.multiply(gap, free, out=g)
         if force is not None:
             # the force is held: directions of zero mean on the free pixels
             g[free] -= np.mean(g[free])
         if precond is not None:
-            z = precond(g)
-            np.multiply(z, free, out=z)
+            np.multiply(precond(g), free, out=z)
             if force is not None:
                 z[free] -= np.mean(z[free])
         else:
-            z = g
-        gz = float(np.sum(g * z))
+            np.copyto(z, g)
+        gz = float(np.einsum("ij,ij->", g, z))
         # conjugate directions while the free set stays; restart when it changes
-        if free_old is None or not np.array_equal(free, free_old):
-            t = z.copy()
+        if restart or not np.array_equal(free, free_old):
+            np.copyto(t, z)
         else:
             t *= gz / gz_old
             t += z
-        free_old, gz_old = free, gz
+        restart = False
+        free, free_old = free_old, free
+        gz_old = gz
         r = op.single(t) if single else op(t)
         if has_compliance:
             r += compliance(t)
-        rt = float(np.sum(r * t))
+        rt = float(np.einsum("ij,ij->", r, t))
         if not rt > 0.0:
             raise SolverError("contact solve: the search direction has no positive curvature "
                               f"(residual {res:.3g}); the operator is not positive definite")
         tau = gz / rt
-        p -= tau * t
-        u -= tau * r
+        np.multiply(t, tau, out=work)
+        p -= work
+        np.multiply(r, tau, out=work)
+        u -= work
         if single:
-            drift += SINGLE_ERROR * abs(tau) * float(np.max(np.abs(r)))
+            drift += SINGLE_ERROR * abs(tau) * float(max(r.max(), -r.min()))
         # the projection onto p >= 0: its (few) pixels enter u by direct sum
         clipped = np.nonzero(p < 0.0) if p.min() < 0.0 else ((),)
         if len(clipped[0]) > MAX_DIRECT:

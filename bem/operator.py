@@ -46,16 +46,17 @@ def influence_kernel(n, spacing, E_star):
     Returned on the 2n × 2n wrap-around grid of the DC-FFT: offset i sits at
     index i mod 2n for |i| < n; the row and column at index n (offset ±n,
     never needed inside the box) are zero, which is what makes the circular
-    convolution equal to the linear one on the n × n box.
+    convolution equal to the linear one on the n × n box. K is even in both
+    offsets: the closed form is evaluated on the quadrant of offsets 0..n-1
+    and mirrored (a quarter of the evaluations).
     """
-    m = 2 * n
-    off = np.arange(m)
-    off = np.where(off < n, off, off - m).astype(float)
-    off[n] = 0.0
-    X, Y = np.meshgrid(off * spacing, off * spacing, indexing="ij")
-    K = rectangle_displacement(X, Y, 0.5 * spacing, 0.5 * spacing, E_star)
-    K[n, :] = 0.0
-    K[:, n] = 0.0
+    off = np.arange(n) * spacing
+    X, Y = np.meshgrid(off, off, indexing="ij")
+    quadrant = rectangle_displacement(X, Y, 0.5 * spacing, 0.5 * spacing, E_star)
+    K = np.zeros((2 * n, 2 * n))
+    K[:n, :n] = quadrant
+    K[n + 1:, :n] = quadrant[:0:-1, :]
+    K[:, n + 1:] = K[:, n - 1:0:-1]
     return K
 
 

@@ -5,14 +5,23 @@
 
 Each run (case:grid) is solved by the baseline (the commit ``--baseline`` of
 this repository, extracted by ``git archive`` into a temporary directory and
-imported from there) and by this working tree, alternately, each in a fresh
-Python process. Per run: solve time (``solve_seconds``), steps, CG
-iterations, double- and single-precision operator applications, and the
-accuracy against the baseline: the largest difference at the stages of the
-force (over F0), of the pressure field (over the stage's peak pressure), of
-the ring-averaged profile (over d, d0 under force control) and of the
-contact radius (over the stage's). The machine is shared: the load average
-is printed before and after each run.
+imported from there) and by this working tree, alternately (ABAB with
+``--repeat 2``), each in a fresh Python process. Per run: solve time
+(``solve_seconds``, wall clock) and the CPU time of the solve (the process's
+own, which the machine's load changes far less: on the shared two cores the
+wall clock runs 2-6 times the CPU time at load 7-14), steps, CG iterations,
+double- and single-precision operator applications, and the accuracy:
+
+- against the baseline, the largest difference at the stages of the force
+  (over F0), of the pressure field (over the stage's peak pressure), of the
+  ring-averaged profile (over d, d0 under force control) and of the contact
+  radius (over the stage's);
+- against an independent reference, the MDR of the same case (its own
+  ``mdr.elements``) in the same process: the largest difference at the
+  stages of the force (over F0) and of the central wear (over d, d0), for
+  each code, so that both are held to the same yardstick.
+
+The machine is shared: the load average is printed before and after each run.
 """
 
 from __future__ import annotations
@@ -34,22 +43,30 @@ PACKAGES = ("cases", "mdr", "fem", "bem", "meshes", "numerics", "comparisons")
 CHILD = r"""
 import json, sys, time
 import numpy as np
-from wearcheck import bem, cases
+from wearcheck import bem, cases, mdr
 from wearcheck.cases import reference
 name, grid, out = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 case = cases.load(cases.shipped(name), [f"bem.grid={grid}"])
+cpu = time.process_time()
 res = bem.solve(case)
+cpu = time.process_time() - cpu
 sc = reference.scales(case)
+d = case.loading.depth if case.loading.control == "depth" else sc["d0"]
 h = res.history
 a = [float(np.interp(s, h["s"], h["contact_radius"])) for s in res.stage_s]
 F = [float(np.interp(s, h["s"], h["force"])) for s in res.stage_s]
+w = [float(np.interp(s, h["s"], h["wear_center"])) for s in res.stage_s]
+ref = mdr.solve(case).history
+dF = max(abs(f - float(np.interp(s, ref["s"], ref["force"]))) for s, f in zip(res.stage_s, F))
+dw = max(abs(x - float(np.interp(s, ref["s"], ref["wear_center"])))
+         for s, x in zip(res.stage_s, w))
 np.savez(out, pressure=res.fields["pressure"], f=res.f, stage_s=res.stage_s, a=a, F=F,
-         F0=sc["F0"], d=case.loading.depth if case.loading.control == "depth" else sc["d0"])
+         F0=sc["F0"], d=d)
 info = res.info
-print(json.dumps(dict(seconds=res.solve_seconds, steps=info["steps"],
+print(json.dumps(dict(seconds=res.solve_seconds, cpu=cpu, steps=info["steps"],
                       cg=info["cg_iterations"], double=info["operator_applications"],
                       single=info.get("single_precision_applications", 0),
-                      module=bem.__file__)))
+                      mdr_force=dF / sc["F0"], mdr_wear=dw / d, module=bem.__file__)))
 """
 
 
@@ -63,7 +80,9 @@ def stage_package(commit: str, into: Path) -> Path:
     src = into / "src"
     shutil.copytree(tree / "wearcheck", src / "wearcheck")
     for pkg in PACKAGES:
-        shutil.copytree(tree / pkg, src / "wearcheck" / pkg)
+        # packages still at the top level at that commit (later ones live in wearcheck/)
+        if (tree / pkg).is_dir() and not (src / "wearcheck" / pkg).exists():
+            shutil.copytree(tree / pkg, src / "wearcheck" / pkg)
     return src
 
 
@@ -109,9 +128,10 @@ def main(argv=None):
                           check=True, capture_output=True, text=True).stdout.strip()
     print(f"# BEM speed: baseline {args.baseline} ({commit}) against the working tree "
           f"(HEAD {head}); " + " ".join(sys.argv))
-    print("| case | grid | code | solve [s] | ratio | steps | CG iterations | double / single "
-          "applications | ΔF/F0 | Δp/p_max | Δf_ring/d | Δa/a | load |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("| case | grid | code | solve [s] | ratio | CPU [s] | CPU ratio | steps | CG iterations "
+          "| double / single applications | ΔF/F0 | Δp/p_max | Δf_ring/d | Δa/a "
+          "| MDR: ΔF/F0 | MDR: Δw_c/d | load |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         src = stage_package(args.baseline, tmp)
@@ -125,9 +145,12 @@ def main(argv=None):
                 for label, row, cells in (("baseline", b, ["–"] * 4),
                                           ("this tree", n, [f"{x:.1e}" for x in acc])):
                     ratio = row["seconds"] / b["seconds"]
+                    cpu_ratio = row["cpu"] / b["cpu"]
                     print(f"| {name} | {grid} | {label} | {row['seconds']:.1f} | {ratio:.2f} | "
+                          f"{row['cpu']:.1f} | {cpu_ratio:.2f} | "
                           f"{row['steps']} | {row['cg']} | {row['double']} / {row['single']} | "
-                          + " | ".join(cells) + f" | {row['load']} |", flush=True)
+                          + " | ".join(cells) + f" | {row['mdr_force']:.1e} | "
+                          f"{row['mdr_wear']:.1e} | {row['load']} |", flush=True)
 
 
 if __name__ == "__main__":

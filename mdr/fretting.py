@@ -490,11 +490,11 @@ def _check_slip_resolved(model, st, acc):
     Any tangential load slides the edge of the unworn contact (the pressure
     falls to zero there), but an annulus a - c narrower than the cell at the
     contact edge holds no loaded node, or one barely loaded: the run
-    dissipates and wears almost nothing, silently. Energy of the first cycle
-    against Mindlin–Deresiewicz, sphere and paraboloid, N = 200, Q* = 0.002-0.2
-    μF: -1.0 (to 5e-4) for 0.09-0.86 cells, -0.31 at 1.3, -0.24 at 2.2, -0.10
-    at 3.5, -0.066 at 5.3, -0.034 at 9.2 cells (docs/fretting.md, §2). The
-    grid's own a and c (sub-grid crossings, c to 1e-5 a) measure the annulus.
+    dissipates and wears almost nothing, silently: the first cycle's energy
+    against Mindlin–Deresiewicz falls short the more, the fewer cells the
+    annulus holds (docs/performance.md, "Measurements behind the code";
+    docs/fretting.md §2). The grid's own a and c (sub-grid crossings) measure
+    the annulus.
     """
     m = st.normal["m"]
     if m < 0:
@@ -522,9 +522,10 @@ def _check_slip_resolved(model, st, acc):
     said = (f"{width:.3g} m wide (a - c, a = {a:.4g} m)" if measured else
             f"narrower than the grid measures, about {width:.3g} m (G*U/(μ|q'(a)|), a = "
             f"{a:.4g} m)")
-    # the cell at the edge scales as 1/N (t = r² uniform); with 4 cells in the
-    # annulus the first cycle's energy was 10-12 % low (Q* = 0.01 μF, N = 1900;
-    # u0 = 0.003 u*, N = 4200). The annulus grows in proportion to a small amplitude.
+    # the cell at the edge scales as 1/N (t = r² uniform); with too few cells in
+    # the annulus the first cycle's energy is low (docs/performance.md,
+    # "Measurements behind the code"). The annulus grows in proportion to a
+    # small amplitude.
     cells = width / cell
     need = 100 * math.ceil(N * ANNULUS_CELLS / cells / 100)
     remedy = f"raise {amp} to about {value * ANNULUS_CELLS / cells:.3g}"
@@ -618,12 +619,12 @@ def _settle_springs(model, st):
     # The springs' memory is slaved to the profile: in the every-cycle run each
     # cycle starts from the state the last one left for nearly the same limits,
     # while after a jump the springs inside the stick edge still hold the state
-    # of the old limits, and the first cycle from there slides and wears more
-    # (the shipped case: +2e-3 in the worn volume after 10⁵ cycles at any
-    # tolerance, the profile 1e-2 of the wear off). One cycle of the springs
-    # alone, without wear, under the new limits puts every spring in the state
-    # the periodic cycle gives them (Coulomb springs under fixed limits shake
-    # down within one cycle): 2.4e-4 and −3.6e-5 then (docs/fretting.md §4).
+    # of the old limits, and the first cycle from there slides and wears more:
+    # without a correction the shipped case is biased at any tolerance
+    # (docs/performance.md, "Measurements behind the code"). One cycle of the
+    # springs alone, without wear, under the new limits puts every spring in the
+    # state the periodic cycle gives them (Coulomb springs under fixed limits
+    # shake down within one cycle; docs/fretting.md §4).
     _spring_cycle(model, st)
 
 

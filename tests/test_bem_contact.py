@@ -281,3 +281,107 @@ def test_the_window_solve_equals_the_box_solve_under_depth_control():
     assert np.max(np.abs(win.pressure - box.pressure)) < 50 * 1e-6 * box.pressure.max()
     gap = f - d + op(win.pressure)
     assert contact.complementarity_residual(win.pressure, gap, 1e9, d) < 1e-6
+
+
+def test_window_only_fields_equal_the_box_solve():
+    # Depth control, the contact small against the box: with whole_box=False
+    # the gap and displacement are the window's and NaN outside it, where no
+    # pixel can touch (h >= d there: the window holds every pixel with h < d).
+    # Pressure and approach must be the whole box's solve to 50·tol of the
+    # peak (both meet tol = 1e-6), the kept displacement G p within its error
+    # bound of a fresh double-precision convolution, and the gap outside,
+    # completed as h - d + G p, non-negative. A second solve started from the
+    # window-only displacement (its window is the same) must need no
+    # convolution in double precision, as with a whole-box one.
+    X, Y, op, a0 = _paraboloid_grid(96, box=8.0)
+    d = 1e-6
+    f = (X**2 + Y**2) / 0.02 + 0.05 * d * np.cos(7 * X / a0) * np.exp(-(X**2 + Y**2) / a0**2)
+    kw = dict(depth=d, p_scale=1e9, g_scale=d, tol=1e-6)
+    win = contact.solve(op, f, whole_box=False, **kw)
+    box = contact.solve(op, f, window=False, **kw)
+    known = np.isfinite(win.displacement)
+    assert np.array_equal(known, np.isfinite(win.gap))
+    assert 0 < np.count_nonzero(known) < known.size
+    assert np.all(f[~known] >= d) and np.all(win.pressure[~known] == 0.0)
+    assert np.max(np.abs(win.pressure - box.pressure)) < 50 * 1e-6 * box.pressure.max()
+    true = op(win.pressure)
+    assert np.max(np.abs(win.displacement - true)[known]) <= win.displacement_error \
+        + 1e-12 * np.max(true)
+    gap = f - d + true
+    assert np.max(np.abs(win.gap - gap)[known]) < 1e-6 * d
+    assert np.min(gap[~known]) >= 0.0
+    assert contact.complementarity_residual(win.pressure, gap, 1e9, d) < 1e-6
+    worn = f + 1e-3 * d * np.exp(-(X**2 + Y**2) / (0.5 * a0)**2)
+    before = op.applications
+    again = contact.solve(op, worn, p_init=win.pressure, displacement=win.displacement,
+                          displacement_error=win.displacement_error, whole_box=False, **kw)
+    assert op.applications == before
+    gap = worn - d + op(again.pressure)
+    assert contact.complementarity_residual(again.pressure, gap, 1e9, d) < 1e-6
+
+
+def test_a_window_only_displacement_is_convolved_where_unknown():
+    # A displacement known on a smaller window than the next solve's (NaN on
+    # the rest): the solve must convolve rather than use it, and still meet
+    # the tolerance on the whole box (a fresh convolution)
+    X, Y, op, a0 = _paraboloid_grid(96, box=8.0)
+    d = 1e-6
+    f = (X**2 + Y**2) / 0.02
+    kw = dict(p_scale=1e9, g_scale=d, tol=1e-6)
+    small = contact.solve(op, f, depth=0.5 * d, whole_box=False, **kw)
+    assert np.any(np.isnan(small.displacement))
+    before = op.applications
+    grown = contact.solve(op, f, depth=d, p_init=small.pressure,
+                          displacement=small.displacement,
+                          displacement_error=small.displacement_error, whole_box=False, **kw)
+    assert op.applications > before
+    gap = f - d + op(grown.pressure)
+    assert contact.complementarity_residual(grown.pressure, gap, 1e9, d) < 1e-6
+
+
+def test_force_control_fields_are_window_only_where_nothing_can_touch():
+    # Force control: after the window's solve, pixels outside it with h < d
+    # at the solved approach could touch; only when there are none may the
+    # fields stay the window's (NaN outside). Started from an eighth of the
+    # force (the window too small: the solve enlarges it) and from the
+    # solution itself: wherever the fields are NaN, h >= d, and the pressure
+    # is the whole box's solve to 50·tol of the peak (both meet 1e-6)
+    X, Y, op, a0 = _paraboloid_grid(96, box=8.0)
+    R, E = 0.01, 1e11
+    h = (X**2 + Y**2) / (2 * R)
+    d0 = a0**2 / R
+    W = 4.0 / 3.0 * E * math.sqrt(R) * d0**1.5
+    kw = dict(p_scale=1e9, g_scale=d0, tol=1e-6)
+    box = contact.solve(op, h, force=W, window=False, **kw)
+    for start in (contact.solve(op, h, force=W / 8, **kw), box):
+        win = contact.solve(op, h, force=W, p_init=start.pressure,
+                            displacement=start.displacement,
+                            displacement_error=start.displacement_error, whole_box=False, **kw)
+        unknown = np.isnan(win.gap)
+        assert np.array_equal(unknown, np.isnan(win.displacement))
+        assert np.all(h[unknown] >= win.depth)
+        assert np.max(np.abs(win.pressure - box.pressure)) < 50 * 1e-6 * box.pressure.max()
+        gap = h - win.depth + op(win.pressure)
+        assert contact.complementarity_residual(win.pressure, gap, 1e9, d0) < 1e-6
+
+
+def test_a_recomputed_displacement_restarts_the_directions():
+    # A start whose displacement is off by 3e-5 d (stated as its error
+    # bound): the solve meets the tolerance on the tracked displacement,
+    # finds the bound too large, recomputes it in double precision and goes
+    # on. The conjugate directions must restart there: continued across the
+    # jump of the gap, a captured wear-step solve took 855 iterations
+    # instead of 7 (here 148 against 9). Bound: 40 iterations (a cold start
+    # here takes 13), and the residual on a fresh convolution below the
+    # tolerance.
+    X, Y, op, f, d = _worn(64)
+    kw = dict(depth=0.8 * d, p_scale=1e9, g_scale=d, tol=1e-6)
+    first = contact.solve(op, f, window=False, **kw)
+    worn = f + 1e-3 * d * np.exp(-(X**2 + Y**2) / (0.5 * np.max(X))**2)
+    error = 3e-5 * d * np.cos(3 * X / np.max(X)) * np.cos(2 * Y / np.max(X))
+    c = contact.solve(op, worn, p_init=first.pressure, window=False,
+                      displacement=op(first.pressure) + error,
+                      displacement_error=3e-5 * d, **kw)
+    assert c.iterations < 40
+    gap = worn - c.depth + op(c.pressure)
+    assert contact.complementarity_residual(c.pressure, gap, 1e9, d) < 1e-6

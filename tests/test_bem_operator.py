@@ -37,10 +37,12 @@ def test_love_against_quadrature(x, y):
                                                                   rel=1e-8)
 
 
-def test_dcfft_equals_direct_sum():
+@pytest.mark.parametrize("n", [7, 8])
+def test_dcfft_equals_direct_sum(n):
     # the zero-padded FFT convolution is the non-periodic sum over the box,
-    # to round-off: compare with the dense influence matrix
-    n, dx, E = 7, 0.1, 3.0
+    # to round-off: compare with the dense influence matrix, evaluated at
+    # every offset (the kernel is evaluated on one quadrant and mirrored)
+    dx, E = 0.1, 3.0
     op = HalfSpace(n, dx, E)
     c = (np.arange(n) * dx)
     X, Y = np.meshgrid(c, c, indexing="ij")

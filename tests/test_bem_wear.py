@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from wearcheck import bem, cases, fem, mdr
+from wearcheck.bem.operator import HalfSpace
 from wearcheck.cases import CaseError, profiles, reference
 
 
@@ -153,6 +154,26 @@ def test_stage_outputs():
     assert len(an["pressure"]) == len(an["wear"]) == K
     assert all(0 <= v < 0.5 for v in an["pressure_interior"])
 
+
+
+def test_stage_gaps_are_the_whole_box_gaps():
+    # The wear run keeps each solve's gap on its window only (NaN outside,
+    # where no pixel can touch); the stored stages complete it. Every stage's
+    # gap must be finite and equal f - d + G p on the whole box, with G p a
+    # fresh convolution of the stored pressure (to 1e-6 d: the solve's
+    # tolerance on its tracked displacement), non-negative off the contact
+    # and zero on it (to the same tolerance)
+    case = paper(48, s_hat=1.0, step_hat=0.05)
+    res = bem.solve(case)
+    n, dx = case.bem.grid, res.info["pixel"]
+    op = HalfSpace(n, dx, case.E_star)
+    d = case.loading.depth
+    for f, p, gap in zip(res.fields["profile"], res.fields["pressure"], res.fields["gap"]):
+        assert np.all(np.isfinite(gap))
+        true = f - d + op(p)
+        assert np.max(np.abs(gap - true)) < 1e-6 * d
+        assert np.min(true[p == 0]) > -1e-6 * d
+        assert np.max(np.abs(true[p > 0])) < 1e-6 * d
 
 def static(profile, grid=32):
     """paper.toml with another profile, the unworn contact only."""
