@@ -142,3 +142,21 @@ def test_the_runaway_guard_names_the_tolerance(every_move):
     with pytest.raises(SolverError, match=r"more than 5 cycles; raise bem.jump_tolerance"):
         moving.run_jumped(mm, one, 100 * len(one), tolerance=0.01,
                           max_simulated_moves=5 * len(one))
+
+
+def test_a_jacobian_known_by_its_solves_propagates_as_the_matrix():
+    # numerics.cycle_jumping.SolveJacobian builds R(hJ) e from (I − gJ)⁻¹ alone;
+    # on a dense J it must equal ros2_propagate with the matrix (to 1e-12)
+    from wearcheck.numerics import cycle_jumping as cj
+    rng = np.random.default_rng(1)
+    Q, _ = np.linalg.qr(rng.normal(size=(8, 8)))
+    J = Q @ np.diag(-np.logspace(-3, 1, 8)) @ Q.T
+
+    class Solves(cj.SolveJacobian):
+        def filter(self, gh, x):
+            return np.linalg.solve(np.eye(8) - gh * J, x)
+    e = rng.normal(size=8)
+    for h in (0.5, 10.0, 1e3):
+        want = cj.ros2_propagate(e, h, cj.Jacobian(np.arange(8), J))
+        np.testing.assert_allclose(Solves().propagate(e, h), want, rtol=0,
+                                   atol=1e-12 * np.max(np.abs(e)))
