@@ -116,6 +116,8 @@ RULES = (
     Forbids((Is("counterface.wears", False), Is("bem.track_model", "moving")),
             why="bem.track_model applies to a counterface that wears",
             hint="set counterface.wears = true or remove bem.track_model"),
+    Excludes.unless(Is("bem.track_model", "moving"), "bem.jump_tolerance",
+                    defaults_allowed=True),
     # the end of the run
     Requires(Is("sliding.until", "distance"), "sliding.distance"),
     Excludes(Is("sliding.until", "force_fraction"), "sliding.distance"),

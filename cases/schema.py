@@ -269,6 +269,13 @@ class BEMSettings:
                                "travels over a grid fixed to the flat, turnarounds "
                                "included; one contact solve per pixel of sliding: short "
                                "runs)")
+    jump_tolerance: float = key(0.01, unit="1", minimum=0.0, maximum=1.0, open_maximum=True,
+                                doc="bem.track_model = \"moving\": cycle jumping (ROS2 on "
+                                    "the wear per simulated cycle, docs/both-bodies.md): "
+                                    "the estimated error of both bodies' wear against the "
+                                    "run that simulates every cycle, held at this fraction "
+                                    "of the largest wear; 0 simulates every cycle (at most "
+                                    "200 000 moves)")
     tolerance: float = key(1e-6, positive=True, maximum=1e-2,
                            doc="complementarity tolerance of each contact solve: "
                                "max |min(p/p0, gap/d)| over the pixels (1e-6: on the paper "

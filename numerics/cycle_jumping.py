@@ -119,7 +119,8 @@ class Problem:
 
     def jacobian(self, cycle: Cycle) -> tuple[np.ndarray, np.ndarray] | None:
         """(index, J): an approximation of ∂F/∂y on the entries ``index`` near the
-        state of ``cycle`` (zero elsewhere), or None (explicit steps, Heun's)."""
+        state of ``cycle`` (zero elsewhere), a :class:`SolveJacobian`, or None
+        (explicit steps, Heun's)."""
         return None
 
 
@@ -170,6 +171,24 @@ class Jacobian:
         return x
 
 
+class SolveJacobian:
+    """J known by its solves only (a matrix-free approximation of ∂F/∂y, e.g. a
+    contact's elastic response): :meth:`filter` is (I − gh·J)⁻¹ x on the whole
+    variable; R(hJ) e (:func:`ros2_propagate`) is built from the same solves, as
+    (I − gJ)⁻¹J = ((I − gJ)⁻¹ − I)/g. Return one from :meth:`Problem.jacobian`
+    instead of (index, J)."""
+
+    def filter(self, gh: float, x: np.ndarray) -> np.ndarray:
+        raise NotImplementedError
+
+    def propagate(self, e: np.ndarray, h: float) -> np.ndarray:
+        g = GAMMA * h
+        k1 = (self.filter(g, e) - e) / g
+        z = e + h * k1
+        k2 = (self.filter(g, z) - z) / g - 2.0 * self.filter(g, k1)
+        return e + 1.5 * h * k1 + 0.5 * h * k2
+
+
 def ros2(F0: np.ndarray, stage_rate, h: float, jac: Jacobian | None):
     """One ROS2 step of h cycles: the increment of y (None if not finite).
 
@@ -190,6 +209,8 @@ def ros2(F0: np.ndarray, stage_rate, h: float, jac: Jacobian | None):
 
 def ros2_propagate(e: np.ndarray, h: float, jac: Jacobian | None) -> np.ndarray:
     """R(hJ) e: the error e carried through a ROS2 step of the linearised problem."""
+    if isinstance(jac, SolveJacobian):
+        return jac.propagate(e, h)
     if jac is None or not len(jac.index):
         return e.copy()
     S = jac.index
@@ -350,7 +371,8 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
         accepted = False
         if h >= 2:
             index_matrix = problem.jacobian(cyc)
-            jac = Jacobian(*index_matrix) if index_matrix is not None else None
+            jac = (index_matrix if index_matrix is None or isinstance(index_matrix, SolveJacobian)
+                   else Jacobian(*index_matrix))
         while h >= 2:
             carried = ros2_propagate(error, h, jac)
             carried_drift = ros2_propagate(drift, h, jac)

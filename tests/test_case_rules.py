@@ -89,6 +89,7 @@ POOL = {
     "sliding.motion": ["reciprocating", "unidirectional"],
     "sliding.track_radius": [0.01],
     "bem.track_model": ["long_stroke", "moving"],
+    "bem.jump_tolerance": [0.05],
     "loading.control": ["depth", "force"],
     "loading.depth": [1e-6, 0.02, 1e-300],
     "loading.force": [1.0, 1e12],
