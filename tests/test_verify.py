@@ -497,3 +497,37 @@ def test_results_that_stop_early_fail(no_figures, tmp_path, paper_run):
     end = max(float(ln.split(",")[col]) / 1e3 * per_m for ln in keep)
     assert f"your results end at ŝ = {end:.4g}" in done.stderr
     # the full history passes (test_history_alone_judges_the_history): the cut alone fails it
+
+
+@pytest.mark.parametrize("factor", [1e3, 1e6])
+def test_distances_in_the_wrong_unit_fail(no_figures, tmp_path, paper_run, factor):
+    """A history whose distances are written in mm or µm under a header that says
+    metres reaches far past the case's last stage, so the reach check passes; its
+    rows nearest the case's stages are then the unworn row (ŝ = 0) and rows far
+    beyond the reference. Judging the unworn row alone passed such results (exit 0,
+    1 of 7 stages judged). The case's last stage must have a row near it (nearer to
+    it than to the stage before, the midpoint of the two): else the verdict fails
+    and says where the rows are. A sparse honest history (rows at ŝ = 0, 2, 9.9, 11)
+    still passes: its row 9.9 is the last stage's."""
+    h = paper_run.history
+    per_m = paper_run.scales["s_hat_per_m"]
+    wrong = tmp_path / "wrong"
+    wrong.mkdir()
+    rows = [f"{s * factor:.17g},{F:.17g}" for s, F in zip(h["s"], h["force"])]
+    (wrong / "history.csv").write_text("s,force\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    m = run_verify("paper", wrong, tmp_path / "v-wrong")
+    assert not m["passed"]
+    done = cli("verify", "paper", wrong, "--out", tmp_path / "v-wrong-cli")
+    assert done.returncode == 1, done.stderr
+    assert "no row of your results near the case's last stage at ŝ = 10" in done.stderr
+    assert "check the unit of the sliding distance" in done.stderr
+
+    # sparse but honest: the reference's own values at ŝ = 0, 2, 9.9 and 11
+    sparse = tmp_path / "sparse"
+    sparse.mkdir()
+    s_hat = np.array([0.0, 2.0, 9.9, 11.0])
+    force = np.interp(s_hat, np.asarray(h["s"]) * per_m, h["force"])
+    rows = [f"{x / per_m:.17g},{F:.17g}" for x, F in zip(s_hat, force)]
+    (sparse / "history.csv").write_text("s,force\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    m = run_verify("paper", sparse, tmp_path / "v-sparse")
+    assert m["passed"], json.dumps(failed_stages(m))
