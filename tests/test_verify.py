@@ -531,3 +531,37 @@ def test_distances_in_the_wrong_unit_fail(no_figures, tmp_path, paper_run, facto
     (sparse / "history.csv").write_text("s,force\n" + "\n".join(rows) + "\n", encoding="utf-8")
     m = run_verify("paper", sparse, tmp_path / "v-sparse")
     assert m["passed"], json.dumps(failed_stages(m))
+
+
+def test_vtk_points_without_values_inside_the_surface_are_refused(no_figures, tmp_path,
+                                                                  paper_run):
+    """A .vtu whose pressure is NaN over most of the contact (a failed export, a
+    result field defined on part of the surface) was judged on the points left
+    (PASS, exit 0, as a CSV with an empty cell is refused). Points without a value
+    between points with values in radius are a hole in the data: refused in one
+    line naming the file, the count and the radii. NaN beyond the last point with
+    values (a field on the contact's selection only) is left out with a note."""
+    import meshio
+    pvd = fmt.vtk_series(tmp_path / "res", paper_run)
+    for vtu in sorted(pvd.parent.glob("surf_*.vtu")):
+        m = meshio.read(vtu)
+        r = np.hypot(m.points[:, 0], m.points[:, 1])        # mm
+        p = m.point_data["CPRESS"]
+        p[(r > 0.01) & (r < 0.12)] = np.nan                   # inside a0 = 0.1 mm
+        meshio.write(vtu, m)
+    with pytest.raises(CaseError, match=r"surf_000\.vtu.*point\(s\) without a finite value "
+                                        r"at radii .* between points with values"):
+        run_verify("paper", pvd, tmp_path / "v-holes", fmt.VTK_MAP)
+    done = cli("verify", "paper", pvd, "--out", tmp_path / "v-holes-cli", *[
+        a for kv in fmt.VTK_MAP for a in ("--map", kv)])
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+
+    tail = fmt.vtk_series(tmp_path / "tail", paper_run)
+    for vtu in sorted(tail.parent.glob("surf_*.vtu")):
+        m = meshio.read(vtu)
+        r = np.hypot(m.points[:, 0], m.points[:, 1])
+        m.point_data["CPRESS"][r > 0.17] = np.nan              # beyond every stage's contact
+        meshio.write(vtu, m)
+    m = run_verify("paper", tail, tmp_path / "v-tail", fmt.VTK_MAP)
+    assert m["passed"], json.dumps(failed_stages(m))
+    assert any("without a finite value" in n for n in m["results"]["notes"])
