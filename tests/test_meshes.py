@@ -105,3 +105,48 @@ def test_mesh_command(tmp_path, capsys):
     assert cli(["mesh", str(cases.shipped("paper")), "--set", "fem.contact_nodes=3",
                 "--quiet"]) == 2
     assert "fem.contact_nodes" in capsys.readouterr().err
+
+
+_WRITER = """
+import os, signal, sys, time
+from pathlib import Path
+from wearcheck import meshes
+def gen(params, tmp):
+    Path(tmp).write_bytes(b"half a mesh")
+    if sys.argv[1] == "die":
+        os.kill(os.getpid(), signal.SIGKILL)   # killed while writing the cache
+    time.sleep(60)
+meshes._generate = gen
+meshes.sphere_mesh(meshes.SphereMeshParameters(radius=0.01, contact_radius=1.8e-4,
+                                               contact_edges=int(sys.argv[2])))
+"""
+
+
+def test_a_killed_cache_writer_s_temporary_is_removed_a_live_one_s_kept(_cache):
+    """A writer killed while gmsh writes the cache entry leaves its temporary file
+    (a hidden '.sphere-<key>...msh') behind: the next write to the cache removes
+    those of processes that are gone (this host), never those of a writer still at
+    work (a concurrent run meshing another case)."""
+    import os
+    import subprocess
+    import sys
+    import time
+    env = dict(os.environ, WEARCHECK_CACHE=str(_cache))
+    dead = subprocess.run([sys.executable, "-c", _WRITER, "die", "10"], env=env)
+    assert dead.returncode == -9
+    left = [f.name for f in _cache.iterdir()]
+    assert len(left) == 1 and left[0].startswith(".sphere-"), left  # the kill's leftover
+    live = subprocess.Popen([sys.executable, "-c", _WRITER, "live", "12"], env=env)
+    try:
+        deadline = time.monotonic() + 60
+        while len(list(_cache.iterdir())) < 2 and time.monotonic() < deadline:
+            time.sleep(0.05)
+        live_tmp = [f for f in _cache.iterdir() if f.name not in left]
+        assert len(live_tmp) == 1
+        meshes.sphere_mesh(_params(10))
+        names = sorted(f.name for f in _cache.iterdir())
+        assert live_tmp[0].name in names and left[0] not in names, names
+        assert sorted(f.suffix for f in _cache.iterdir() if f != live_tmp[0]) == [".msh", ".npz"]
+    finally:
+        live.kill()
+        live.wait()

@@ -78,6 +78,15 @@ def test_netcdf_never_replaces_a_file_that_is_not_its_own(result, tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["notes.nc", "run.nc"]
 
 
+def test_netcdf_into_a_missing_directory_is_one_clear_error(result, tmp_path):
+    """A path whose directory does not exist raised FileNotFoundError naming the hidden
+    temporary ('.run.nc.XXXX.partial'), a name the user never gave: a CaseError names
+    the directory."""
+    with pytest.raises(wearcheck.CaseError, match=r"its directory '.*nowhere' does not exist"):
+        result.to_netcdf(tmp_path / "nowhere" / "run.nc")
+    assert not (tmp_path / "nowhere").exists()
+
+
 def test_plot_helpers_draw_into_the_given_axes(result):
     import matplotlib
     matplotlib.use("Agg")

@@ -13,6 +13,7 @@ limits (no environment variable): the documented 30 s.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
@@ -248,3 +249,36 @@ def test_a_workers_address_is_told_from_the_schedulers(tmp_path, scheduler):
     assert scheduler_mod.probe(address, 10.0, {})["type"] == "Scheduler"
     with pytest.raises(scheduler_mod.SchedulerError, match="is a Dask Worker, not the scheduler"):
         scheduler_mod.probe(worker, 10.0, {})
+
+
+def test_a_stopped_worker_ends_the_study_in_time(tmp_path, monkeypatch):
+    """The scheduler answers but its one worker was stopped (SIGSTOP): the scheduler
+    keeps it registered until its worker-ttl (5 min), so counting workers saw one
+    and the study waited (no end after 8 min from the CLI). A worker whose heartbeat
+    has not come for the worker timeout counts as gone: every run becomes an error
+    row within that limit."""
+    procs, stopped = [], []
+    try:
+        address = _start_scheduler(tmp_path, procs, worker=True)
+        import psutil     # (a dependency of distributed) the nanny's worker process too
+        stopped += [procs[1].pid] + [c.pid for c in psutil.Process(procs[1].pid).children(
+            recursive=True)]
+        for pid in stopped:
+            os.kill(pid, signal.SIGSTOP)
+        monkeypatch.setenv("WEARCHECK_WORKER_TIMEOUT", str(LIMIT))
+        tasks = [Task(f"r{i}", "mdr", {"mdr.elements": 40}) for i in range(2)]
+        t0 = time.perf_counter()
+        outcomes = run_cases(cases.load(HERTZ), tasks, tmp_path / "s", scheduler=address,
+                             quiet=True)
+        wall = time.perf_counter() - t0
+        assert [o.ok for o in outcomes] == [False, False]
+        assert all("heartbeat" in o.message for o in outcomes), [o.message for o in outcomes]
+        assert wall < STARTUP, wall
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                for pid in stopped:
+                    with contextlib.suppress(ProcessLookupError):
+                        os.kill(pid, signal.SIGCONT)
+                p.kill()
+            p.wait(timeout=30)

@@ -497,3 +497,71 @@ def test_results_that_stop_early_fail(no_figures, tmp_path, paper_run):
     end = max(float(ln.split(",")[col]) / 1e3 * per_m for ln in keep)
     assert f"your results end at ŝ = {end:.4g}" in done.stderr
     # the full history passes (test_history_alone_judges_the_history): the cut alone fails it
+
+
+@pytest.mark.parametrize("factor", [1e3, 1e6])
+def test_distances_in_the_wrong_unit_fail(no_figures, tmp_path, paper_run, factor):
+    """A history whose distances are written in mm or µm under a header that says
+    metres reaches far past the case's last stage, so the reach check passes; its
+    rows nearest the case's stages are then the unworn row (ŝ = 0) and rows far
+    beyond the reference. Judging the unworn row alone passed such results (exit 0,
+    1 of 7 stages judged). The case's last stage must have a row near it (nearer to
+    it than to the stage before, the midpoint of the two): else the verdict fails
+    and says where the rows are. A sparse honest history (rows at ŝ = 0, 2, 9.9, 11)
+    still passes: its row 9.9 is the last stage's."""
+    h = paper_run.history
+    per_m = paper_run.scales["s_hat_per_m"]
+    wrong = tmp_path / "wrong"
+    wrong.mkdir()
+    rows = [f"{s * factor:.17g},{F:.17g}" for s, F in zip(h["s"], h["force"])]
+    (wrong / "history.csv").write_text("s,force\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    m = run_verify("paper", wrong, tmp_path / "v-wrong")
+    assert not m["passed"]
+    done = cli("verify", "paper", wrong, "--out", tmp_path / "v-wrong-cli")
+    assert done.returncode == 1, done.stderr
+    assert "no row of your results near the case's last stage at ŝ = 10" in done.stderr
+    assert "check the unit of the sliding distance" in done.stderr
+
+    # sparse but honest: the reference's own values at ŝ = 0, 2, 9.9 and 11
+    sparse = tmp_path / "sparse"
+    sparse.mkdir()
+    s_hat = np.array([0.0, 2.0, 9.9, 11.0])
+    force = np.interp(s_hat, np.asarray(h["s"]) * per_m, h["force"])
+    rows = [f"{x / per_m:.17g},{F:.17g}" for x, F in zip(s_hat, force)]
+    (sparse / "history.csv").write_text("s,force\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    m = run_verify("paper", sparse, tmp_path / "v-sparse")
+    assert m["passed"], json.dumps(failed_stages(m))
+
+
+def test_vtk_points_without_values_inside_the_surface_are_refused(no_figures, tmp_path,
+                                                                  paper_run):
+    """A .vtu whose pressure is NaN over most of the contact (a failed export, a
+    result field defined on part of the surface) was judged on the points left
+    (PASS, exit 0, as a CSV with an empty cell is refused). Points without a value
+    between points with values in radius are a hole in the data: refused in one
+    line naming the file, the count and the radii. NaN beyond the last point with
+    values (a field on the contact's selection only) is left out with a note."""
+    import meshio
+    pvd = fmt.vtk_series(tmp_path / "res", paper_run)
+    for vtu in sorted(pvd.parent.glob("surf_*.vtu")):
+        m = meshio.read(vtu)
+        r = np.hypot(m.points[:, 0], m.points[:, 1])        # mm
+        p = m.point_data["CPRESS"]
+        p[(r > 0.01) & (r < 0.12)] = np.nan                   # inside a0 = 0.1 mm
+        meshio.write(vtu, m)
+    with pytest.raises(CaseError, match=r"surf_000\.vtu.*point\(s\) without a finite value "
+                                        r"at radii .* between points with values"):
+        run_verify("paper", pvd, tmp_path / "v-holes", fmt.VTK_MAP)
+    done = cli("verify", "paper", pvd, "--out", tmp_path / "v-holes-cli", *[
+        a for kv in fmt.VTK_MAP for a in ("--map", kv)])
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+
+    tail = fmt.vtk_series(tmp_path / "tail", paper_run)
+    for vtu in sorted(tail.parent.glob("surf_*.vtu")):
+        m = meshio.read(vtu)
+        r = np.hypot(m.points[:, 0], m.points[:, 1])
+        m.point_data["CPRESS"][r > 0.17] = np.nan              # beyond every stage's contact
+        meshio.write(vtu, m)
+    m = run_verify("paper", tail, tmp_path / "v-tail", fmt.VTK_MAP)
+    assert m["passed"], json.dumps(failed_stages(m))
+    assert any("without a finite value" in n for n in m["results"]["notes"])

@@ -271,8 +271,11 @@ def judge(reference, history: dict, stages: list, *, case_stage_s, scales: dict,
                 not_given=not_given, not_judged=not_judged,
                 history=history_differences(reference, history, scales, depth, given),
                 reach=(reach := reached(history, stages, case_stage_s, same_distance)),
+                last_stage=(last := judged_near_last([st["s"] for st in out_stages], history,
+                                                     stages, case_stage_s, reference.covers,
+                                                     same_distance)),
                 passed=(bool(out_stages) and all(st["passed"] for st in out_stages)
-                        and reach["passed"]))
+                        and reach["passed"] and last["passed"]))
 
 
 def reached(history: dict, stages: list, case_stage_s, same: float = SAME_DISTANCE) -> dict:
@@ -291,6 +294,38 @@ def reached(history: dict, stages: list, case_stage_s, same: float = SAME_DISTAN
     late = [float(s) for s in case_stage_s
             if not (np.isfinite(end) and end >= s - same * abs(s))]
     return dict(passed=not late, end_s=end, not_reached=late)
+
+
+def judged_near_last(judged_s, history: dict, stages: list, case_stage_s, covers,
+                     same: float = SAME_DISTANCE) -> dict:
+    """Whether a judged stage lies near the case's last stage.
+
+    Results that reach past the case's end (:func:`reached`) may still hold no row
+    near it: distances written in mm or µm under a header that says metres put
+    every row but the unworn one far beyond the reference, which judges nothing
+    there, and the unworn row alone would pass. A judged stage, or a row of the
+    results the reference covers (``covers(s)``; a history beside stages that end
+    earlier), must lie at or past the midpoint between the case's last two stages
+    (nearer to the last than to the one before; the last stage itself, to ``same``,
+    when the case has one). Returns
+    {passed, last_s, from_s (that midpoint), below_s and above_s (the results'
+    distances nearest it on either side, NaN where none)}.
+    """
+    case_s = sorted(float(s) for s in case_stage_s)
+    if not case_s:
+        return dict(passed=True, last_s=math.nan, from_s=math.nan, below_s=math.nan,
+                    above_s=math.nan)
+    last = case_s[-1]
+    start = 0.5 * (case_s[-2] + last) if len(case_s) > 1 else last
+    start -= same * abs(start)
+    given = np.concatenate([np.asarray(history.get("s", []), float),
+                            np.asarray([st["s"] for st in stages], float)])
+    given = given[np.isfinite(given)]
+    below, above = given[given < start], given[given >= start]
+    passed = any(s >= start for s in judged_s) or any(covers(float(s)) for s in above)
+    return dict(passed=bool(passed), last_s=last, from_s=start,
+                below_s=float(below.max()) if below.size else math.nan,
+                above_s=float(above.min()) if above.size else math.nan)
 
 
 def _peak(reference, s, a, edge_band, exclude_radius, exclude_width) -> float:

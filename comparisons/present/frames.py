@@ -126,6 +126,8 @@ def write_netcdf(result, path: str | Path) -> Path:
         if not ours:
             raise CaseError(f"'{path}' exists and is not a wearcheck netCDF file: not "
                             "replaced (choose another path)")
+    if not path.parent.is_dir():
+        raise CaseError(f"cannot write '{path}': its directory '{path.parent}' does not exist")
     ds = to_xarray(result)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial", dir=path.parent)
     os.close(fd)

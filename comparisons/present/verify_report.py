@@ -43,6 +43,16 @@ def failures(m) -> list[str]:
         out.append(f"the case's stage(s) at ŝ = {late} not reached: {ends}, before the "
                    f"case's last stage at ŝ = {reach['not_reached'][-1] * per_m:.4g} "
                    f"(s = {reach['not_reached'][-1]:.4g} m)")
+    last = pair.get("last_stage")
+    if last is not None and not last["passed"] and (reach is None or reach["passed"]):
+        per_m = m["scales"]["s_hat_per_m"]
+        rows = " and ".join(f"ŝ = {s * per_m:.4g} (s = {s:.4g} m)"
+                            for s in (last["below_s"], last["above_s"]) if math.isfinite(s))
+        out.append(f"no row of your results near the case's last stage at ŝ = "
+                   f"{last['last_s'] * per_m:.4g} (none judged from ŝ = "
+                   f"{last['from_s'] * per_m:.4g} up to the reference's end): the nearest are "
+                   f"at {rows}; check the unit of the sliding distance (a column without "
+                   "one is in metres: 's [mm]', 's [um]')")
     if not pair["stages"]:
         out.append("no stage could be judged" + (": " + "; ".join(pair["not_judged"])
                                                  if pair["not_judged"] else ""))

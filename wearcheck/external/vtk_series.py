@@ -89,6 +89,27 @@ def _array(mesh, name: str, where: str):
     return data
 
 
+def _check_holes(r, finite, file: Path, notes: list) -> None:
+    """Points without a finite value (NaN, inf) between points with values in radius
+    are a hole in the data, which judging the points left would hide: refused. Those
+    beyond the last point with values (a field on the contact's selection only) are
+    left out, with a note; so are those inside the first (a field off the axis)."""
+    missing = ~finite
+    if not missing.any():
+        return
+    if not finite.any():
+        raise CaseError(f"{file}: no point has a finite value of the arrays read")
+    lo, hi = r[finite].min(), r[finite].max()
+    hole = missing & (r > lo) & (r < hi)
+    if hole.any():
+        raise CaseError(f"{file}: {int(hole.sum())} point(s) without a finite value at radii "
+                        f"{r[hole].min():.4g} to {r[hole].max():.4g} m, between points with "
+                        f"values ({lo:.4g} to {hi:.4g} m): a hole in the results, which "
+                        "wearcheck does not judge around; export the field on every point")
+    notes.append(f"{file.name}: {int(missing.sum())} point(s) without a finite value, outside "
+                 f"the radii {lo:.4g} to {hi:.4g} m of the others, left out")
+
+
 def _field(mesh, name: str):
     v = mesh.field_data.get(name)
     if v is None:
@@ -209,6 +230,7 @@ def read(path: Path, mapping: dict) -> External:
         for v in vals.values():
             if v is not None:
                 finite &= np.isfinite(v)
+        _check_holes(r, finite, file, notes)
         r, vals = r[finite], {k: (v[finite] if v is not None else None) for k, v in vals.items()}
         spread = np.ptp(pts[finite][:, off], axis=0) if finite.any() else np.zeros(2)
         if np.all(spread > 0) and len(np.unique(np.round(r / max(r.max(), 1e-300) * 1e9))) \

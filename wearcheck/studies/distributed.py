@@ -278,16 +278,30 @@ class _Watchdog:
         limit = _worker_timeout()
         answered = time.monotonic()     # the scheduler's last answer
         workerless = None               # since when it has had no worker
+        beats = {}                      # worker: (its last heartbeat, when that changed here)
         while not self._stop.wait(self.interval):
             now = time.monotonic()
             # a request may take what is left of the limit, at most the answer timeout
             wait = max(0.1, min(_answer_timeout(), answered + limit - now))
             try:
-                workers = len(scheduler_mod.nthreads(self.client, wait))
+                seen = scheduler_mod.heartbeats(self.client, wait)
                 answered = time.monotonic()
             except Exception:  # noqa: BLE001 - no answer in time, or the scheduler is gone
-                workers = None
+                seen = None
             now = time.monotonic()
+            workers = None if seen is None else len(seen)
+            if seen is not None:
+                # a worker whose heartbeat has not moved for the limit (stopped, hung)
+                # counts as gone: the scheduler keeps it until its worker-ttl (5 min)
+                beats = {w: beats[w] if w in beats and beats[w][0] == b else (b, now)
+                         for w, b in seen.items()}
+                alive = sum(now - since < limit for _, since in beats.values())
+                if seen and not alive:
+                    self.reason = (f"no worker of the Dask scheduler has sent a heartbeat "
+                                   f"for {limit:g} s (stopped, or hung); the task was "
+                                   "cancelled")
+                    self._cancel()
+                    return
             if workers:
                 workerless = None
                 continue
@@ -307,16 +321,20 @@ class _Watchdog:
                     continue
                 self.reason = (f"no worker left on the Dask scheduler for {limit:g} s; the "
                                "task was cancelled")
-            for _ in range(3):
-                try:
-                    futures = list(self.futures)
-                    break
-                except RuntimeError:  # the dict grew meanwhile
-                    continue
-            for fut in futures:
-                with contextlib.suppress(Exception):  # a client already closed
-                    fut.cancel()
+            self._cancel()
             return
+
+    def _cancel(self):
+        futures = []
+        for _ in range(3):
+            try:
+                futures = list(self.futures)
+                break
+            except RuntimeError:  # the dict grew meanwhile
+                continue
+        for fut in futures:
+            with contextlib.suppress(Exception):  # a client already closed
+                fut.cancel()
 
     def stop(self):
         self._stop.set()

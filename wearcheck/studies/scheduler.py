@@ -222,6 +222,15 @@ def nthreads(client_, timeout: float) -> dict:
     return client_.nthreads(callback_timeout=timeout)
 
 
+def heartbeats(client_, timeout: float) -> dict:
+    """{worker: the scheduler's time of its last heartbeat} of the client's scheduler;
+    TimeoutError (or OSError) if it does not answer within ``timeout`` s. A stopped
+    worker stays registered until the scheduler's worker-ttl (5 min) while its
+    heartbeat stays where it was."""
+    info = client_.sync(client_.scheduler.identity, n_workers=-1, callback_timeout=timeout)
+    return {w: d.get("last_seen") for w, d in (info.get("workers") or {}).items()}
+
+
 def wait_for_worker(client_, address: str, worker_timeout: float, timeout: float) -> None:
     """Return once the scheduler has a worker; SchedulerError when none joined within
     ``worker_timeout`` s, or the scheduler stopped answering (each request ``timeout`` s).
