@@ -141,6 +141,12 @@ def _trsm_in_place(side: bytes, uplo: bytes, diag: bytes, a: np.ndarray, rows: i
            ctypes.byref(lda), a.ctypes.data + 8 * b_offset, ctypes.byref(lda))
 
 
+class Pivoted(Exception):
+    """LAPACK's partial pivoting permuted a matrix that :class:`NestedLU` was given to
+    factorise in its own storage (``overwrite``): that matrix is overwritten, so the
+    factorisation without pivoting needs a fresh copy of it."""
+
+
 class NestedLU:
     """LU of a matrix whose leading blocks are solved as often as the whole.
 
@@ -152,10 +158,15 @@ class NestedLU:
     bordering, so it can start at the size needed now.
     """
 
-    def __init__(self, M: np.ndarray, limit: int | None = None):
+    def __init__(self, M: np.ndarray, limit: int | None = None, overwrite: bool = False):
+        """``overwrite``: M (a square float64 array in Fortran order) may become the
+        factors' storage, spared a copy; should LAPACK pivot it, :class:`Pivoted` is
+        raised (M is then lost) and the caller factors a fresh copy without it."""
         self.n = 0
         self.limit = limit          # the largest size it may grow to (storage is capped there)
-        self.lu = np.zeros((0, 0), order="F")
+        own = overwrite and M.dtype == np.float64 and M.flags.f_contiguous \
+            and M.flags.writeable and M.shape[0] == M.shape[1]
+        self.lu = M if own else np.zeros((0, 0), order="F")
         self.extend(M[:0, :], M[:, :0], M)
 
     @staticmethod
@@ -166,10 +177,12 @@ class NestedLU:
         # use it when it does. In place where ``out`` is a whole array: the
         # first factorisation of a system is its largest matrix
         whole = out.flags.f_contiguous and out.base is None
-        if whole:
+        if whole and out is not M:
             out[...] = M
         lu, piv = lu_factor(out if whole else M, overwrite_a=whole, check_finite=False)
         if np.any(piv != np.arange(len(piv))):
+            if out is M:
+                raise Pivoted("LAPACK pivoted a matrix factorised in its own storage")
             lu = lu_nopivot(M)
         if lu is not out:
             out[...] = lu
