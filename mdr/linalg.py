@@ -226,6 +226,7 @@ class NestedLU:
         if not np.all(np.isfinite(lu[n:m, :m])) or not np.all(np.isfinite(lu[:n, n:m])):
             raise SolverError("implicit wear step: the contact matrix factorisation failed")
         self.lu, self.n = lu, m
+        self._last = None       # (b, L⁻¹ b) of the last solve (:meth:`solve`)
         # the factors' address and leading dimension for BLAS, read once per
         # growth (ndarray.ctypes is slow for a per-solve call; docs/performance.md)
         self._address, self._lda = lu.ctypes.data, ctypes.c_int(lu.shape[0])
@@ -236,6 +237,19 @@ class NestedLU:
             self.Lt = np.ascontiguousarray(lu[r, c])
             self.Lt[np.cumsum(np.arange(1, m + 1)) - 1] = 1.0
 
+    def _forward_kept(self, x: np.ndarray) -> int:
+        """How many leading entries of the forward solve of ``x`` the last solve
+        had (its right-hand side agreed there); they are written into ``x``."""
+        last = self._last
+        if last is None:
+            return 0
+        b0, y0 = last
+        k = min(len(x), len(b0))
+        if not k or not np.array_equal(x[:k], b0[:k]):
+            return 0
+        x[:k] = y0[:k]
+        return k
+
     def solve(self, b: np.ndarray) -> np.ndarray:
         n = len(b)
         if n > self.n:
@@ -243,11 +257,20 @@ class NestedLU:
         if _DTRSV is not None:
             x = np.array(b, dtype=float)     # a fresh contiguous copy, solved in place
             if n:
-                size, lda, one = ctypes.byref(ctypes.c_int(n)), ctypes.byref(self._lda), \
-                    ctypes.byref(_ONE)
+                lda, one = ctypes.byref(self._lda), ctypes.byref(_ONE)
                 a, xp = self._address, x.ctypes.data
-                _DTRSV(b"L", b"N", b"U", size, a, lda, xp, one)
-                _DTRSV(b"U", b"N", b"N", size, a, lda, xp, one)
+                # the forward solve y = L⁻¹ b is nested too: y[:k] depends on b[:k]
+                # alone, so a right-hand side that shares its leading entries with
+                # the last one's (the contact iteration's next set: the same gap,
+                # a node or two more or fewer) keeps that part of y
+                k = self._forward_kept(x)
+                if k < n:
+                    if k:
+                        x[k:] -= self.lu[k:n, :k] @ x[:k]
+                    _DTRSV(b"L", b"N", b"U", ctypes.byref(ctypes.c_int(n - k)),
+                           a + 8 * k * (self._lda.value + 1), lda, xp + 8 * k, one)
+                self._last = (np.array(b, dtype=float), x.copy())
+                _DTRSV(b"U", b"N", b"N", ctypes.byref(ctypes.c_int(n)), a, lda, xp, one)
             return x
         k = n * (n + 1) // 2
         y = dtpsv(n, self.Lt[:k], b, lower=0, trans=1, diag=1)

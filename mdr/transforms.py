@@ -205,8 +205,9 @@ def _convolve(spec: np.ndarray, x: np.ndarray, nfft: int) -> np.ndarray:
     if _POCKETFFT is None:
         return _fft.irfft(spec * _fft.rfft(x, nfft), nfft)[:n]
     r2c, c2r = _POCKETFFT
-    padded = np.zeros(nfft)
+    padded = np.empty(nfft)
     padded[:n] = x
+    padded[n:] = 0.0
     X = r2c(padded, (0,), True, 0, None, 1)
     X *= spec
     return c2r(X, (0,), nfft, False, 2, None, 1)[:n]

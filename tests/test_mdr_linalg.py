@@ -70,6 +70,26 @@ def test_implicit_system_falls_back_when_lapack_pivots(monkeypatch):
                                rtol=1e-10, atol=1e-12 * np.max(np.abs(b)))
 
 
+def test_nested_lu_keeps_the_forward_solve_of_a_shared_leading_part():
+    # the contact iteration's next right-hand side is the last one cut or extended
+    # (the same gap, a node or two more or fewer): the kept forward solve must
+    # give numpy's solution of every such block, and a right-hand side that
+    # differs anywhere in its leading part must not reuse it
+    rng = np.random.default_rng(9)
+    A = transforms.compliance_matrix(200, 1e-10, 2e11)
+    A[np.diag_indices(200)] += 0.05 * A[0, 0]
+    lu = linalg.NestedLU(A)
+    b = rng.random(200)
+    for n in (150, 153, 149, 149, 200, 1, 37):
+        np.testing.assert_allclose(lu.solve(b[:n]), np.linalg.solve(A[:n, :n], b[:n]),
+                                   rtol=1e-10, atol=1e-12)
+    c = b.copy()
+    c[5] += 1.0
+    lu.solve(b[:120])
+    np.testing.assert_allclose(lu.solve(c[:130]), np.linalg.solve(A[:130, :130], c[:130]),
+                               rtol=1e-10, atol=1e-12)
+
+
 def test_lu_without_pivoting_matches_numpy():
     rng = np.random.default_rng(4)
     M = rng.random((200, 200)) + 200 * np.eye(200)
