@@ -22,9 +22,9 @@ from pathlib import Path
 import wearcheck
 from wearcheck import cases
 from wearcheck.cases import RunResult
-from wearcheck.comparisons import rundir
+from wearcheck import rundir
 from wearcheck.comparisons.analysis import metrics
-from wearcheck.comparisons.studies import compare as compare_mod
+from wearcheck.studies import compare as compare_mod
 
 
 def read_result(path) -> tuple:

@@ -35,7 +35,7 @@ def fit_run(mode: str, sheet: str, elements: int, exponents: str, workers: int) 
     case = wearcheck.load_case("ball_on_flat", {"mdr.elements": int(elements)})
     if mode == "baseline":
         from wearcheck.cases import reference
-        from wearcheck.comparisons.studies import fit as F
+        from wearcheck.studies import fit as F
         data, _, _ = F.read_measurements(sheet, case)
         sc = reference.scales(case)
         start, top = F.plan(case, data, sc["E_star"] / sc["a0"], 1.0)

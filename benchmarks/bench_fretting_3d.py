@@ -15,9 +15,9 @@ rigid counterface, amplitude u0 = 0.18 µm held), the MDR fretting run to
 On each profile, under the same normal force and the cycle ±u0:
 
 - MDR: the tangential springs over a ramp and one cycle, wear off (the
-  profile held), :func:`comparisons.studies.fretting3d.mdr_fretting`;
+  profile held), :func:`wearcheck.studies.fretting3d.mdr_fretting`;
 - BEM: normal contact on n × n pixels (box 2.4 a), tangential contact with
-  Coulomb discs and the Cerruti coupling, :func:`comparisons.studies.fretting3d.bem_fretting`.
+  Coulomb discs and the Cerruti coupling, :func:`wearcheck.studies.fretting3d.bem_fretting`.
 
 Columns: stick radius (MDR; BEM equivalent √(A/π) and its half-widths along
 x and y), stick-area difference, the largest difference of τx along the x
@@ -39,7 +39,7 @@ import numpy as np
 from wearcheck import mdr
 from wearcheck.cases import load
 from wearcheck.cases import reference_fretting as rf
-from wearcheck.comparisons.studies import fretting3d
+from wearcheck.studies import fretting3d
 
 ROOT = Path(__file__).resolve().parents[1]
 STAGES = (0, 10, 1000, 100000)

@@ -8,10 +8,10 @@ limiting state and keeps the worn profiles at several cycle counts. On each
 profile, under the same normal force F and the cycle ±u0:
 
 - MDR: ramp and one cycle on the held profile (wear off),
-  :func:`comparisons.studies.fretting3d.mdr_fretting`;
+  :func:`wearcheck.studies.fretting3d.mdr_fretting`;
 - BEM: its own normal contact of the profile on n × n pixels and the
   tangential contact with Coulomb discs and the Cerruti coupling,
-  :func:`comparisons.studies.fretting3d.bem_fretting` (stick radius
+  :func:`wearcheck.studies.fretting3d.bem_fretting` (stick radius
   √(A_stick/π)).
 
 The BEM shares no contact or friction code with the MDR; if it finds the same
@@ -34,7 +34,7 @@ import numpy as np
 from wearcheck import cases, mdr
 from wearcheck.cases import reference as ref
 from wearcheck.cases import reference_fretting as rf
-from wearcheck.comparisons.studies import fretting3d
+from wearcheck.studies import fretting3d
 
 R, FORCE, MU, K = 0.01, 30.0, 0.3, 0.1
 

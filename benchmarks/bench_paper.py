@@ -54,7 +54,7 @@ def solve_child() -> None:
     import time
 
     from wearcheck import cases
-    from wearcheck.comparisons import registry
+    from wearcheck import registry
 
     case = cases.load(cases.shipped("paper"))
     registry.get("mdr").supports(case)      # its package imported, as the run's memory check does

@@ -14,7 +14,7 @@ import tempfile
 import time
 
 from wearcheck import cases
-from wearcheck.comparisons.studies.distributed import Task, run_cases
+from wearcheck.studies.distributed import Task, run_cases
 from wearcheck.comparisons.analysis.convergence import levels
 
 

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 import wearcheck
-from wearcheck.comparisons import rundir
+from wearcheck import rundir
 from wearcheck.references.certified import unworn_profile
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -20,7 +20,7 @@ import sys
 import time
 from pathlib import Path
 
-from wearcheck.comparisons import rundir
+from wearcheck import rundir
 from wearcheck.references import certified, derive
 
 

@@ -33,12 +33,12 @@ import tempfile
 import time
 from pathlib import Path
 
-from wearcheck.comparisons import outputs
+from wearcheck import outputs
 
 CHILD = r"""
 import os, signal, sys
-from wearcheck.comparisons import outputs, renames
-from wearcheck.comparisons.cli import main
+from wearcheck import outputs, renames
+from wearcheck.cli import main
 out, step, exchange = sys.argv[1:4]
 if exchange == "0":
     renames._RENAMEAT2 = None

@@ -47,7 +47,7 @@ def main() -> int:
     if ctypes.util.find_library("OSMesa"):
         print("OSMesa is installed: vtkOSOpenGLRenderWindow works here, nothing to reproduce")
         return 2
-    from wearcheck.comparisons.rundir import Run
+    from wearcheck.rundir import Run
     work = Path(tempfile.mkdtemp(prefix="review-render-"))
     crash = dict(os.environ, VTK_DEFAULT_OPENGL_WINDOW="vtkOSOpenGLRenderWindow")
     plain = {k: v for k, v in os.environ.items() if k != "VTK_DEFAULT_OPENGL_WINDOW"}

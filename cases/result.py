@@ -36,7 +36,7 @@ def scar_radius(r, wear_depth, threshold: float = SCAR_THRESHOLD) -> float:
 @dataclass(frozen=True)
 class Item:
     """One output file, column, array or field: its name, unit ("" when
-    dimensionless) and meaning (``comparisons.layout`` and the solvers'
+    dimensionless) and meaning (``wearcheck.layout`` and the solvers'
     registrations describe their outputs with it)."""
 
     name: str
@@ -48,7 +48,7 @@ class Item:
 
 
 #: the history columns every solver provides, in this order: the one declaration
-#: (``RunResult`` checks them, ``rundir`` writes them first, ``comparisons.layout``
+#: (``RunResult`` checks them, ``rundir`` writes them first, ``wearcheck.layout``
 #: documents them; a solver declares its extra columns in its own registration)
 HISTORY = (
     Item("s", "m", "sliding distance"),

@@ -1,4 +1,7 @@
-"""The application layer: run directories, the MDR-vs-FEM comparison, studies,
-exports and the ``wearcheck`` command line. The numerics live in ``mdr`` and
-``fem``; this package only orchestrates, measures and draws.
+"""The analysis and presentation of comparisons: ``analysis`` (pure functions
+from results to numbers: metrics, edge peaks, convergence orders, verdicts,
+fits) and ``present`` (figures, reports, progress bars, VTK files and
+pictures). What runs the solvers and writes outputs (the registry, run
+directories, output safety, studies, the command line) is the application, in
+``wearcheck/``; the numerics live in the solver packages.
 """

@@ -20,7 +20,7 @@ lists them all.
 
 What is generated at build time (``_ext/wearcheck_docs.py``, into
 ``_generated/``): the case-key table (from ``cases/schema.py``), the output
-tables (from ``comparisons/layout.py``) and the command reference (from
+tables (from ``wearcheck/layout.py``) and the command reference (from
 the ``wearcheck`` argument parser), so they cannot go stale.
 """
 

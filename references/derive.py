@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from wearcheck.cases import reference as closed
-from wearcheck.comparisons import registry
+from wearcheck import registry
 
 from . import certified
 
@@ -603,7 +603,7 @@ def as_reference(data, case) -> certified.Reference:
 def _spread(plan, case, data, solvers, solve, say) -> dict:
     """Each other solver at the case's own settings against the reference, per stage
     and check (relative to the stage's scale, as the verdict judges)."""
-    from wearcheck.comparisons.studies import compare as cmp
+    from wearcheck.studies import compare as cmp
     ref = as_reference(data, case)
     out = {}
     for name in solvers:

@@ -126,7 +126,7 @@ def test_undeclared_history_columns_are_listed_in_the_dictionary(tmp_path):
 
 
 def test_studies_refuse_bad_input_before_starting_dask(tmp_path, monkeypatch):
-    from wearcheck.comparisons.studies import distributed
+    from wearcheck.studies import distributed
 
     def no_cluster(*args, **kwargs):
         raise AssertionError("a Dask cluster was started")
@@ -181,8 +181,8 @@ def test_a_comparison_or_study_is_named_as_such_not_as_a_damaged_run(tmp_path, c
     """``wearcheck export runs/paper`` right after ``compare`` (a reviewer's first try)
     said "not a complete run directory (no meta.json)", and on a study "meta.json is
     damaged": neither is damaged, they are not runs. The message names the runs inside."""
-    from wearcheck.comparisons.cli import main
-    from wearcheck.comparisons.outputs import atomic_directory, study_directory
+    from wearcheck.cli import main
+    from wearcheck.outputs import atomic_directory, study_directory
     result = wearcheck.solve(wearcheck.load_case("hertz", {"mdr.elements": 60}), "mdr")
     with atomic_directory(tmp_path / "cmp", "comparison") as tmp:
         result.write(tmp / "mdr")
@@ -251,7 +251,7 @@ def test_changes_in_the_shape_of_the_case_file_are_taken():
 def test_studies_take_their_arguments_as_the_command_line_writes_them(tmp_path, monkeypatch):
     """``sweep(case, "wear.mu=0.2,0.3", out)`` was an AttributeError, ``refine(...,
     levels="50,100")`` a ValueError, and ``sweep(case, {}, out)`` started a cluster."""
-    from wearcheck.comparisons.studies import refine as refine_mod, sweep as sweep_mod
+    from wearcheck.studies import refine as refine_mod, sweep as sweep_mod
     seen = {}
 
     def no_cluster(case, tasks, out, **kwargs):

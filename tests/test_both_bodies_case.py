@@ -72,7 +72,7 @@ def test_resolved_case_round_trips():
 
 
 def test_mdr_and_fem_say_why_they_skip_a_wearing_counterface():
-    from wearcheck.comparisons import registry
+    from wearcheck import registry
     case = load(*WEARS)
     for name in ("mdr", "fem"):
         reason = registry.get(name).supports(case)
@@ -83,7 +83,7 @@ def test_mdr_and_fem_say_why_they_skip_a_wearing_counterface():
 def test_compare_names_the_skipped_solvers(tmp_path, capsys):
     # only the BEM wears a counterface: compare refuses with one line that
     # gives each other solver's reason (exit 2, a case the tool cannot compare)
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     code = main(["compare", "ball_on_flat_steel", "--out", str(tmp_path / "c"), "--quiet"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and "\n" not in err

@@ -19,7 +19,7 @@ from wearcheck import cases, fem, meshes
 from wearcheck.cases import SolverError, reference
 from wearcheck.cases.profiles import height
 from wearcheck.ccx import compliance, deck, in_loop, model, output, run, solver
-from wearcheck.comparisons.cli import main as cli_main
+from wearcheck.cli import main as cli_main
 
 CCX = run.unavailable("ccx")
 pytestmark = pytest.mark.skipif(CCX is not None, reason=f"CalculiX: {CCX}")

@@ -37,10 +37,10 @@ def _run(code: str, cwd: Path) -> dict:
 def test_a_clone_imports_and_solves_from_its_root(tmp_path):
     clone = _copy_checkout(tmp_path / "clone")
     got = _run("import json, wearcheck, wearcheck.cases, wearcheck.mdr.solver, "
-               "wearcheck.comparisons.cli\n"
+               "wearcheck.cli\n"
                "r = wearcheck.solve('hertz')\n"
                "print(json.dumps(dict(files=[m.__file__ for m in (wearcheck, wearcheck.cases, "
-               "wearcheck.mdr.solver, wearcheck.comparisons.cli)], "
+               "wearcheck.mdr.solver, wearcheck.cli)], "
                "force=float(r.history['force'][0] / r.scales['F0']))))", clone)
     # every module from the clone's own folders, none from an installed wearcheck
     for file in got["files"]:

@@ -11,7 +11,7 @@ import sys
 
 import pytest
 
-from wearcheck.comparisons import cli
+from wearcheck import cli
 
 
 def _choices():
@@ -37,7 +37,7 @@ def test_a_closed_pipe_ends_the_command_quietly_and_successfully():
 def test_a_broken_pipe_elsewhere_is_still_an_io_error(monkeypatch, capsys):
     # a pipe other than our standard output (stdout here is fine): exit 4 with
     # the one-line message, as for any file that cannot be written
-    from wearcheck.comparisons.cli import cases as cases_command
+    from wearcheck.cli import cases as cases_command
 
     def broken(args):
         raise BrokenPipeError(32, "Broken pipe")
@@ -84,7 +84,7 @@ def test_jsonable_is_strict_json():
     # NaN and inf are not JSON: null; numpy numbers and arrays as Python's; paths as text
     import numpy as np
     from pathlib import Path
-    from wearcheck.comparisons.cli._common import jsonable
+    from wearcheck.cli._common import jsonable
 
     value = {"a": np.float64("nan"), "b": [np.int64(3), np.array([1.5, np.inf])],
              "c": Path("runs") / "x", 4: (1, "t")}
@@ -117,7 +117,7 @@ def test_compare_json_is_the_verdict_and_agrees_with_the_exit_code(tmp_path, cap
     # the MDR against itself on Hertz's unworn contact (passes), then with the coarsest
     # MDR grid against the FEM on a short paper run (fails on the profile:
     # tests/test_compare.py): stdout is one JSON line whose "passed" is the exit code's
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     small = ["--set", "stages.s_hat=[0.0, 0.5]", "--set", 'sliding.until="distance"',
              "--set", "sliding.distance=0.015", "--set", "fem.contact_nodes=60"]
     for elements, code_wanted in ((200, 0), (32, 1)):

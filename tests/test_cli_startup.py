@@ -11,7 +11,7 @@ import sys
 
 import pytest
 
-from wearcheck.comparisons import cli
+from wearcheck import cli
 
 #: what no command's start-up may load: plotting, 3D export, the cluster, the mesher
 HEAVY = ("matplotlib", "pyvista", "vtk", "dask", "distributed", "gmsh")
@@ -40,11 +40,11 @@ def test_import_wearcheck_loads_no_plotting_export_cluster_or_mesher():
 
 
 def test_help_loads_no_subcommand_and_nothing_heavy():
-    code = ("import sys\nfrom wearcheck.comparisons.cli import main\n"
+    code = ("import sys\nfrom wearcheck.cli import main\n"
             "try:\n    main(['--help'])\nexcept SystemExit as e:\n    assert e.code == 0\n")
     modules = _loaded_after(code)
     assert _heavy(modules) == []
-    subcommands = sorted(m for m in modules if m.startswith("wearcheck.comparisons.cli."))
+    subcommands = sorted(m for m in modules if m.startswith("wearcheck.cli."))
     assert subcommands == [], subcommands
     # nor the studies' or the solvers' dependencies
     assert not {"scipy.optimize", "scipy.fft", "wearcheck.mdr", "asyncio"} & modules
@@ -52,12 +52,12 @@ def test_help_loads_no_subcommand_and_nothing_heavy():
 
 def test_a_subcommand_loads_only_its_own_module():
     # run's parser (--help exits after parsing) without the studies' modules
-    code = ("from wearcheck.comparisons.cli import main\n"
+    code = ("from wearcheck.cli import main\n"
             "try:\n    main(['run', '--help'])\nexcept SystemExit as e:\n    assert e.code == 0\n")
     modules = _loaded_after(code)
-    subcommands = {m for m in modules if m.startswith("wearcheck.comparisons.cli.")
+    subcommands = {m for m in modules if m.startswith("wearcheck.cli.")
                    and not m.endswith("._common")}
-    assert subcommands == {"wearcheck.comparisons.cli.run"}
+    assert subcommands == {"wearcheck.cli.run"}
     assert _heavy(modules) == []
 
 
@@ -66,7 +66,7 @@ def test_an_mdr_run_loads_only_what_it_uses(tmp_path):
     # no other solver, and no psutil (the memory check reads /proc/meminfo
     # where there is one)
     out = tmp_path / "hertz"
-    code = ("from wearcheck.comparisons.cli import main\n"
+    code = ("from wearcheck.cli import main\n"
             f"assert main(['run', 'hertz', '--solver', 'mdr', '--quiet', '--out', {str(out)!r}]) == 0\n")
     modules = _loaded_after(code)
     assert (out / "meta.json").is_file()

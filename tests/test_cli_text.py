@@ -7,7 +7,7 @@ import re
 import pytest
 
 from wearcheck import cases
-from wearcheck.comparisons.cli import build_parser, main as cli_main, plain
+from wearcheck.cli import build_parser, main as cli_main, plain
 
 
 def _subparsers():
@@ -66,7 +66,7 @@ def test_the_similarity_note_is_printed_once_per_command(argv, tmp_path, capsys)
 def test_set_with_a_space_for_the_equals_sign_gets_the_spelling_that_works(capsys):
     """``--set wear.mu 0.5`` said "wearcheck: error: unrecognized arguments: 0.5 (see
     wearcheck --help)": neither the subcommand nor what was wrong."""
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     with pytest.raises(SystemExit) as exit_:
         main(["run", "paper", "--set", "wear.mu", "0.5", "--quiet"])
     assert exit_.value.code == 2

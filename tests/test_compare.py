@@ -11,10 +11,10 @@ import pytest
 
 from wearcheck import cases
 from wearcheck.cases import RunResult, profiles, reference
-from wearcheck.comparisons.studies import compare as compare_mod
-from wearcheck.comparisons import registry
-from wearcheck.comparisons import rundir as runio
-from wearcheck.comparisons.cli import main as cli_main
+from wearcheck.studies import compare as compare_mod
+from wearcheck import registry
+from wearcheck import rundir as runio
+from wearcheck.cli import main as cli_main
 
 HERTZ = str(cases.shipped("hertz"))
 TRUNCATED = str(cases.shipped("truncated"))

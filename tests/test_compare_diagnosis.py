@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 import wearcheck
-from wearcheck.comparisons import registry
+from wearcheck import registry
 from wearcheck.comparisons.analysis import diagnosis
-from wearcheck.comparisons.studies import compare as compare_mod
+from wearcheck.studies import compare as compare_mod
 
 
 def _failure(s_hat, check="force", scale=0.02, tolerance=0.03):

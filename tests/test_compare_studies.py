@@ -6,8 +6,8 @@ import pytest
 
 from wearcheck import cases
 from wearcheck.cases import RunResult, profiles, reference
-from wearcheck.comparisons.studies import compare as compare_mod
-from wearcheck.comparisons.studies import sphere_sweep as sphere_mod
+from wearcheck.studies import compare as compare_mod
+from wearcheck.studies import sphere_sweep as sphere_mod
 
 PAPER = cases.shipped("paper")
 

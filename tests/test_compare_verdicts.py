@@ -12,10 +12,10 @@ import pytest
 
 import wearcheck
 from wearcheck.cases import RunResult
-from wearcheck.comparisons import registry
+from wearcheck import registry
 from wearcheck.comparisons.present import compare_report
-from wearcheck.comparisons.registry import Solver, register, unregister
-from wearcheck.comparisons.studies import compare as compare_mod
+from wearcheck.registry import Solver, register, unregister
+from wearcheck.studies import compare as compare_mod
 
 # the paper case through its seven stages to ŝ = 10, where F ≈ 0.016 F0 and the peak
 # pressure ≈ 0.007 p0: the stages where a tolerance in F0 or p0 could not fail

@@ -10,8 +10,8 @@ import pandas as pd
 import pytest
 
 from wearcheck import cases
-from wearcheck.comparisons import layout
-from wearcheck.comparisons.cli import main
+from wearcheck import layout
+from wearcheck.cli import main
 
 
 @pytest.fixture(scope="module")
@@ -79,7 +79,7 @@ def test_a_sweep_into_a_study_of_the_previous_version_keeps_its_rows(cluster, tm
 
 def _replace_as_the_study(study, name, text):
     """Write ``study/name`` through the study writer, as the previous version did."""
-    from wearcheck.comparisons.outputs import write_study_text
+    from wearcheck.outputs import write_study_text
     write_study_text(study, name, text)
 
 
@@ -105,7 +105,7 @@ def test_refinement_csvs_load_as_written(cluster, tmp_path):
 def test_refinement_csv_takes_a_per_solver_table_of_the_previous_version(cluster, tmp_path):
     """refinement.csv combines every refinement-<solver>.csv in the directory, also one
     an earlier version wrote with '#' lines and no sidecar (its notes: those lines)."""
-    from wearcheck.comparisons.studies.refine import combined_csv_text, combined_notes
+    from wearcheck.studies.refine import combined_csv_text, combined_notes
     out = tmp_path / "refine"
     assert main(["refine", "hertz", "--solver", "mdr", "--levels", "40,80",
                  "--set", "stages.s_hat=[0.0, 0.2]", "--scheduler", cluster, "--quiet",
@@ -145,8 +145,8 @@ def test_the_other_csv_writers_write_no_preamble(name):
     """history.csv, fit's measurements.csv and track_profile.csv: header first (their
     units are in the directory's meta.json data dictionary)."""
     from wearcheck.comparisons.present.track_report import profile_csv_text
-    from wearcheck.comparisons.rundir import history_csv_text
-    from wearcheck.comparisons.studies.fit import measurements_csv
+    from wearcheck.rundir import history_csv_text
+    from wearcheck.studies.fit import measurements_csv
     import io
     text = {"history.csv": lambda: history_csv_text({k: [0.0, 1.0] for k in (
                 "s", "force", "depth", "contact_radius", "wear_center", "wear_volume")}),
@@ -160,7 +160,7 @@ def test_the_other_csv_writers_write_no_preamble(name):
 
 def test_verify_results_history_loads_with_a_comma_in_a_file_name(tmp_path):
     """results/history.csv names each row's origin, a file name that may hold a comma."""
-    from wearcheck.comparisons.studies.verify import write_results
+    from wearcheck.studies.verify import write_results
     hist = dict(s=[0.0, 1.0], force=[2.0, 1.0], origin=["run 1, final.csv row 2",
                                                          'say "hi".csv row 3'])
     write_results(tmp_path, hist, [], per_m=2.0)

@@ -78,7 +78,7 @@ def test_readme_is_an_entry_point():
 
 
 def test_every_command_is_in_the_readme_table():
-    from wearcheck.comparisons.cli import build_parser
+    from wearcheck.cli import build_parser
     import argparse
     parser = build_parser()
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
@@ -115,7 +115,7 @@ def test_cli_reference_has_every_command():
         import wearcheck_docs
     finally:
         sys.path.remove(str(DOCS / "_ext"))
-    from wearcheck.comparisons.cli import build_parser
+    from wearcheck.cli import build_parser
     import argparse
     parser = build_parser()
     sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))

@@ -44,7 +44,7 @@ BLOCKER = textwrap.dedent("""
         exec(sys.argv[2])
     else:   # command lines (JSON), each through the CLI: [exit code, its stderr] each
         import contextlib, io, json
-        from wearcheck.comparisons.cli import main
+        from wearcheck.cli import main
         out = []
         for argv in json.loads(sys.argv[1]):
             err = io.StringIO()
@@ -146,8 +146,8 @@ def test_run_reports_without_their_figures_say_which_extra(blocked, tmp_path):
 
 def test_a_solver_without_its_extra_is_listed_as_skipped_with_the_reason(blocked):
     code = ("import json, wearcheck\n"
-            "from wearcheck.comparisons import registry\n"
-            "from wearcheck.comparisons.studies.compare import skipped_solvers\n"
+            "from wearcheck import registry\n"
+            "from wearcheck.studies.compare import skipped_solvers\n"
             "case = wearcheck.load_case('paper')\n"
             "print(json.dumps(dict(supporting=registry.supporting(case),\n"
             "                      skipped=skipped_solvers(case, ['mdr', 'bem']))))\n"

@@ -185,8 +185,8 @@ def test_contact_outgrowing_the_arc_is_an_error():
 
 
 def test_run_command_writes_fem_run(tmp_path):
-    from wearcheck.comparisons.cli import main as cli
-    from wearcheck.comparisons.rundir import Run
+    from wearcheck.cli import main as cli
+    from wearcheck.rundir import Run
 
     out = tmp_path / "run"
     assert cli(["run", str(cases.shipped("hertz")), "--solver", "fem", "--quiet",

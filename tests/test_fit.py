@@ -18,8 +18,8 @@ import pytest
 import wearcheck
 from wearcheck.cases import CaseError, RunWarning, reference
 from wearcheck.comparisons.analysis import fitting
-from wearcheck.comparisons.cli import main as cli_main
-from wearcheck.comparisons.studies import fit as fit_study
+from wearcheck.cli import main as cli_main
+from wearcheck.studies import fit as fit_study
 
 K_TRUE = 2.3e-15                         # m³/(N·m); the case file's K is 1e-15
 CYCLES = np.array([100.0, 300.0, 1e3, 3e3, 1e4, 3e4, 1e5])

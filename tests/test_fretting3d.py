@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from wearcheck.cases import load, shipped
-from wearcheck.comparisons.studies import fretting3d
+from wearcheck.studies import fretting3d
 
 
 def fretting_case(nu):

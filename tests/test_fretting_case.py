@@ -10,7 +10,7 @@ import pytest
 from wearcheck import cases, fem, mdr
 from wearcheck.cases import reference
 from wearcheck.cases import reference_fretting as rf
-from wearcheck.comparisons.rundir import Run, write_run
+from wearcheck.rundir import Run, write_run
 
 
 def raw(**fretting):
@@ -134,7 +134,7 @@ def cluster():
 
 
 def test_fretting_map_regimes_follow_cattaneo_mindlin(cluster, tmp_path):
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     out = tmp_path / "map"
     code = main(["fretting-map", str(cases.shipped("fretting")),
                  "--vary", "fretting.amplitude=1e-7,3e-7,6e-7", "--vary", "loading.force=10,30",
@@ -178,7 +178,7 @@ def test_api_derives_and_round_trips_a_fretting_case():
 def test_wearcheck_run_vtk_of_a_fretting_case_carries_the_shear_traction(tmp_path):
     # the command line end to end: `wearcheck run fretting --vtk`
     import pyvista as pv
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     out = tmp_path / "run"
     code = main(["run", "fretting", "--set", "mdr.elements=60", "--set", "fretting.cycles=3",
                  "--set", "fretting.stage_cycles=[0, 3]", "--out", str(out), "--vtk",
@@ -208,7 +208,7 @@ def test_the_bem_refusal_of_fretting_does_not_deny_its_tangential_solver():
     bem.tangential does (one fretting cycle, without wear): what is missing is a
     fretting wear run."""
     import importlib
-    from wearcheck.comparisons import registry
+    from wearcheck import registry
     assert hasattr(importlib.import_module("wearcheck.bem.tangential"), "__file__")
     reason = registry.get("bem").supports(cases.load(cases.shipped("fretting")))
     assert "bem.tangential" in reason and "does not solve" not in reason and "MDR" in reason

@@ -24,7 +24,7 @@ from hypothesis import HealthCheck, given, settings, strategies as st  # noqa: E
 
 from wearcheck import cases  # noqa: E402
 from wearcheck.cases.schema import SECTIONS, section_fields, toml_string  # noqa: E402
-from wearcheck.comparisons.cli import main as cli_main  # noqa: E402
+from wearcheck.cli import main as cli_main  # noqa: E402
 
 BASE = tomllib.loads(cases.shipped("hertz").read_text())
 #: seconds one fuzzed solve may take before it is stopped
@@ -40,7 +40,7 @@ class _OverBudget(KeyboardInterrupt):
 
 @pytest.fixture
 def budgeted(monkeypatch):
-    from wearcheck.comparisons import registry
+    from wearcheck import registry
     real = registry.solve
     hit = []
 
@@ -52,7 +52,7 @@ def budgeted(monkeypatch):
                 hit.append(True)
                 raise _OverBudget()
         return real(case, solver, progress=check)
-    monkeypatch.setattr("wearcheck.comparisons.registry.solve", solve)
+    monkeypatch.setattr("wearcheck.registry.solve", solve)
     return hit
 
 

@@ -49,7 +49,7 @@ def test_wheel_holds_one_namespace(installed):
     tops = {n.split("/")[0] for n in names}
     info = {t for t in tops if t.endswith(".dist-info")}
     assert len(info) == 1 and tops - info == {"wearcheck"}
-    for package in ("cases", "mdr", "fem", "bem", "meshes", "comparisons"):
+    for package in ("cases", "mdr", "fem", "bem", "meshes", "comparisons", "cli", "studies"):
         assert f"wearcheck/{package}/__init__.py" in names
     assert "wearcheck/cases/paper.toml" in names
 
@@ -57,7 +57,7 @@ def test_wheel_holds_one_namespace(installed):
 def test_old_top_level_names_are_gone_and_wearcheck_imports(installed, tmp_path):
     _, target, _ = installed
     code = ("import importlib.util, wearcheck, wearcheck.mdr, wearcheck.fem\n"
-            "import wearcheck.comparisons.present, wearcheck.comparisons.cli.run\n"
+            "import wearcheck.comparisons.present, wearcheck.cli.run\n"
             "assert wearcheck.comparisons.present.__file__.startswith(wearcheck.__path__[0])\n"
             "print(wearcheck.__file__)\n"
             "print([n for n in ('cases', 'mdr', 'fem', 'meshes', 'comparisons')"

@@ -13,7 +13,7 @@ import wearcheck
 from wearcheck import cases
 from wearcheck.cases import CaseError, reference
 from wearcheck.cases import RunWarning, validity
-from wearcheck.comparisons.cli import main as cli_main
+from wearcheck.cli import main as cli_main
 
 BALL = cases.shipped("ball_on_flat")   # k = 2e-5, μ = 0.3, σ0 = 6 GPa: K = 1e-15 m³/(N·m)
 

@@ -1,5 +1,5 @@
 """Every output describes itself: each column, array and key that a run or a comparison
-writes has a unit and a meaning in ``comparisons.layout`` (and in the file's own data
+writes has a unit and a meaning in ``wearcheck.layout`` (and in the file's own data
 dictionary), and nothing is described that is not written."""
 
 import csv
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import wearcheck
-from wearcheck.comparisons import layout
+from wearcheck import layout
 
 
 @pytest.fixture(scope="module")

@@ -7,7 +7,7 @@ import pytest
 
 from wearcheck import meshes
 from wearcheck.cases import CaseError, SolverError
-from wearcheck.comparisons.cli import main as cli
+from wearcheck.cli import main as cli
 
 R = 0.01
 

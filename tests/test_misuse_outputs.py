@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from wearcheck import cases
-from wearcheck.comparisons.cli import main as cli_main
+from wearcheck.cli import main as cli_main
 
 HERTZ = str(cases.shipped("hertz"))
 SMALL = ["--set", "mdr.elements=40", "--quiet"]
@@ -38,7 +38,7 @@ def no_solve(monkeypatch):
     """Fail the test if the CLI starts a solve: refusals must come before the work."""
     def boom(*args, **kwargs):
         raise AssertionError("the solve started before the refusal")
-    monkeypatch.setattr("wearcheck.comparisons.registry.solve", boom)
+    monkeypatch.setattr("wearcheck.registry.solve", boom)
 
 
 # -- output paths refused before the solve -----------------------------------
@@ -73,7 +73,7 @@ def test_sweep_runs_with_over_long_names_are_refused_before_the_cluster(tmp_path
     """A run named by a long varied value (a list of 70 stages): refused before the
     cluster starts and before the study directory is made (it was refused only when
     the first run was written, after its solve, and left the new study's marker)."""
-    from wearcheck.comparisons.studies import distributed
+    from wearcheck.studies import distributed
 
     def no_cluster(*args, **kwargs):
         raise AssertionError("the cluster started")
@@ -122,7 +122,7 @@ def test_an_immutable_out_is_refused_before_solving(tmp_path, capsys, monkeypatc
 
     def boom(*args, **kwargs):
         raise AssertionError("the solve started before the refusal")
-    monkeypatch.setattr("wearcheck.comparisons.registry.solve", boom)
+    monkeypatch.setattr("wearcheck.registry.solve", boom)
     assert cli_main(["run", HERTZ, "--out", str(out), *SMALL]) == 2
     line = _one_error_line(capsys.readouterr().err)
     assert ("immutable" if flag == "+i" else "append-only") in line
@@ -200,8 +200,8 @@ def _mdr_peak(stages: int) -> tuple[int, float, list]:
         values.append(float(np.nextafter(values[-1], 2.0)))
     overrides = ["mdr.elements=800", "stages.s_hat=[" + ",".join(map(repr, values)) + "]"]
     code = ("import sys, tempfile; from pathlib import Path; from wearcheck import cases; "
-            "from wearcheck.comparisons import registry; "
-            "from wearcheck.comparisons.rundir import write_run; import wearcheck.mdr; "
+            "from wearcheck import registry; "
+            "from wearcheck.rundir import write_run; import wearcheck.mdr; "
             "hwm = lambda: int([l for l in Path('/proc/self/status').read_text().splitlines() "
             "if l.startswith('VmHWM:')][0].split()[1]); "
             "c = cases.load(cases.shipped('paper'), sys.argv[1:]); b = hwm(); "
@@ -293,7 +293,7 @@ def test_a_mesh_cache_entry_changed_since_it_was_written_is_rebuilt(tmp_path, ca
     monkeypatch.setattr(meshes, "_generate", lambda *a: generated.append(1) or real(*a))
     assert cli_main([*argv, "--out", str(tmp_path / "b")]) == 0, capsys.readouterr().err
     assert generated == [1]
-    from wearcheck.comparisons.rundir import Run
+    from wearcheck.rundir import Run
     a, b = Run(tmp_path / "a"), Run(tmp_path / "b")
     np.testing.assert_array_equal(a.history["force"], b.history["force"])
 

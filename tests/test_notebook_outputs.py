@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import wearcheck
-from wearcheck.comparisons import layout
+from wearcheck import layout
 from wearcheck.comparisons.present import progress
 
 pd = pytest.importorskip("pandas")

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from wearcheck.comparisons import rundir as runio
+from wearcheck import rundir as runio
 
 REPO = Path(__file__).resolve().parent.parent
 PYPROJECT = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))["project"]
@@ -74,7 +74,7 @@ def test_installed_inside_another_git_repository_records_no_revision(tmp_path):
     # package data: the shipped cases and the case file's JSON Schema
     for name in ("paper.toml", "case.schema.json"):
         assert (target / "wearcheck" / "cases" / name).is_file(), name
-    probe = ("import json; from wearcheck.comparisons import rundir as runio; "
+    probe = ("import json; from wearcheck import rundir as runio; "
              "print(json.dumps([runio.__file__, runio.git_revision(), "
              "runio.source_checkout() and str(runio.source_checkout()), "
              "runio.provenance(['wearcheck'])]))")

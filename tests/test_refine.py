@@ -15,7 +15,7 @@ import pytest
 from wearcheck import cases
 from wearcheck.cases import reference
 from wearcheck.comparisons.analysis import convergence as rf
-from wearcheck.comparisons.rundir import Run
+from wearcheck.rundir import Run
 
 # the stand-in solvers below travel to the Dask workers by value, so the
 # workers need not import this test module
@@ -154,7 +154,7 @@ def cluster():
 
 @pytest.fixture(scope="module")
 def fake_study(cluster, tmp_path_factory):
-    from wearcheck.comparisons.studies.refine import refine
+    from wearcheck.studies.refine import refine
     out = tmp_path_factory.mktemp("study")
     case = cases.shipped("paper")
     # 24 fails in the solver (a level the case rejects is refused up front, below)
@@ -198,7 +198,7 @@ def test_study_recovers_the_known_order(fake_study):
 
 
 def test_second_solver_joins_the_same_directory(fake_study, cluster):
-    from wearcheck.comparisons.studies.refine import refine
+    from wearcheck.studies.refine import refine
     from wearcheck.comparisons.present.study_figures import FIGURES, studies
     out, _ = fake_study
     refine(cases.load(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"]), "fem", out,
@@ -228,7 +228,7 @@ def test_second_solver_joins_the_same_directory(fake_study, cluster):
 
 
 def test_mdr_study_through_the_command_line(cluster, tmp_path):
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     out = tmp_path / "mdr"
     # a level the case rejects (mdr.elements >= 2) refuses the study before it starts
     args = ["refine", str(cases.shipped("paper")), "--solver", "mdr", "--out", str(out),
@@ -266,7 +266,7 @@ def crashing_solve(case, solver, progress=None):
 
 
 def test_a_dead_worker_fails_only_its_level(tmp_path):
-    from wearcheck.comparisons.studies.distributed import Task, run_cases
+    from wearcheck.studies.distributed import Task, run_cases
     # the embedded cluster (no scheduler given): loopback, one task per worker
     tasks = [Task(f"mdr-elements-{n}", "mdr", {"mdr.elements": n}) for n in (8, 16, 32, 64)]
     outcomes = run_cases(cases.load(cases.shipped("paper")), tasks, tmp_path, workers=2,
@@ -279,7 +279,7 @@ def test_a_dead_worker_fails_only_its_level(tmp_path):
 
 
 def test_mdr_step_refinement_shows_backward_euler_first_order(cluster, tmp_path):
-    from wearcheck.comparisons.studies.refine import refine
+    from wearcheck.studies.refine import refine
     # implicit (backward) Euler in ŝ has a global error Δŝ e1(ŝ) + O(Δŝ²): order
     # 1. With Δŝ <= 0.2 the O(Δŝ²) part moves the fitted slope by O(0.1)
     summary = refine(cases.load(cases.shipped("paper"), ["sliding.force_fraction=0.3",
@@ -295,7 +295,7 @@ def test_mdr_step_refinement_shows_backward_euler_first_order(cluster, tmp_path)
 
 def test_a_failed_level_removes_an_earlier_run_of_that_level(cluster, tmp_path):
     import shutil
-    from wearcheck.comparisons.studies.refine import refine
+    from wearcheck.studies.refine import refine
     out = tmp_path / "study"
     refine(cases.load(cases.shipped("paper"), ["stages.s_hat=[0.0, 0.5, 1.0]"]), "mdr", out,
            levels=[8, 16], scheduler=cluster, quiet=True, solve=fake_solve)

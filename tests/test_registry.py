@@ -13,8 +13,8 @@ import pytest
 import wearcheck
 from wearcheck import cases
 from wearcheck.cases import RunResult, reference
-from wearcheck.comparisons import registry
-from wearcheck.comparisons.cli import main as cli_main
+from wearcheck import registry
+from wearcheck.cli import main as cli_main
 
 HERTZ = cases.shipped("hertz")
 PAPER = cases.shipped("paper")

@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from wearcheck.cases import result
-from wearcheck.comparisons import layout, registry
+from wearcheck import layout, registry
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the project's own source folders (the design card's top level plus the API)
@@ -55,7 +55,7 @@ def test_each_solver_declares_its_entry_in_its_own_package(module):
 
 def test_the_registry_declares_no_solver_and_the_common_columns_are_declared_once():
     # the registry module holds the machinery only: no Solver(...) entry, no Item(...)
-    central = ROOT / "comparisons" / "registry.py"
+    central = ROOT / "wearcheck" / "registry.py"
     assert _calls_to(central, "Solver") == [] and _calls_to(central, "Item") == []
     # layout documents the common columns it is given, the very tuple RunResult checks
     assert layout.HISTORY is result.HISTORY
@@ -82,7 +82,7 @@ def test_the_registry_declares_no_solver_and_the_common_columns_are_declared_onc
         entry = importlib.import_module(module).SOLVER
         own = {i.name for i in entry.history_columns} - {"s_hat", "cycles", "scar_radius",
                                                         "max_pressure"}
-        for path in (ROOT / "comparisons").rglob("*.py"):
+        for path in [*(ROOT / "wearcheck").rglob("*.py"), *(ROOT / "comparisons").rglob("*.py")]:
             declared = {n for n, _ in _item_calls(path)}
             if path.name == "layout.py":
                 declared -= study_tables

@@ -10,12 +10,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from wearcheck.comparisons.rundir import OUTPUT_MARKER
+from wearcheck.outputs import OUTPUT_MARKER
 
 from wearcheck import cases
 from wearcheck.cases import WearcheckError
 from wearcheck.comparisons.present import render
-from wearcheck.comparisons.rundir import Run, write_run
+from wearcheck.rundir import Run, write_run
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_vtk_export import cylinder_run  # noqa: E402

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import pytest
 
-from wearcheck.comparisons import outputs
+from wearcheck import outputs
 
 def _payload(out: Path, payload: str) -> None:
     with outputs.atomic_directory(out, "run") as tmp:
@@ -36,7 +36,7 @@ def _payload(out: Path, payload: str) -> None:
 def _writer(step, exchange, work, before=None):
     """The child: ``work()``, killing itself (SIGKILL) when it reaches ``step``;
     ``before(name)`` runs at every step first."""
-    from wearcheck.comparisons import renames
+    from wearcheck import renames
     if not exchange:
         renames._RENAMEAT2 = None          # as on NFS: no atomic exchange
 
@@ -183,8 +183,8 @@ def test_a_read_restores_an_output_a_kill_left_aside(tmp_path):
     """The fallback's window: the run is missing, the earlier one in ``.NAME.old-*``;
     reading the run (``export``, ``compare``'s reading) puts it back first."""
     from wearcheck import cases
-    from wearcheck.comparisons.cli import main as cli_main
-    from wearcheck.comparisons.rundir import Run
+    from wearcheck.cli import main as cli_main
+    from wearcheck.rundir import Run
     out = tmp_path / "out"
     hertz = str(cases.shipped("hertz"))
     assert cli_main(["run", hertz, "--out", str(out), "--set", "mdr.elements=40",
@@ -201,8 +201,8 @@ def test_a_read_restores_an_output_a_kill_left_aside(tmp_path):
 def _cli_signalled(step, exchange, signum, argv, err: Path):
     """The child: ``wearcheck`` with ``argv``, sending itself ``signum`` at ``step``;
     its stderr into ``err``, its exit code the command's."""
-    from wearcheck.comparisons import renames
-    from wearcheck.comparisons.cli import main as cli_main
+    from wearcheck import renames
+    from wearcheck.cli import main as cli_main
     if not exchange:
         renames._RENAMEAT2 = None
 
@@ -226,8 +226,8 @@ def test_an_interrupt_at_each_step_leaves_the_old_or_the_new_run(tmp_path, excha
     that runs puts the old run back or keeps the new one, whole, nothing hidden is
     left, and the message says no more than that (the new run may be in place)."""
     from wearcheck import cases
-    from wearcheck.comparisons.cli import main as cli_main
-    from wearcheck.comparisons.rundir import Run
+    from wearcheck.cli import main as cli_main
+    from wearcheck.rundir import Run
     out, err = tmp_path / "out", tmp_path.parent / f"err-{tmp_path.name}"
     hertz = str(cases.shipped("hertz"))
     argv = ["run", hertz, "--out", str(out), "--quiet", "--set"]
@@ -332,7 +332,7 @@ def _record_study_slowly(study, name, entered, released):
     """The child: records its study, pausing (up to 3 s) once it has read meta.json and
     listed its new file, until the parent says its own study has been recorded."""
     from wearcheck import cases
-    from wearcheck.comparisons.studies.distributed import record_study
+    from wearcheck.studies.distributed import record_study
 
     def hook(step):
         if step == "study-file-listed" and not entered.is_set():
@@ -350,7 +350,7 @@ def test_two_studies_ending_at_once_into_one_directory_keep_both(tmp_path):
     write while the parent records its own study: the parent must wait for it."""
     import threading
     from wearcheck import cases
-    from wearcheck.comparisons.studies.distributed import record_study, study_meta
+    from wearcheck.studies.distributed import record_study, study_meta
     study = outputs.study_directory(tmp_path / "s")
     ctx = multiprocessing.get_context("fork")
     entered, released = ctx.Event(), ctx.Event()

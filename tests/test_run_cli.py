@@ -12,8 +12,8 @@ import pytest
 import wearcheck
 from wearcheck import cases
 from wearcheck.cases import reference
-from wearcheck.comparisons import rundir as runio
-from wearcheck.comparisons.cli import main as cli_main
+from wearcheck import outputs, rundir as runio
+from wearcheck.cli import main as cli_main
 from wearcheck.comparisons.present.progress import ProgressBar
 
 SMALL = ["--set", "mdr.elements=100", "--set", "sliding.until=distance",
@@ -39,7 +39,7 @@ def mdr_run(tmp_path_factory):
 
 def test_run_writes_exactly_the_documented_files(mdr_run):
     out, _ = mdr_run
-    assert sorted(p.name for p in out.iterdir()) == [runio.OUTPUT_MARKER, "case.toml",
+    assert sorted(p.name for p in out.iterdir()) == [outputs.OUTPUT_MARKER, "case.toml",
                                                      "history.csv", "meta.json", "stages.npz"]
     header = (out / "history.csv").read_text().splitlines()[0].split(",")
     assert header[:6] == list(cases.HISTORY_COLUMNS)
@@ -114,7 +114,7 @@ def test_interrupted_write_leaves_nothing(tmp_path, monkeypatch):
         (args[0] / "history.csv").write_text("s,force\n")
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("wearcheck.comparisons.cli.run.write_run_files", interrupted)
+    monkeypatch.setattr("wearcheck.cli.run.write_run_files", interrupted)
     code = cli_main(["run", str(cases.shipped("hertz")), "--out", str(tmp_path / "x"),
                      "--quiet", "--set", "mdr.elements=50"])
     assert code == 130
@@ -123,10 +123,10 @@ def test_interrupted_write_leaves_nothing(tmp_path, monkeypatch):
 
 def test_atomic_directory_replaces_only_on_success(tmp_path):
     target = tmp_path / "d"
-    with runio.atomic_directory(target) as tmp:
+    with outputs.atomic_directory(target) as tmp:
         (tmp / "a").write_text("1")
     with pytest.raises(RuntimeError):
-        with runio.atomic_directory(target) as tmp:
+        with outputs.atomic_directory(target) as tmp:
             (tmp / "a").write_text("2")
             raise RuntimeError
     assert (target / "a").read_text() == "1"
@@ -162,7 +162,7 @@ def test_output_path_that_is_not_a_wearcheck_output_is_refused(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["thesis"]
     # a file is refused the same way
     with pytest.raises(cases.CaseError, match="not a wearcheck output"):
-        with runio.atomic_directory(precious / "thesis.tex"):
+        with outputs.atomic_directory(precious / "thesis.tex"):
             pass
 
 
@@ -175,7 +175,7 @@ def test_revolve_below_three_segments_is_bad_input_before_solving(tmp_path):
 def test_run_says_which_requested_stages_it_did_not_reach(tmp_path, capsys):
     """The paper case stops once F < 1 % F0 (ŝ ≈ 11.25): a stage at ŝ = 20 cannot be
     stored. The Python API warned; ``wearcheck run`` said only "1 stages"."""
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     out = tmp_path / "run"
     assert main(["run", "paper", "--solver", "mdr", "--set", "mdr.elements=100",
                  "--set", "stages.s_hat=[0.0, 20.0]", "--out", str(out)]) == 0
@@ -191,7 +191,7 @@ def test_run_says_which_requested_stages_it_did_not_reach(tmp_path, capsys):
 def test_stages_not_reached_are_named_in_the_unit_given(tmp_path, capsys, given, expect):
     """Stages given in cycles or in metres are named so when the run ends before them
     (the note said "ŝ = 144627" for a stage at 1e7 cycles)."""
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     over = ["mdr.elements=100", "sliding.until=\"cycles\"", "sliding.cycles=1000", given]
     args = [x for o in over for x in ("--set", o)]
     assert main(["run", "ball_on_flat", "--solver", "mdr", *args,

@@ -27,7 +27,7 @@ import numpy as np
 import pytest
 
 from wearcheck import cases
-from wearcheck.comparisons.cli import main as cli_main
+from wearcheck.cli import main as cli_main
 
 from conftest import TABLE_CASE
 
@@ -63,7 +63,7 @@ def no_solve(monkeypatch):
     """Fail the test if the CLI starts a solve: refusals must come before the work."""
     def boom(*args, **kwargs):
         raise AssertionError("the solve started before the refusal")
-    monkeypatch.setattr("wearcheck.comparisons.registry.solve", boom)
+    monkeypatch.setattr("wearcheck.registry.solve", boom)
 
 
 # -- 1. data loss ----------------------------------------------------------
@@ -138,7 +138,7 @@ def test_an_output_inside_another_output_is_refused(tmp_path, capsys, inner, no_
     # (by export) and a study's runs live inside another output
     outer = tmp_path / "outer"
     outer.mkdir()
-    from wearcheck.comparisons import outputs
+    from wearcheck import outputs
     outputs.write_marker(outer, "run", files=outputs.inventory(outer))
     before = _snapshot(tmp_path)
     assert cli_main(["run", HERTZ, "--out", str(outer / inner), *SMALL]) == 2
@@ -190,7 +190,7 @@ def test_an_unmarked_vtk_folder_of_the_user_is_not_replaced_by_export(tmp_path, 
 def test_a_file_added_while_an_output_is_replaced_is_kept(tmp_path, monkeypatch):
     # the race between the check and the move aside: the occupant is checked
     # again once moved, and goes back with the file
-    from wearcheck.comparisons import outputs
+    from wearcheck import outputs
     out = tmp_path / "out"
     with outputs.atomic_directory(out) as tmp:
         (tmp / "payload").write_text("first")
@@ -205,7 +205,7 @@ def test_a_file_added_while_an_output_is_replaced_is_kept(tmp_path, monkeypatch)
 
 
 def test_debris_of_a_dead_export_does_not_block_a_rerun(tmp_path):
-    from wearcheck.comparisons import outputs
+    from wearcheck import outputs
     run = tmp_path / "run"
     assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
     dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
@@ -235,7 +235,7 @@ def test_a_copy_that_loses_the_mtime_is_still_replaceable(tmp_path):
 
 
 def test_study_files_and_runs_the_user_changed_are_kept(tmp_path):
-    from wearcheck.comparisons import outputs
+    from wearcheck import outputs
     study = outputs.study_directory(tmp_path / "study")
     outputs.write_study_text(study, "sweep.csv", "a\n")
     outputs.write_study_text(study, "sweep.csv", "b\n")     # its own file: replaced
@@ -273,7 +273,7 @@ def test_study_files_and_runs_the_user_changed_are_kept(tmp_path):
 
 
 def test_the_mesh_side_marker_is_never_written_through_a_link(tmp_path, monkeypatch):
-    from wearcheck.comparisons import outputs
+    from wearcheck import outputs
     source = tmp_path / "src.msh"
     source.write_text("$MeshFormat\n")
     precious = tmp_path / "user_text.txt"
@@ -292,7 +292,7 @@ def test_the_mesh_side_marker_is_never_written_through_a_link(tmp_path, monkeypa
 
 
 def test_a_comparisons_solver_folder_takes_its_own_export(tmp_path):
-    from wearcheck.comparisons import outputs
+    from wearcheck import outputs
     comparison = tmp_path / "cmp"
     (comparison / "mdr").mkdir(parents=True)
     outputs.write_marker(comparison, "comparison",
@@ -316,7 +316,7 @@ def test_an_output_of_an_older_wearcheck_is_not_replaced(tmp_path, capsys):
 
 
 def test_an_output_of_another_kind_is_not_replaced(tmp_path):
-    from wearcheck.comparisons import outputs
+    from wearcheck import outputs
     run = tmp_path / "run"
     assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
     with pytest.raises(cases.CaseError, match="wearcheck run directory, not a study"):
@@ -403,7 +403,7 @@ def test_a_study_whose_workers_all_leave_ends_instead_of_hanging(tmp_path, monke
     cancelled after the worker timeout and reported as failed levels."""
     import threading
     from distributed import LocalCluster
-    from wearcheck.comparisons.studies.refine import refine
+    from wearcheck.studies.refine import refine
     monkeypatch.setenv("WEARCHECK_WORKER_TIMEOUT", "2")
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1",
                       dashboard_address=None) as cluster:
@@ -474,7 +474,7 @@ def test_the_fem_memory_estimate_bounds_the_measured_peak():
     # VmHWM, not ru_maxrss: Linux carries ru_maxrss over from the parent (pytest)
     # through fork and exec, VmHWM belongs to the new process's memory alone
     code = ("from pathlib import Path; from wearcheck import cases; "
-            "from wearcheck.comparisons import registry; import wearcheck.fem; "
+            "from wearcheck import registry; import wearcheck.fem; "
             "hwm = lambda: int([l for l in Path('/proc/self/status').read_text().splitlines() "
             "if l.startswith('VmHWM:')][0].split()[1]); "
             "c = cases.load(cases.shipped('paper'), ['fem.contact_nodes=250']); "
@@ -580,7 +580,7 @@ def _marker(kind, complete, pid, host=None):
 
 
 def test_stale_partials_of_dead_writers_are_cleaned_and_no_others(tmp_path):
-    from wearcheck.comparisons.rundir import OUTPUT_MARKER
+    from wearcheck.outputs import OUTPUT_MARKER
     stale, live, foreign, unmarked = (tmp_path / f".x.partial-{n}" for n in "abcd")
     for d, marker in ((stale, _marker("run", False, _dead_pid())),
                       (live, _marker("run", False, os.getppid())),
@@ -597,7 +597,7 @@ def test_stale_partials_of_dead_writers_are_cleaned_and_no_others(tmp_path):
 
 @pytest.mark.parametrize("command", ["export", "render"])
 def test_export_and_render_refuse_a_partial_directory(tmp_path, capsys, command):
-    from wearcheck.comparisons.rundir import OUTPUT_MARKER
+    from wearcheck.outputs import OUTPUT_MARKER
     run = tmp_path / "x"
     assert cli_main(["run", HERTZ, "--out", str(run), *SMALL]) == 0
     partial = tmp_path / ".x.partial-abc"
@@ -609,10 +609,10 @@ def test_export_and_render_refuse_a_partial_directory(tmp_path, capsys, command)
 
 
 def _writer(path, worker, count, queue):
-    from wearcheck.comparisons import rundir as runio
+    from wearcheck import outputs
     try:
         for i in range(count):
-            with runio.atomic_directory(path) as tmp:
+            with outputs.atomic_directory(path) as tmp:
                 (tmp / "payload").write_text(f"{worker} {i}\n" * 50)
         queue.put(None)
     except BaseException as exc:  # reported to the parent
@@ -625,9 +625,9 @@ def test_concurrent_writers_to_one_path_never_fail_nor_leave_debris(tmp_path, mo
     """4 processes x 150 atomic writes to one path: no OSError, no leftover
     directory, and the path holds one complete write (the last to land); with
     the atomic exchange and with the renames of file systems without it."""
-    from wearcheck.comparisons.rundir import OUTPUT_MARKER
+    from wearcheck.outputs import OUTPUT_MARKER
     if not exchange:
-        monkeypatch.setattr("wearcheck.comparisons.renames._RENAMEAT2", None)
+        monkeypatch.setattr("wearcheck.renames._RENAMEAT2", None)
     path = tmp_path / "out"
     ctx = multiprocessing.get_context("fork")
     queue = ctx.Queue()
@@ -734,7 +734,7 @@ def test_fem_with_an_extreme_modulus_is_the_numerical_failure_exit(tmp_path, cap
 
 
 def test_refine_rerun_where_every_level_fails_removes_the_old_figures(tmp_path, capsys):
-    from wearcheck.comparisons.studies.refine import refine
+    from wearcheck.studies.refine import refine
     from wearcheck.comparisons.present.study_figures import FIGURES
     out = tmp_path / "study"
     refine(cases.load(HERTZ), "mdr", out, levels=[20, 40, 80], workers=1, quiet=True)
@@ -867,7 +867,7 @@ def test_a_mount_point_is_refused_before_solving(tmp_path, capsys, no_solve, mon
         line = _one_error_line(capsys.readouterr().err)
         assert "mount point" in line and str(out / "run") in line
     assert list(out.iterdir()) == []
-    from wearcheck.comparisons.outputs import study_directory
+    from wearcheck.outputs import study_directory
     assert study_directory(out) == out
 
 
@@ -936,7 +936,7 @@ def test_a_place_that_takes_no_new_entry_is_refused_before_solving(tmp_path, cap
         assert cli_main([*argv, "--out", out, *SMALL]) == 2
         assert "nothing can be created in '/proc'" in _one_error_line(capsys.readouterr().err)
     # an ordinary directory is probed and left as it was
-    from wearcheck.comparisons.outputs import check_output
+    from wearcheck.outputs import check_output
     assert check_output(tmp_path / "r", "run") == tmp_path / "r"
     assert list(tmp_path.iterdir()) == []
 
@@ -958,6 +958,6 @@ def test_the_working_directory_is_not_replaced_under_the_shell(tmp_path, monkeyp
     monkeypatch.chdir(run / "vtk")
     assert cli_main(["run", HERTZ, "--solver", "mdr", "--out", str(run), *SMALL]) == 2
     assert "(or holds it)" in _one_error_line(capsys.readouterr().err)
-    from wearcheck.comparisons.outputs import study_directory
+    from wearcheck.outputs import study_directory
     monkeypatch.chdir(here)
     assert study_directory(here) == here

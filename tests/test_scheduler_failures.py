@@ -26,8 +26,8 @@ import cloudpickle
 import pytest
 
 from wearcheck import cases
-from wearcheck.comparisons.studies import scheduler as scheduler_mod
-from wearcheck.comparisons.studies.distributed import Task, run_cases
+from wearcheck.studies import scheduler as scheduler_mod
+from wearcheck.studies.distributed import Task, run_cases
 
 cloudpickle.register_pickle_by_value(sys.modules[__name__])
 
@@ -118,7 +118,7 @@ def test_a_server_that_greets_first_is_named_not_out_of_memory(tmp_path, listene
 ])
 def test_an_address_this_machine_cannot_use_is_bad_input(tmp_path, capsys, address, words):
     """At once, in this process (none of them waits for anything)."""
-    from wearcheck.comparisons.cli import main as cli_main
+    from wearcheck.cli import main as cli_main
     code = cli_main(["sweep", HERTZ, "--vary", "wear.mu=0.2,0.3", "--scheduler", address,
                      "--out", str(tmp_path / "s"), "--quiet"])
     lines = [line for line in capsys.readouterr().err.splitlines() if line.strip()]

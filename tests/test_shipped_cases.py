@@ -7,7 +7,7 @@ import pytest
 
 from wearcheck import cases
 from wearcheck.cases import CaseError, catalog
-from wearcheck.comparisons.cli import main as cli_main
+from wearcheck.cli import main as cli_main
 
 CASES_DIR = Path(cases.__file__).resolve().parent
 #: every TOML file in the package folder is a shipped case: the list is independent

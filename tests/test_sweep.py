@@ -14,8 +14,8 @@ import wearcheck
 from wearcheck import cases
 from wearcheck.cases import reference
 from wearcheck.cases.case import parse_vary, split_values
-from wearcheck.comparisons.studies.sweep import sweep
-from wearcheck.comparisons.rundir import Run
+from wearcheck.studies.sweep import sweep
+from wearcheck.rundir import Run
 
 # the stand-in solvers below travel to the Dask workers by value, so the
 # workers need not import this test module
@@ -86,7 +86,7 @@ def test_sweep_writes_one_run_per_value(cluster, tmp_path):
 
 
 def test_mdr_sweep_over_the_wear_coefficient_is_self_similar(cluster, tmp_path):
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     out = tmp_path / "k"
     code = main(["sweep", str(cases.shipped("paper")), "--vary", "wear.k=1e-5,1e-4,1e-3",
                  "--solver", "mdr", "--out", str(out), "--set", "mdr.elements=50",
@@ -114,8 +114,8 @@ def test_a_value_its_key_cannot_take_is_refused_before_the_cluster(tmp_path, cap
                                                                     monkeypatch, command, vary):
     # one line naming the key and the value, exit 2, no directory; the
     # cluster never starts (run_cases would)
-    from wearcheck.comparisons.cli import main as cli_main
-    from wearcheck.comparisons.studies import fretting_map, sweep as sweep_mod
+    from wearcheck.cli import main as cli_main
+    from wearcheck.studies import fretting_map, sweep as sweep_mod
 
     def no_cluster(*args, **kwargs):
         raise AssertionError("the cluster started")
@@ -140,8 +140,8 @@ def test_a_solver_that_cannot_run_the_case_is_refused_before_the_cluster(tmp_pat
     coefficient: refine and sweep started the cluster, wrote a study of error rows and
     ended with exit 1. Now refused like ``run``: one line with the reason, exit 2, no
     directory."""
-    from wearcheck.comparisons.cli import main as cli_main
-    from wearcheck.comparisons.studies import refine as refine_mod, sweep as sweep_mod
+    from wearcheck.cli import main as cli_main
+    from wearcheck.studies import refine as refine_mod, sweep as sweep_mod
 
     def no_cluster(*args, **kwargs):
         raise AssertionError("the cluster started")
@@ -169,7 +169,7 @@ def test_a_value_is_judged_with_the_other_varied_keys(tmp_path, monkeypatch):
     """``--vary loading.control=force --vary loading.force=1,2`` on a depth-controlled
     case was refused ("loading.force given but loading.control = depth"): the force is
     fine beside the varied control. A value wrong in every combination still is not."""
-    from wearcheck.comparisons.studies import sweep as sweep_mod
+    from wearcheck.studies import sweep as sweep_mod
     seen = []
 
     def no_cluster(case, tasks, out, **kwargs):
@@ -229,8 +229,8 @@ def test_a_sweep_of_another_base_into_a_study_is_refused(cluster, tmp_path, caps
                                                          monkeypatch, argv, what):
     """One table for two different studies would pass for one: refused before the
     cluster starts, one line naming what differs; the first sweep untouched."""
-    from wearcheck.comparisons.cli import main as cli_main
-    from wearcheck.comparisons.studies import sweep as sweep_mod
+    from wearcheck.cli import main as cli_main
+    from wearcheck.studies import sweep as sweep_mod
     out = tmp_path / "s"
     paper = str(cases.shipped("paper"))
     sweep(cases.load(paper), {"wear.k": [1e-5, 1e-4]}, "mdr", out, scheduler=cluster,
@@ -253,7 +253,7 @@ def test_the_same_sweep_from_python_and_from_the_command_line_gives_the_same_run
     """The command line types its text once and hands the study what Python hands it:
     the same run directories, the same cases and the same histories, a list-valued key
     (stages.s_hat) included."""
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     cli_out, py_out = tmp_path / "cli", tmp_path / "py"
     assert main(["sweep", "hertz", "--set", "mdr.elements=50", "--vary", "wear.mu=0.2,0.3",
                  "--vary", "stages.s_hat=[0.0, 0.5],[0.0, 1.0]", "--scheduler", cluster,
@@ -302,8 +302,8 @@ def test_study_errors_name_the_python_argument_or_the_flag(tmp_path, capsys, mon
                                                           said_on_the_command_line):
     """Called from Python a study's error names the argument the caller wrote; only the
     command line's names its flag (it said --vary, --tolerance from Python too)."""
-    from wearcheck.comparisons.cli import main
-    from wearcheck.comparisons.studies import distributed
+    from wearcheck.cli import main
+    from wearcheck.studies import distributed
 
     def no_cluster(*args, **kwargs):
         raise AssertionError("the cluster started")
@@ -324,8 +324,8 @@ def test_the_command_line_reads_a_varied_table_file_as_set_does(tmp_path, monkey
     directory (as ``Case.derive`` reads it), made absolute before it goes to a worker,
     whose working directory may differ."""
     from types import SimpleNamespace
-    from wearcheck.comparisons.cli._common import varied
-    from wearcheck.comparisons.studies.sweep import task_changes
+    from wearcheck.cli._common import varied
+    from wearcheck.studies.sweep import task_changes
     case_file = tmp_path / "sub" / "case.toml"
     args = SimpleNamespace(case=case_file, overrides=["wear.mu=0.3"],
                            vary=["indenter.file=a.csv,/abs/b.csv", "wear.k=1e-5"])
@@ -343,7 +343,7 @@ def test_sweep_json_rows_are_the_runs(cluster, tmp_path, capsys):
     # the rows on stdout: one per value, as sweep.csv has them, and Archard's
     # self-similarity (ŝ ∝ k s, docs/theory.md §5) makes k·s at the end one number
     out = tmp_path / "k"
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     code = main(["sweep", "paper", "--vary", "wear.k=1e-5,1e-4", "--solver", "mdr",
                      "--out", str(out), "--set", "mdr.elements=50",
                      "--set", "sliding.force_fraction=0.3", "--scheduler", cluster, "--quiet",

@@ -87,7 +87,7 @@ def test_optional_empty_cell_is_nan(tmp_path):
     t = read_table(path, COLUMNS, required=[("s", "cycles"), "force"])
     assert np.isnan(t["p"][0]) and t["p"][1] == 5.0
     # a column of a group ("s or cycles") may be empty or "nan": its reader checks the one
-    # it uses (comparisons.external.tables_dir)
+    # it uses (wearcheck.external.tables_dir)
     assert np.all(np.isnan(t["cycles"]))
 
 

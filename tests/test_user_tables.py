@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from wearcheck.cases import CaseError
-from wearcheck.comparisons.studies.fit import MEASUREMENTS
+from wearcheck.studies.fit import MEASUREMENTS
 from wearcheck.user_tables import Quantity, from_columns, read_table
 
 HISTORY = (Quantity("force", "force", ("F",), "normal force"),

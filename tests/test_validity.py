@@ -23,7 +23,7 @@ import pytest
 import wearcheck
 from wearcheck import cases
 from wearcheck.cases import CaseError, RunWarning, SolverError, reference, validity
-from wearcheck.comparisons.cli import main as cli_main
+from wearcheck.cli import main as cli_main
 from wearcheck.mdr import resolution
 
 PAPER = str(cases.shipped("paper"))

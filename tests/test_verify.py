@@ -18,7 +18,7 @@ import pytest
 
 import wearcheck
 from wearcheck.cases import CaseError
-from wearcheck.comparisons import external
+from wearcheck import external
 
 import verify_formats as fmt
 

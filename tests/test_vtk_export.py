@@ -18,12 +18,12 @@ import xml.etree.ElementTree as ET
 import numpy as np
 import pytest
 
-from wearcheck.comparisons.rundir import OUTPUT_MARKER
+from wearcheck.outputs import OUTPUT_MARKER
 
 from wearcheck import cases
 from wearcheck.cases import RunResult, WearcheckError
 from wearcheck.comparisons.present import vtk
-from wearcheck.comparisons.rundir import Run, write_run
+from wearcheck.rundir import Run, write_run
 
 SEGMENTS = 12
 
@@ -509,7 +509,7 @@ def test_export_replaces_atomically_and_a_failure_keeps_the_old_files(tmp_path):
 
 
 def test_export_command(tmp_path, capsys):
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     run, _ = cylinder_run(tmp_path / "run", s_hat=(0.0, 2.0))
     assert main(["export", str(run.path), "--revolve", "5"]) == 0
     check_series(run.path / "vtk", run, SERIES_FIELDS)

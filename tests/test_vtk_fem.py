@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from wearcheck.comparisons.rundir import OUTPUT_MARKER
+from wearcheck.outputs import OUTPUT_MARKER
 
 from wearcheck import cases
 from wearcheck.comparisons.present import vtk
-from wearcheck.comparisons.rundir import Run, write_run
+from wearcheck.rundir import Run, write_run
 
 sys.path.insert(0, str(Path(__file__).parent))
 from test_vtk_export import (SERIES_FIELDS, assert_convex_cells,  # noqa: E402
@@ -131,7 +131,7 @@ def test_fem_von_mises_on_the_axis_is_hertz(fem_run):
 
 
 def test_run_command_writes_vtk_into_the_run_directory(tmp_path):
-    from wearcheck.comparisons.cli import main
+    from wearcheck.cli import main
     out = tmp_path / "hertz-fem"
     assert main(["run", str(cases.shipped("hertz")), "--solver", "fem", "--out", str(out),
                  "--set", "fem.contact_nodes=30", "--vtk", "--revolve", "6", "--quiet"]) == 0

@@ -5,7 +5,7 @@ import pytest
 
 from wearcheck import bem, cases
 from wearcheck.cases import WearcheckError, reference
-from wearcheck.comparisons import rundir
+from wearcheck import rundir
 from wearcheck.comparisons.present import vtk_image
 from wearcheck.comparisons.present.vtk import export_run, read_units
 

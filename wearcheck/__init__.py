@@ -18,7 +18,8 @@ certified reference solution), :func:`verify` (results produced elsewhere agains
 :class:`Case`,
 :class:`CaseError`, :class:`SolverError`, and the solver registry
 :mod:`wearcheck.registry` (``register``, ``Solver``). Everything else
-(``wearcheck.mdr``, ``wearcheck.comparisons``, ...) is internal.
+(``wearcheck.mdr``, ``wearcheck.comparisons``, ``wearcheck.studies``, ``wearcheck.cli``,
+...) is internal.
 """
 
 import os as _os

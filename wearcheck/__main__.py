@@ -2,6 +2,6 @@
 
 import sys
 
-from wearcheck.comparisons.cli import main
+from wearcheck.cli import main
 
 sys.exit(main())

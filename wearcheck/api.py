@@ -22,7 +22,7 @@ import numpy as np
 from wearcheck import cases
 from wearcheck.cases import ArgumentError, Case, CaseError, RunResult
 from wearcheck.cases import reference as closed_forms
-from wearcheck.comparisons import registry, rundir
+from wearcheck import registry, rundir
 
 __all__ = ["load_case", "shipped_cases", "solvers", "solve", "Result", "read_run", "compare",
            "refine", "sweep", "fit", "export_vtk", "reference", "verify"]
@@ -287,8 +287,8 @@ def verify(case: str | Path | Case, results: str | Path, out: str | Path, *,
     ``["p [MPa]=CONTACT.CPRESS"]`` as ``--map``. Returns the metrics as in
     ``metrics.json``; ``["passed"]`` is the verdict.
     """
-    from wearcheck.comparisons.external import parse_mapping
-    from wearcheck.comparisons.studies.verify import verify as _verify
+    from wearcheck.external import parse_mapping
+    from wearcheck.studies.verify import verify as _verify
     if mapping is not None and not isinstance(mapping, Mapping):
         mapping = parse_mapping([mapping] if isinstance(mapping, str) else list(mapping))
     return _verify(load_case(case), results, out, mapping=dict(mapping or {}),
@@ -306,7 +306,7 @@ def compare(case: str | Path | Case, out: str | Path, *, solvers: Iterable[str] 
 
     Returns the metrics as in ``metrics.json``; ``["passed"]`` is the verdict.
     """
-    from wearcheck.comparisons.studies.compare import compare as _compare
+    from wearcheck.studies.compare import compare as _compare
     if isinstance(solvers, str):
         # "mdr,fem" as on the command line (--solvers)
         solvers = [name.strip() for name in solvers.split(",") if name.strip()] or [solvers]
@@ -326,7 +326,7 @@ def refine(case: str | Path | Case, out: str | Path, solver: str = "mdr", *,
            quiet: bool = True) -> dict:
     """A refinement study on Dask (paper Fig. 4): returns its summary (observed orders,
     Richardson's estimate, coarsest converged level); run directories go to ``out``."""
-    from wearcheck.comparisons.studies.refine import refine as _refine
+    from wearcheck.studies.refine import refine as _refine
     case = load_case(case)
     levels = None if levels is None else [_plain(v) for v in _listed(levels, "levels")]
     steps = None if steps is None else [_plain(v) for v in _listed(steps, "steps")]
@@ -348,7 +348,7 @@ def sweep(case: str | Path | Case, vary: Mapping[str, Iterable], out: str | Path
     Returns the rows of ``sweep.csv`` (the varied values, final ŝ, F/F0, wear
     depth, status per run).
     """
-    from wearcheck.comparisons.studies.sweep import sweep as _sweep
+    from wearcheck.studies.sweep import sweep as _sweep
     case = load_case(case)
     if isinstance(vary, str):
         vary = [vary]
@@ -390,7 +390,7 @@ def fit(case: str | Path | Case, data, keys: str | Iterable[str] = ("wear.specif
     CaseError
         bad keys, case or data (one message naming the file, row and column).
     """
-    from wearcheck.comparisons.studies import fit as _fit
+    from wearcheck.studies import fit as _fit
     result = _fit.fit(load_case(case), data, keys, exponents=exponents, scheduler=scheduler,
                       workers=workers, quiet=quiet)
     for text in result.warnings:

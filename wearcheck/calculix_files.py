@@ -3,7 +3,7 @@
 One reader for both users of CalculiX output: the ``ccx`` solver (its own
 jobs; :mod:`wearcheck.ccx.output` reports a damaged file of its own job as a
 SolverError) and ``wearcheck verify`` (a user's CalculiX results,
-:mod:`wearcheck.comparisons.external.calculix`). A file that cannot be read is
+:mod:`wearcheck.external.calculix`). A file that cannot be read is
 one :class:`CaseError` naming the file and the line.
 
 The .dat file holds what ``*NODE PRINT``, ``*EL PRINT`` and ``*CONTACT PRINT``

@@ -15,7 +15,7 @@ import numpy as np
 from scipy import optimize
 
 from wearcheck.cases import ArgumentError, CaseError
-from wearcheck.comparisons import registry
+from wearcheck import registry
 
 #: the error measures of a level, in the order tables show them
 MEASURES = ("profile", "pressure", "pressure_interior", "force")

@@ -1,6 +1,6 @@
 """Least-squares fits of wear coefficients to measurements, with profile-likelihood intervals.
 
-Pure numerics, arrays in and out (``comparisons.studies.fit`` runs the model
+Pure numerics, arrays in and out (``wearcheck.studies.fit`` runs the model
 and reads the measurements).
 
 **The structure used.** The wear law dw/ds = K σ0 (p/σ0)ⁿ with a quasi-static

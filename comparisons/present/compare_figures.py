@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from wearcheck.cases import WearcheckError, reference
-from wearcheck.comparisons import registry
+from wearcheck import registry
 from wearcheck.comparisons.analysis import metrics
 from wearcheck.comparisons.present import figures
 from wearcheck.extras import MissingExtra

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from wearcheck import cases
-from wearcheck.comparisons import registry
+from wearcheck import registry
 from wearcheck.comparisons.analysis import diagnosis, edge_peak, metrics
 from wearcheck.comparisons.present import report
 

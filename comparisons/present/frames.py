@@ -4,7 +4,7 @@ Dataset's netCDF file.
 
 pandas and xarray are optional (``pip install "wearcheck[xarray]"``); each is
 imported only when asked for. Units and meanings come from the run's data
-dictionary (``comparisons.layout``), the same one meta.json carries.
+dictionary (``wearcheck.layout``), the same one meta.json carries.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 
 from wearcheck import cases
 from wearcheck.cases import CaseError, reference
-from wearcheck.comparisons import layout, registry
+from wearcheck import layout, registry
 from wearcheck.extras import need
 
 #: the global attribute that marks a netCDF file as wearcheck's (only such a file is
@@ -62,7 +62,7 @@ def _provenance(result) -> dict:
     provenance when read from one, else this process's."""
     if result.meta and "command" in result.meta:   # meta.json holds it at its top level
         return result.meta
-    from wearcheck.comparisons import rundir
+    from wearcheck import rundir
     return rundir.provenance()
 
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from wearcheck.extras import need
 
-from wearcheck.comparisons.rundir import provenance
+from wearcheck.rundir import provenance
 
 
 def _label(name: str) -> str:

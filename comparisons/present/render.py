@@ -29,7 +29,8 @@ from pathlib import Path
 import numpy as np
 
 from wearcheck.cases import WearcheckError
-from wearcheck.comparisons.rundir import Run, atomic_directory
+from wearcheck.outputs import atomic_directory
+from wearcheck.rundir import Run
 from wearcheck.extras import need
 from wearcheck.comparisons.present.vtk import (SURFACE_SEGMENTS, VTK_QUADRATIC_TRIANGLE,
                   VTK_TRIANGLE, check_fields, grid, nice_factor, orient_triangles, revolve_curve, section_data, unworn_profile)

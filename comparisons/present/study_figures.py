@@ -17,9 +17,9 @@ from wearcheck.extras import need
 
 from wearcheck.comparisons.analysis.convergence import MEASURES
 from wearcheck.cases import CaseError
-from wearcheck.comparisons import registry
-from wearcheck.comparisons.outputs import remove_study_file, write_study_file
-from wearcheck.comparisons.rundir import Run, provenance
+from wearcheck import registry
+from wearcheck.outputs import remove_study_file, write_study_file
+from wearcheck.rundir import Run, provenance
 
 FIGURES = ("fig4_profiles.png", "fig4_force.png", "convergence.png", "cost.png")
 LABELS = {"profile": "profile / d0", "pressure": "pressure / p0",

@@ -50,7 +50,8 @@ from wearcheck.cases import CaseError, WearcheckError
 from wearcheck.cases.profiles import height, height_xy
 from wearcheck.cases.schema import NON_AXISYMMETRIC
 
-from wearcheck.comparisons.rundir import Run, atomic_directory
+from wearcheck.outputs import atomic_directory
+from wearcheck.rundir import Run
 
 FIELD_KEYS = ("points", "cells", "displacement", "stress", "contact_nodes",
               "contact_pressure", "wear_depth")
@@ -464,7 +465,7 @@ def _solver_export(name: str):
     """The registry's VTK writer for a solver's own fields (None: none)."""
     import importlib
 
-    from wearcheck.comparisons import registry
+    from wearcheck import registry
     try:
         target = registry.get(name).export_vtk
     except CaseError:
@@ -504,7 +505,7 @@ def export_run(run_dir, revolve: int = 0) -> Path:
 
     Parameters
     ----------
-    run_dir : a complete run directory (``comparisons.rundir.Run`` reads it).
+    run_dir : a complete run directory (``wearcheck.rundir.Run`` reads it).
     revolve : N > 0 also writes the FEM fields revolved in N segments
         (``solid`` series); ignored for runs without fields. N is also the
         number of segments of the worn surface (default ``SURFACE_SEGMENTS``).
@@ -514,7 +515,7 @@ def export_run(run_dir, revolve: int = 0) -> Path:
     need("pyvista", "writing ParaView files")
     run = Run(run_dir)
     target = run.path / "vtk"
-    from wearcheck.comparisons.resources import check_export
+    from wearcheck.resources import check_export
     # the FEM's section mesh is what a revolution multiplies; other fields are small
     check_export(len(run.fields["points"]) if run.fields and "points" in run.fields else 0,
                  len(run.stages["r"]), revolve or SURFACE_SEGMENTS, len(run.stages["s"]),

@@ -27,7 +27,7 @@ from wearcheck.extras import need
 from wearcheck.cases import WearcheckError
 
 from wearcheck.comparisons.present.vtk import pvd_text, units_of, warp_scale
-from wearcheck.comparisons.rundir import Run
+from wearcheck.rundir import Run
 
 #: the per-stage surface fields of a BEM run (``RunResult.fields``)
 IMAGE_FIELDS = ("profile", "wear_depth", "pressure", "gap")

@@ -5,7 +5,7 @@ Writes into ``docs/_generated/`` (not kept in git), included by the pages:
 - ``case-keys.md``: every case key with unit, default and meaning (``cases/schema.py``);
 - ``case-rules.md``: every rule between keys, and who checks it (``cases/rules.py``);
 - ``layout-NAME.md``: the tables of what a run or a comparison writes
-  (``comparisons/layout.py``);
+  (``wearcheck/layout.py``);
 - ``cli.md``: ``wearcheck --help`` and every subcommand's help, from the argument parser;
 - ``reference-bands.md`` and ``reference-NAME.png``: the certified references' error
   bands, orders and spreads, and their curves, from the shipped files
@@ -31,7 +31,7 @@ def tutorial_order(filename: str):
 
 def cli_reference() -> str:
     """Every command's ``--help``, as the terminal shows it (80 columns)."""
-    from wearcheck.comparisons.cli import build_parser
+    from wearcheck.cli import build_parser
     saved = os.environ.get("COLUMNS")
     os.environ["COLUMNS"] = "80"
     try:
@@ -51,7 +51,7 @@ def cli_reference() -> str:
 def generated_pages() -> dict[str, str]:
     """File name in ``_generated/`` -> Markdown."""
     from wearcheck.cases import key_reference, rules
-    from wearcheck.comparisons import layout
+    from wearcheck import layout
     pages = {"case-keys.md": key_reference() + "\n", "case-rules.md": rules.reference() + "\n",
              "cli.md": cli_reference()}
     for name, table in layout.doc_tables().items():

@@ -23,12 +23,12 @@ from wearcheck import cases
 from wearcheck.cases import ArgumentError
 from wearcheck.cases.reference import scales as case_scales
 from wearcheck.cases.schema import format_value, key_problem
-from wearcheck.comparisons.studies.distributed import Task, fmt, record_study, run_cases
-from wearcheck.comparisons import csv_metadata
-from wearcheck.comparisons.csv_metadata import describer, sidecar_name, write_table
-from wearcheck.comparisons.layout import SWEEP_COLUMNS
-from wearcheck.comparisons.outputs import study_lock
-from wearcheck.comparisons.rundir import provenance
+from wearcheck.studies.distributed import Task, fmt, record_study, run_cases
+from wearcheck import csv_metadata
+from wearcheck.csv_metadata import describer, sidecar_name, write_table
+from wearcheck.layout import SWEEP_COLUMNS
+from wearcheck.outputs import study_lock
+from wearcheck.rundir import provenance
 
 
 def plain(value):
@@ -131,7 +131,7 @@ def refuse_unsupported(case, solver: str, runs, every: bool = False) -> None:
     refinement varies only the resolution, which never makes a case
     supported). A combination the case rejects is left to its row.
     """
-    from wearcheck.comparisons import registry
+    from wearcheck import registry
     entry = registry.get(solver)
     reasons = []
     for changes in runs:
@@ -183,7 +183,7 @@ def sweep(case: cases.Case, vary: Mapping[str, Iterable], solver: str, out, *,
     The rows hold the varied values (typed; a relative ``indenter.file`` made
     absolute), the status, times and the end of each run in its own scales.
     """
-    from wearcheck.comparisons import registry
+    from wearcheck import registry
     registry.get(solver)  # an unknown solver is refused before the cluster starts
     values = varied_values(vary)
     check_varied(case, values)
@@ -242,8 +242,8 @@ def earlier_rows(out: Path, solver: str, case) -> list[dict]:
     with its ``--set``): refused, before the cluster starts, otherwise, as one
     table would present the runs of two different studies as one.
     """
-    from wearcheck.comparisons.outputs import read_marker
-    from wearcheck.comparisons.studies.distributed import base_difference, study_meta
+    from wearcheck.outputs import read_marker
+    from wearcheck.studies.distributed import base_difference, study_meta
     marker = read_marker(out) if Path(out).is_dir() else None
     if not marker or marker.get("kind") != "study":
         return []

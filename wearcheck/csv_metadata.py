@@ -57,7 +57,7 @@ def write_table(study, csv_name: str, text: str, *, title: str, command: str, no
                 describe) -> None:
     """Write ``text`` as ``study/csv_name`` and its sidecar, each atomically as a
     study file (:func:`outputs.write_study_text`)."""
-    from wearcheck.comparisons.outputs import write_study_text
+    from wearcheck.outputs import write_study_text
     meta = metadata(csv_name, title, command, notes, header(text), describe)
     write_study_text(study, csv_name, text)
     write_study_text(study, sidecar_name(csv_name),

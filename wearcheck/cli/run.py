@@ -7,11 +7,11 @@ from pathlib import Path
 
 from wearcheck.cases import CaseError
 
-from wearcheck.comparisons.outputs import check_output
-from wearcheck.comparisons.resources import _estimator, check_export, check_memory
+from wearcheck.outputs import atomic_directory, check_output
+from wearcheck.resources import _estimator, check_export, check_memory
 from wearcheck.comparisons.present.progress import ProgressBar
-from wearcheck.comparisons.rundir import atomic_directory, write_run_files
-from wearcheck.comparisons import registry
+from wearcheck.rundir import write_run_files
+from wearcheck import registry
 from ._common import add_case_arguments, load_case, print_json
 
 
@@ -80,7 +80,7 @@ def summary(case, result, solver: str, out: Path) -> dict:
     """What ``--json`` prints: the run's counts, the last history row (units
     from the run's data dictionary) and the scales."""
     from wearcheck.cases import reference
-    from wearcheck.comparisons import layout
+    from wearcheck import layout
 
     entry = registry.get(solver) if solver in registry.names() else None
     units = layout.run_dictionary(entry, list(result.history))["history_csv"]

@@ -299,7 +299,7 @@ def plan(case: cases.Case, data: fitting.Data, c: float, n: float) -> tuple[floa
 
 
 def _solve_here(case: cases.Case, quiet: bool, label: str):
-    from wearcheck.comparisons import registry
+    from wearcheck import registry
     from wearcheck.comparisons.present.progress import ProgressBar
     bar = ProgressBar(label, quiet=quiet)
     try:
@@ -462,7 +462,7 @@ def _reach(log_K, upper, data, c) -> float:
 
 def _fit_exponent(case, data, c, exponents, scheduler, workers, quiet, notes):
     """n free: one forward run per exponent, on Dask."""
-    from wearcheck.comparisons.studies.distributed import Task, run_cases
+    from wearcheck.studies.distributed import Task, run_cases
     exponents = np.asarray(EXPONENTS if exponents is None else sorted(set(map(float, exponents))),
                            float)
     if len(exponents) < 4 or exponents[0] < 1.0 or exponents[-1] > 4.0:
@@ -629,9 +629,9 @@ def write(result: FitResult, out, data_path=None, argv=None) -> Path:
     """Write the fit directory ``out`` atomically: case.toml, fitted_case.toml, fit.json,
     measurements.csv, fit.png and meta.json (provenance)."""
     import json
-    from wearcheck.comparisons import layout
-    from wearcheck.comparisons.outputs import atomic_directory
-    from wearcheck.comparisons.rundir import jsonable, provenance
+    from wearcheck import layout
+    from wearcheck.outputs import atomic_directory
+    from wearcheck.rundir import jsonable, provenance
     with atomic_directory(out, "fit") as tmp:
         (tmp / "case.toml").write_text(cases.to_toml(result.case), encoding="utf-8")
         (tmp / "fitted_case.toml").write_text(cases.to_toml(result.fitted_case),
@@ -658,7 +658,7 @@ def write(result: FitResult, out, data_path=None, argv=None) -> Path:
 
 def measurements_csv(rows: list) -> str:
     """measurements.csv: one row per measurement (SI; ``pandas.read_csv`` reads it as is)."""
-    from wearcheck.comparisons.layout import FIT_COLUMNS
+    from wearcheck.layout import FIT_COLUMNS
     names = [c.name for c in FIT_COLUMNS]
     lines = [",".join(names)]
     for row in rows:

@@ -254,7 +254,7 @@ def main(argv=None) -> int:
     args, extra = parser.parse_known_args(argv)
     if extra:
         _unrecognized(args.command, argv, extra)
-    from wearcheck.comparisons.rundir import set_command
+    from wearcheck.rundir import set_command
     set_command(["wearcheck", *argv])
     name = f"wearcheck {args.command}"
     previous = None

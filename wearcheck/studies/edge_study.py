@@ -12,7 +12,7 @@ import math
 
 from wearcheck import cases
 from wearcheck.cases import reference
-from wearcheck.comparisons import registry
+from wearcheck import registry
 from wearcheck.comparisons.analysis import edge_peak
 from wearcheck.comparisons.analysis.diagnosis import grid_spacing, step_hat_used
 from wearcheck.comparisons.present.progress import ProgressBar

@@ -11,10 +11,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from wearcheck.comparisons import registry
+from wearcheck import registry
 from wearcheck.comparisons.present.compare_report import print_summary
-from wearcheck.comparisons.studies.compare import compare
-from wearcheck.comparisons.studies.sphere_sweep import SPHERE_RATIOS
+from wearcheck.studies.compare import compare
+from wearcheck.studies.sphere_sweep import SPHERE_RATIOS
 from ._common import add_case_arguments, load_case, print_json, verdict
 
 

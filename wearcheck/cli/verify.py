@@ -18,8 +18,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from wearcheck.comparisons import registry
-from wearcheck.comparisons.external import parse_mapping
+from wearcheck import registry
+from wearcheck.external import parse_mapping
 from ._common import add_case_arguments, load_case, print_json, verdict
 
 
@@ -48,7 +48,7 @@ def add_parser(sub):
 
 def main(args) -> int:
     from wearcheck.comparisons.present.verify_report import print_summary
-    from wearcheck.comparisons.studies.verify import verify
+    from wearcheck.studies.verify import verify
     case = load_case(args)
     mapping = parse_mapping(args.mapping)
     out = args.out or Path("runs") / f"verify-{args.case.stem}"

@@ -36,7 +36,7 @@ import time
 from pathlib import Path
 
 from wearcheck import cases
-from wearcheck.comparisons import renames
+from wearcheck import renames
 
 try:
     import fcntl

@@ -1,7 +1,7 @@
 """``wearcheck compare``: every solver that supports a case, each against a reference.
 
 Everything is computed first; the output directory is then written in one
-piece with ``rundir.atomic_directory`` (the layout is ``rundir.COMPARISON``):
+piece with ``outputs.atomic_directory`` (the layout is ``layout.COMPARISON_FILES``):
 
     DIR/<solver>/               one run directory per solver (as ``wearcheck run`` writes)
     DIR/fig2_profiles.png|pdf   f/d against r/a0 at the stages (paper Fig. 2a)
@@ -25,17 +25,17 @@ import numpy as np
 
 from wearcheck import cases
 from wearcheck.cases import reference
-from wearcheck.comparisons import layout, registry, rundir
+from wearcheck import layout, registry, rundir
 from wearcheck.comparisons.analysis import diagnosis, metrics, scar
 from wearcheck.comparisons.analysis.diagnosis import grid_spacing, step_hat_used
 from wearcheck.comparisons.analysis.edge_peak import peaks_of
-from wearcheck.comparisons.outputs import check_output
+from wearcheck.outputs import atomic_directory, check_output
 from wearcheck.comparisons.present import compare_figures, compare_report, report
 from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.comparisons.present.scar_figure import scar_figure
-from wearcheck.comparisons.resources import check_memory
-from wearcheck.comparisons.studies import edge_study as edge_mod
-from wearcheck.comparisons.studies import sphere_sweep as sphere_mod
+from wearcheck.resources import check_memory
+from wearcheck.studies import edge_study as edge_mod
+from wearcheck.studies import sphere_sweep as sphere_mod
 from wearcheck.extras import need
 
 #: how a solver is run; tests replace it with analytic stand-ins
@@ -412,7 +412,7 @@ def write(out, case, runs: Runs, m: dict, *, argv=None, render=True, started=Non
     m = dict(m)
     names = list(runs.results)
     prov = rundir.provenance(argv)
-    with rundir.atomic_directory(Path(out), "comparison") as tmp:
+    with atomic_directory(Path(out), "comparison") as tmp:
         for name, res in runs.results.items():
             (tmp / name).mkdir()
             rundir.write_run_files(tmp / name, case, res, name, argv)

@@ -65,7 +65,7 @@ def _estimator(solver: str):
     """The solver package's ``resources`` module (next to its ``solve``), or None."""
     module = f"wearcheck.{solver}"
     try:
-        from wearcheck.comparisons import registry
+        from wearcheck import registry
         module = registry.get(solver).module or module
     except Exception:  # an unknown name: the solve reports it
         pass

@@ -24,19 +24,16 @@ from pathlib import Path
 
 import numpy as np
 
-from wearcheck import cases, extras
+from wearcheck import cases, extras, layout
 from wearcheck.cases import reference
 from wearcheck.cases.result import HISTORY_COLUMNS, RunResult
-from wearcheck.comparisons import layout
+from wearcheck.outputs import atomic_directory
 
 #: the packages whose versions every output records: the core's, then the extras'
 #: (None when not installed)
 DEPENDENCIES = ("numpy", "scipy", "threadpoolctl", "tqdm",
                 *dict.fromkeys(distribution for distribution, _ in extras.MODULES.values()))
 
-
-# output safety lives in comparisons.outputs; these names are kept for their users
-from wearcheck.comparisons.outputs import OUTPUT_MARKER, atomic_directory  # noqa: E402,F401
 
 
 def wearcheck_version() -> str | None:
@@ -75,7 +72,7 @@ def source_checkout() -> Path | None:
     The package's folders sit at the top level of the repository, so the root
     is the folder above this one. It counts as a wearcheck checkout only when it
     holds a pyproject.toml naming the project "wearcheck" and git's top level is
-    that very folder: an installed copy (site-packages/wearcheck/comparisons),
+    that very folder: an installed copy (site-packages/wearcheck),
     perhaps inside a user's own git repository, is not one.
     """
     root = Path(__file__).resolve().parent.parent
@@ -194,7 +191,7 @@ def write_run_files(directory: Path, case: cases.Case, result: RunResult, solver
 
 
 def _registered(solver: str):
-    from wearcheck.comparisons import registry
+    from wearcheck import registry
     try:
         return registry.get(solver)
     except cases.CaseError:  # e.g. a stand-in solver of a test
@@ -215,7 +212,7 @@ class Run:
     """A run directory read back: case, history, stages, meta."""
 
     def __init__(self, path: str | Path):
-        from wearcheck.comparisons.outputs import is_partial, recover
+        from wearcheck.outputs import is_partial, recover
         self.path = Path(path)
         if is_partial(self.path):
             raise cases.CaseError(f"'{self.path}' is an incomplete run directory (a .partial "
@@ -317,7 +314,7 @@ def _refuse_other_output(path: Path) -> None:
     Their ``meta.json`` (a study's) or ``metrics.json`` would otherwise be read
     as a damaged run, which sends the user looking for damage that is not there.
     """
-    from wearcheck.comparisons.outputs import read_marker
+    from wearcheck.outputs import read_marker
     marker = read_marker(path)
     kind = marker.get("kind") if marker else None
     if kind in (None, "run", "legacy"):

@@ -16,20 +16,20 @@ import math
 from pathlib import Path
 
 from wearcheck import cases
-from wearcheck.comparisons import registry
+from wearcheck import registry
 from wearcheck.comparisons.analysis import convergence as rf
-from wearcheck.comparisons.studies.distributed import Task, fmt as _fmt, record_study, run_cases
-from wearcheck.comparisons.studies.sweep import refuse_unsupported
-from wearcheck.comparisons import csv_metadata
-from wearcheck.comparisons.csv_metadata import describer, sidecar_name, write_table
-from wearcheck.comparisons.layout import REFINEMENT_COLUMNS
-from wearcheck.comparisons.outputs import study_lock, write_study_text
+from wearcheck.studies.distributed import Task, fmt as _fmt, record_study, run_cases
+from wearcheck.studies.sweep import refuse_unsupported
+from wearcheck import csv_metadata
+from wearcheck.csv_metadata import describer, sidecar_name, write_table
+from wearcheck.layout import REFINEMENT_COLUMNS
+from wearcheck.outputs import study_lock, write_study_text
 
 #: the sidecars' column descriptions
 describe = describer(REFINEMENT_COLUMNS, [("F/F0 at s_hat=", next(
     c for c in REFINEMENT_COLUMNS if c.name.startswith("F/F0 at s_hat=")))])
 from wearcheck.comparisons.present.study_figures import FIGURES
-from wearcheck.comparisons.rundir import jsonable, provenance
+from wearcheck.rundir import jsonable, provenance
 
 
 def refine(case: cases.Case, solver: str, out, *, levels=None, steps=None, tolerance=0.01,

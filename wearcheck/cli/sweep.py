@@ -11,10 +11,10 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from wearcheck.comparisons.studies.distributed import fmt
-from wearcheck.comparisons import registry
+from wearcheck.studies.distributed import fmt
+from wearcheck import registry
 
-from wearcheck.comparisons.studies.sweep import sweep
+from wearcheck.studies.sweep import sweep
 
 from ._common import (add_case_arguments, add_json_argument, load_case, print_json, study_exit,
                       varied)

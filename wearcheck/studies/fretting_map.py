@@ -2,13 +2,13 @@
 
 One MDR fretting run per combination of the varied keys (typically
 ``fretting.amplitude`` and ``loading.force``) on the Dask runner of
-:mod:`comparisons.distributed`; each run directory is kept. A run is in
+:mod:`wearcheck.studies.distributed`; each run directory is kept. A run is in
 partial slip when a stick zone survives its last cycle (stick radius > 0),
 else in gross slip. ``fretting_map.csv`` lists every run with its regime,
 the amplitude over the unworn gross-slip threshold u* = 3μF/(4G*a), the
 worn volume per cycle and the energy dissipated in the last cycle;
 ``fretting_map.png`` draws the map
-(:mod:`comparisons.present.fretting_map_figure`).
+(:mod:`wearcheck.comparisons.present.fretting_map_figure`).
 """
 
 from __future__ import annotations
@@ -19,12 +19,12 @@ from pathlib import Path
 from wearcheck import cases
 from wearcheck.cases import reference
 
-from wearcheck.comparisons.csv_metadata import describer, sidecar_name, write_table
-from wearcheck.comparisons.layout import FRETTING_MAP_COLUMNS
-from wearcheck.comparisons.outputs import write_study_file
-from wearcheck.comparisons.rundir import provenance
-from wearcheck.comparisons.studies.distributed import record_study, run_cases
-from wearcheck.comparisons.studies.sweep import (check_varied, csv_cell, tasks_for,
+from wearcheck.csv_metadata import describer, sidecar_name, write_table
+from wearcheck.layout import FRETTING_MAP_COLUMNS
+from wearcheck.outputs import write_study_file
+from wearcheck.rundir import provenance
+from wearcheck.studies.distributed import record_study, run_cases
+from wearcheck.studies.sweep import (check_varied, csv_cell, tasks_for,
                                                  varied_column, varied_values)
 
 COLUMNS = tuple(c.name for c in FRETTING_MAP_COLUMNS)

@@ -13,7 +13,7 @@ import numpy as np
 
 from wearcheck import cases
 from wearcheck.cases import reference
-from wearcheck.comparisons import registry
+from wearcheck import registry
 from wearcheck.comparisons.present.progress import ProgressBar
 
 #: a0/R of the finite-sphere sweep

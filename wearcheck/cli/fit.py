@@ -61,9 +61,9 @@ def _exponents(text):
 
 
 def main(args) -> int:
-    from wearcheck.comparisons.outputs import check_output
+    from wearcheck.outputs import check_output
     from wearcheck.comparisons.present.fit_report import text
-    from wearcheck.comparisons.studies.fit import fit, write
+    from wearcheck.studies.fit import fit, write
     case = load_case(args)
     if args.out is not None:
         check_output(args.out, "fit")   # before the runs: a path we may not write fails at once
@@ -78,7 +78,7 @@ def main(args) -> int:
         print(f"warning: {remark}" if remark.startswith("the residuals") else f"note: {remark}",
               file=sys.stderr)
     if args.json:
-        from wearcheck.comparisons.rundir import jsonable
+        from wearcheck.rundir import jsonable
         print(json.dumps(jsonable(result.to_dict()), indent=2, allow_nan=True))
     else:
         print(text(result))

@@ -36,8 +36,8 @@ from pathlib import Path
 
 from wearcheck import cases
 from wearcheck.comparisons.present.progress import ProgressBar
-from wearcheck.comparisons.studies import scheduler as scheduler_mod
-from wearcheck.comparisons.rundir import jsonable, write_run
+from wearcheck.studies import scheduler as scheduler_mod
+from wearcheck.rundir import jsonable, write_run
 from wearcheck.extras import need
 
 #: seconds between two samples of a task's resident set size
@@ -164,11 +164,11 @@ def execute(base: cases.Case, changes: dict, solver: str, name: str,
     """Build the case (``base`` with ``changes``), solve it; never raises. Runs inside a
     worker.
 
-    ``solve(case, solver, progress)`` defaults to ``comparisons.registry.solve``.
+    ``solve(case, solver, progress)`` defaults to ``wearcheck.registry.solve``.
     """
     if solve is None:
-        from wearcheck.comparisons import registry
-        from wearcheck.comparisons.registry import solve
+        from wearcheck import registry
+        from wearcheck.registry import solve
         try:  # a worker's first import of the solver is not part of its cost
             # (a solver package imports its numerics with its solve, on first use)
             getattr(importlib.import_module(registry.get(solver).module), "solve")
@@ -184,7 +184,7 @@ def execute(base: cases.Case, changes: dict, solver: str, name: str,
     with _PeakRSS() as rss:
         try:
             case = base.derive(changes) if changes else base
-            from wearcheck.comparisons.resources import check_memory
+            from wearcheck.resources import check_memory
             check_memory(case, solver)  # this worker's memory, before allocating
             result = solve(case, solver, _progress_sender(topic, name))
             out.update(ok=True, case=case, result=result)
@@ -357,7 +357,7 @@ class _Reporter:
 
 def _unclaim(out: Path, remove_directory: bool) -> None:
     """Remove the study marker of ``out`` (and ``out``) if it holds nothing else."""
-    from wearcheck.comparisons.outputs import OUTPUT_MARKER
+    from wearcheck.outputs import OUTPUT_MARKER
     try:
         if [p.name for p in out.iterdir()] == [OUTPUT_MARKER]:
             (out / OUTPUT_MARKER).unlink()
@@ -389,7 +389,7 @@ def run_cases(case: cases.Case, tasks: list[Task], out: str | Path, *,
     check_workers(scheduler, workers)
     if scheduler:
         scheduler_mod.check_address(scheduler)  # before the study directory is made
-    from wearcheck.comparisons.outputs import study_directory
+    from wearcheck.outputs import study_directory
     names = [t.name for t in tasks]
     if len(set(names)) != len(names):
         raise cases.CaseError("two runs would share a directory: " + ", ".join(names))
@@ -506,7 +506,7 @@ def run_cases(case: cases.Case, tasks: list[Task], out: str | Path, *,
 
 def discard_run(path: Path) -> None:
     """Remove an earlier run directory at ``path`` (only ever a wearcheck run)."""
-    from wearcheck.comparisons.outputs import remove_output
+    from wearcheck.outputs import remove_output
     remove_output(path, "run")
 
 
@@ -530,7 +530,7 @@ def record_study(out: Path, study: str, case, prov, arguments: dict | None = Non
     A study of the same name recorded before (a re-run, or a sweep that adds
     values) stays, under ``earlier`` in the new entry, latest first.
     """
-    from wearcheck.comparisons.outputs import study_lock, write_study_text
+    from wearcheck.outputs import study_lock, write_study_text
     with study_lock(out):       # read and written by one study at a time
         meta = study_meta(out)
         studies = meta.setdefault("studies", {})

@@ -23,11 +23,11 @@ def main(args) -> int:
 
     from wearcheck.fem.solver import mesh_parameters
 
-    from wearcheck.comparisons.outputs import check_output_file, write_file
+    from wearcheck.outputs import check_output_file, write_file
     case = load_case(args)
     if args.out is not None:
         check_output_file(args.out, "mesh")  # before meshing
-    from wearcheck.comparisons.resources import check_memory
+    from wearcheck.resources import check_memory
     check_memory(case, "fem")  # the mesh is the FEM's: refuse one it could never solve
     params = mesh_parameters(case)
     mesh = meshes.sphere_mesh(params)

@@ -15,8 +15,8 @@ import math
 import sys
 from pathlib import Path
 
-from wearcheck.comparisons import registry
-from wearcheck.comparisons.studies.refine import refine, table
+from wearcheck import registry
+from wearcheck.studies.refine import refine, table
 
 from ._common import add_case_arguments, add_json_argument, load_case, print_json
 

@@ -3,7 +3,7 @@ fresh wearcheck run), with the overlays, per-stage metrics, verdict and report o
 ``compare``.
 
 Verification is a comparison whose second "solver" reads files instead of
-solving: the user's results are read (:mod:`comparisons.external`), the
+solving: the user's results are read (:mod:`wearcheck.external`), the
 reference is evaluated at the user's own distances and radii, and each stage
 is judged by the verdict's checks (:mod:`comparisons.analysis.verification`).
 The output directory (``layout.VERIFICATION_FILES``, written atomically as a
@@ -29,9 +29,9 @@ import numpy as np
 
 from wearcheck import cases
 from wearcheck.cases import CaseError, reference as closed
-from wearcheck.comparisons import external, layout, registry, rundir
+from wearcheck import external, layout, outputs, registry, rundir
 from wearcheck.comparisons.analysis import verification
-from wearcheck.comparisons.studies import compare as compare_mod
+from wearcheck.studies import compare as compare_mod
 
 #: the name of the user's results in outputs and reports
 RESULTS = "results"
@@ -129,14 +129,14 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
     Parameters
     ----------
     case : the case the results claim to solve (a loaded :class:`wearcheck.Case`).
-    results : a results directory or file (:func:`comparisons.external.read`).
+    results : a results directory or file (:func:`wearcheck.external.read`).
     out : the output directory (replaced only if it is a wearcheck comparison).
     mapping : {"name [unit]": "field"} from ``--map``.
     reference_solver : None for the certified reference, else a solver to run.
 
     Returns the metrics (as in metrics.json); ``["passed"]`` is the verdict.
     """
-    from wearcheck.comparisons.outputs import check_output
+    from wearcheck.outputs import check_output
     from wearcheck.references import certified
     t0 = time.perf_counter()
     check_output(out, "comparison")
@@ -231,7 +231,7 @@ def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, certif
     from wearcheck.comparisons.present import report, verify_figures, verify_report
     prov = rundir.provenance(argv)
     out = Path(out)
-    with rundir.atomic_directory(out, "comparison") as tmp:
+    with outputs.atomic_directory(out, "comparison") as tmp:
         (tmp / "reference").mkdir()
         extra = {"reference": m["reference_band"]} if certified_ref else None
         rundir.write_run_files(tmp / "reference", ref_case, run, ref_name, argv,

@@ -11,8 +11,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from wearcheck.comparisons.studies.distributed import fmt
-from wearcheck.comparisons.studies.fretting_map import fretting_map
+from wearcheck.studies.distributed import fmt
+from wearcheck.studies.fretting_map import fretting_map
 
 from ._common import (add_case_arguments, add_json_argument, load_case, print_json, study_exit,
                       varied)
