@@ -247,10 +247,10 @@ class ImplicitSystem:
             self.lu.extend(compliance_block(model, n, old, new),
                            compliance_block(model, n, new, old), A22)
 
-    def _nested_solve(self, r: np.ndarray) -> np.ndarray:
+    def _nested_solve(self, r: np.ndarray, keep: bool = False) -> np.ndarray:
         if len(r) > self.lu.n:
             self._factor(max(len(r), int(NESTED_GROWTH * self.lu.n)))
-        return self.lu.solve(r)
+        return self.lu.solve(r, keep)
 
     def matvec(self, p: np.ndarray, sigma) -> np.ndarray:
         return transforms.from_1d_exact(transforms.line_load(p, self.dt)) / self.E + sigma * p
@@ -386,7 +386,7 @@ class ImplicitSystem:
         low = None
         if self.nested:
             if self.exact(sigma):
-                return self._nested_solve(r)
+                return self._nested_solve(r, keep=True)
             precond = self._nested_solve
         else:
             s0 = float(np.mean(sigma))

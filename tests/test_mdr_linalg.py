@@ -81,13 +81,13 @@ def test_nested_lu_keeps_the_forward_solve_of_a_shared_leading_part():
     lu = linalg.NestedLU(A)
     b = rng.random(200)
     for n in (150, 153, 149, 149, 200, 1, 37):
-        np.testing.assert_allclose(lu.solve(b[:n]), np.linalg.solve(A[:n, :n], b[:n]),
-                                   rtol=1e-10, atol=1e-12)
+        x = lu.solve(b[:n], keep=True)
+        np.testing.assert_allclose(x, np.linalg.solve(A[:n, :n], b[:n]), rtol=1e-10, atol=1e-12)
     c = b.copy()
     c[5] += 1.0
-    lu.solve(b[:120])
-    np.testing.assert_allclose(lu.solve(c[:130]), np.linalg.solve(A[:130, :130], c[:130]),
-                               rtol=1e-10, atol=1e-12)
+    lu.solve(b[:120], keep=True)
+    x = lu.solve(c[:130], keep=True)
+    np.testing.assert_allclose(x, np.linalg.solve(A[:130, :130], c[:130]), rtol=1e-10, atol=1e-12)
 
 
 def test_lu_without_pivoting_matches_numpy():
