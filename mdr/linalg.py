@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import math
 import threading
 
 import numpy as np
@@ -141,6 +142,12 @@ def _trsm_in_place(side: bytes, uplo: bytes, diag: bytes, a: np.ndarray, rows: i
            ctypes.byref(lda), a.ctypes.data + 8 * b_offset, ctypes.byref(lda))
 
 
+class Pivoted(Exception):
+    """LAPACK's partial pivoting permuted a matrix that :class:`NestedLU` was given to
+    factorise in its own storage (``overwrite``): that matrix is overwritten, so the
+    factorisation without pivoting needs a fresh copy of it."""
+
+
 class NestedLU:
     """LU of a matrix whose leading blocks are solved as often as the whole.
 
@@ -152,10 +159,15 @@ class NestedLU:
     bordering, so it can start at the size needed now.
     """
 
-    def __init__(self, M: np.ndarray, limit: int | None = None):
+    def __init__(self, M: np.ndarray, limit: int | None = None, overwrite: bool = False):
+        """``overwrite``: M (a square float64 array in Fortran order) may become the
+        factors' storage, spared a copy; should LAPACK pivot it, :class:`Pivoted` is
+        raised (M is then lost) and the caller factors a fresh copy without it."""
         self.n = 0
         self.limit = limit          # the largest size it may grow to (storage is capped there)
-        self.lu = np.zeros((0, 0), order="F")
+        own = overwrite and M.dtype == np.float64 and M.flags.f_contiguous \
+            and M.flags.writeable and M.shape[0] == M.shape[1]
+        self.lu = M if own else np.zeros((0, 0), order="F")
         self.extend(M[:0, :], M[:, :0], M)
 
     @staticmethod
@@ -166,10 +178,12 @@ class NestedLU:
         # use it when it does. In place where ``out`` is a whole array: the
         # first factorisation of a system is its largest matrix
         whole = out.flags.f_contiguous and out.base is None
-        if whole:
+        if whole and out is not M:
             out[...] = M
         lu, piv = lu_factor(out if whole else M, overwrite_a=whole, check_finite=False)
         if np.any(piv != np.arange(len(piv))):
+            if out is M:
+                raise Pivoted("LAPACK pivoted a matrix factorised in its own storage")
             lu = lu_nopivot(M)
         if lu is not out:
             out[...] = lu
@@ -213,6 +227,7 @@ class NestedLU:
         if not np.all(np.isfinite(lu[n:m, :m])) or not np.all(np.isfinite(lu[:n, n:m])):
             raise SolverError("implicit wear step: the contact matrix factorisation failed")
         self.lu, self.n = lu, m
+        self._last = None       # (b, L⁻¹ b) of the last solve (:meth:`solve`)
         # the factors' address and leading dimension for BLAS, read once per
         # growth (ndarray.ctypes is slow for a per-solve call; docs/performance.md)
         self._address, self._lda = lu.ctypes.data, ctypes.c_int(lu.shape[0])
@@ -223,18 +238,46 @@ class NestedLU:
             self.Lt = np.ascontiguousarray(lu[r, c])
             self.Lt[np.cumsum(np.arange(1, m + 1)) - 1] = 1.0
 
-    def solve(self, b: np.ndarray) -> np.ndarray:
+    def _forward_kept(self, x: np.ndarray) -> int:
+        """How many leading entries of the forward solve of ``x`` the last solve
+        had (its right-hand side agreed there); they are written into ``x``."""
+        last = self._last
+        if last is None:
+            return 0
+        b0, y0 = last
+        k = min(len(x), len(b0))
+        if not k or not np.array_equal(x[:k], b0[:k]):
+            return 0
+        x[:k] = y0[:k]
+        return k
+
+    def solve(self, b: np.ndarray, keep: bool = False) -> np.ndarray:
+        """Solve the leading len(b)×len(b) block. ``keep``: keep the forward
+        solve for the next call, and use the last kept one where its right-hand
+        side shares the leading entries (the contact iteration's solves; not
+        worth its comparison where every right-hand side differs, as GMRES's
+        preconditioning)."""
         n = len(b)
         if n > self.n:
             raise ValueError(f"NestedLU.solve: {n} unknowns, factored {self.n}")
         if _DTRSV is not None:
             x = np.array(b, dtype=float)     # a fresh contiguous copy, solved in place
             if n:
-                size, lda, one = ctypes.byref(ctypes.c_int(n)), ctypes.byref(self._lda), \
-                    ctypes.byref(_ONE)
+                lda, one = ctypes.byref(self._lda), ctypes.byref(_ONE)
                 a, xp = self._address, x.ctypes.data
-                _DTRSV(b"L", b"N", b"U", size, a, lda, xp, one)
-                _DTRSV(b"U", b"N", b"N", size, a, lda, xp, one)
+                # the forward solve y = L⁻¹ b is nested too: y[:k] depends on b[:k]
+                # alone, so a right-hand side that shares its leading entries with
+                # the last one's (the contact iteration's next set: the same gap,
+                # a node or two more or fewer) keeps that part of y
+                k = self._forward_kept(x) if keep else 0
+                if k < n:
+                    if k:
+                        x[k:] -= self.lu[k:n, :k] @ x[:k]
+                    _DTRSV(b"L", b"N", b"U", ctypes.byref(ctypes.c_int(n - k)),
+                           a + 8 * k * (self._lda.value + 1), lda, xp + 8 * k, one)
+                if keep:
+                    self._last = (np.array(b, dtype=float), x.copy())
+                _DTRSV(b"U", b"N", b"N", ctypes.byref(ctypes.c_int(n)), a, lda, xp, one)
             return x
         k = n * (n + 1) // 2
         y = dtpsv(n, self.Lt[:k], b, lower=0, trans=1, diag=1)
@@ -296,11 +339,16 @@ def _cycles(matvec, precond, b, x, tol, restart, maxiter, low):
             return x, np.inf, its, False
         V = np.empty((restart + 1, n), dtype=dtype)
         Z = np.empty((restart, n), dtype=dtype)
-        H = np.zeros((restart + 1, restart))
+        # the Hessenberg matrix reduced to triangular R by Givens rotations as it
+        # grows: the least-squares residual |g[j+1]| at every iteration without a
+        # least-squares solve (numpy's lstsq per iteration was a fifth of a
+        # pressure exponent's run at N = 100, its GMRES taking 5-6 iterations)
+        R = np.zeros((restart, restart))
+        cs, sn = [0.0] * restart, [0.0] * restart
+        g = [0.0] * (restart + 1)
+        g[0] = beta
         V[0] = r / beta
-        e1 = np.zeros(restart + 1)
-        e1[0] = beta
-        y = None
+        k = 0
         for j in range(restart):
             its += 1
             Z[j] = precond(V[j])
@@ -308,19 +356,31 @@ def _cycles(matvec, precond, b, x, tol, restart, maxiter, low):
             if not np.all(np.isfinite(w)):
                 if low:
                     return x, np.inf, its, False
-                # (LAPACK's least squares would print its own complaint first)
                 raise SolverError("implicit wear step: non-finite values in the iterative "
                                   "solve; the case's numbers may lie outside what it can "
                                   "represent")
+            h = [0.0] * (j + 1)
             for i in range(j + 1):
-                H[i, j] = w @ V[i]
-                w -= float(H[i, j]) * V[i]
-            H[j + 1, j] = np.linalg.norm(w)
-            y, *_ = np.linalg.lstsq(H[:j + 2, :j + 1], e1[:j + 2], rcond=None)
-            res = np.linalg.norm(e1[:j + 2] - H[:j + 2, :j + 1] @ y)
-            if res <= tol or H[j + 1, j] == 0.0:
+                h[i] = float(w @ V[i])
+                w -= h[i] * V[i]
+            h_next = float(np.linalg.norm(w))
+            for i in range(j):
+                h[i], h[i + 1] = cs[i] * h[i] + sn[i] * h[i + 1], \
+                    -sn[i] * h[i] + cs[i] * h[i + 1]
+            rho = math.hypot(h[j], h_next)
+            cs[j], sn[j] = (h[j] / rho, h_next / rho) if rho > 0.0 else (1.0, 0.0)
+            h[j] = rho
+            R[:j + 1, j] = h
+            g[j], g[j + 1] = cs[j] * g[j], -sn[j] * g[j]
+            res = abs(g[j + 1])
+            k = j + 1
+            if res <= tol or h_next == 0.0:
                 break
-            V[j + 1] = w / float(H[j + 1, j])
+            V[j + 1] = w / h_next
+        if np.all(np.diag(R)[:k] != 0.0):
+            y = solve_triangular(R[:k, :k], np.array(g[:k]), check_finite=False)
+        else:       # a breakdown with a singular R: its least-squares solution
+            y = np.linalg.lstsq(R[:k, :k], np.array(g[:k]), rcond=None)[0]
         step = y.astype(dtype) @ Z[:len(y)]
         x = step if x is None else x + step
         if res <= tol:

@@ -175,11 +175,26 @@ def _fftw_convolve(plan, spec: np.ndarray, x: np.ndarray) -> np.ndarray:
     return real[:n] * real.dtype.type(1.0 / len(real))
 
 
+_FFT_LENGTHS: dict = {}
+
+
 def _fft_length(n: int) -> int:
-    """The FFT length of a product whose leading n outputs are wanted (at least 2n)."""
-    if FFT == "fftw" and 2 * n >= FFTW_FROM:
-        return _fftw_size(2 * n)
-    return _fft.next_fast_len(2 * n, real=True)
+    """The FFT length of a product whose leading n outputs are wanted (at least 2n).
+
+    Cached per n: asked for at every transform, and the few lengths of a run
+    repeat (a lookup instead of next_fast_len's search in the implicit
+    step's contact iterations)."""
+    key = (n, FFT)        # (FFT may change: an FFTW found broken, tests)
+    nfft = _FFT_LENGTHS.get(key)
+    if nfft is None:
+        if FFT == "fftw" and 2 * n >= FFTW_FROM:
+            nfft = _fftw_size(2 * n)
+        else:
+            nfft = _fft.next_fast_len(2 * n, real=True)
+        if len(_FFT_LENGTHS) > 4096:
+            _FFT_LENGTHS.clear()
+        _FFT_LENGTHS[key] = nfft
+    return nfft
 
 
 def _convolve(spec: np.ndarray, x: np.ndarray, nfft: int) -> np.ndarray:
@@ -191,8 +206,9 @@ def _convolve(spec: np.ndarray, x: np.ndarray, nfft: int) -> np.ndarray:
     if _POCKETFFT is None:
         return _fft.irfft(spec * _fft.rfft(x, nfft), nfft)[:n]
     r2c, c2r = _POCKETFFT
-    padded = np.zeros(nfft)
+    padded = np.empty(nfft)
     padded[:n] = x
+    padded[n:] = 0.0
     X = r2c(padded, (0,), True, 0, None, 1)
     X *= spec
     return c2r(X, (0,), nfft, False, 2, None, 1)[:n]
@@ -410,7 +426,9 @@ def to_1d(f: np.ndarray) -> np.ndarray:
     g = np.empty(n)
     g[0] = f[0]
     if n > 1:
-        s = lower(_kernel(abel_kernel, n - 1), np.diff(f), key="c")
+        # (the differences by slicing: np.diff's checks cost as much as the
+        # subtraction on a grid of 800)
+        s = lower(_kernel(abel_kernel, n - 1), f[1:] - f[:-1], key="c")
         np.multiply(_two_sqrt(n), s, out=g[1:])
         g[1:] += f[0]
     return g

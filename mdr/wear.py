@@ -151,8 +151,10 @@ _UNIT_COMPLIANCE: dict = {}
 _TRANSFERS: dict = {}
 
 
-def compliance_block(model: Model, n: int) -> np.ndarray:
-    """A fresh copy of the leading n×n block of the model's compliance matrix.
+def compliance_block(model: Model, n: int, rows: slice = slice(None),
+                     cols: slice = slice(None)) -> np.ndarray:
+    """A fresh copy of the leading n×n block of the model's compliance matrix
+    (Fortran-ordered), or of its part ``[rows, cols]``.
 
     The matrix is sqrt(Δt)/E* times one of the grid size alone, so that one
     is built once and shared by every grid a growing domain passes through and
@@ -160,13 +162,14 @@ def compliance_block(model: Model, n: int) -> np.ndarray:
     factorising. It is built twice as large as asked (at most the whole grid),
     since contacts grow: built at the size asked, a growing contact rebuilt
     it several times (docs/performance.md, "Measurements behind the code").
+    A factorisation grown by bordering asks for the new rows and columns only.
     """
     unit = _UNIT_COMPLIANCE.get("C")
     if unit is None or len(unit) < n:
         want = 2 * max(n, len(unit) if unit is not None else 0)
         size = max(n, min(want, len(model.x)))
         unit = _UNIT_COMPLIANCE["C"] = transforms.compliance_matrix(size, 1.0, 1.0)
-    return unit[:n, :n] * (math.sqrt(model.dt) / model.E_star)
+    return np.multiply(unit[:n, :n][rows, cols], math.sqrt(model.dt) / model.E_star, order="F")
 
 
 def coarse_eigen(nc: int):
@@ -220,21 +223,34 @@ class ImplicitSystem:
 
     def _factor(self, n: int) -> None:
         n = min(n, self.N + 1)
-        A = compliance_block(self.model, n)
-        A[np.diag_indices(n)] += self.sigma
+        model = self.model
         if self.lu is None:
-            self.lu = linalg.NestedLU(A, limit=self.N + 1)
+            def block():
+                A = compliance_block(model, n)
+                A[np.diag_indices(n)] += self.sigma
+                return A
+            try:
+                # factorised in A's own storage (A is a fresh copy): one n×n copy
+                # fewer per system
+                self.lu = linalg.NestedLU(block(), limit=self.N + 1, overwrite=True)
+            except linalg.Pivoted:
+                self.lu = linalg.NestedLU(block(), limit=self.N + 1)
         else:
             # bordering: the factors of the smaller block stay (the paper case
             # at N = 800 factored 1.52e9 n³-units sized ahead and refactoring,
-            # against 0.63e9 for the blocks its solves needed)
+            # against 0.63e9 for the blocks its solves needed); only the new
+            # rows and columns of the matrix are formed
             k = self.lu.n
-            self.lu.extend(A[:k, k:], A[k:, :k], A[k:, k:])
+            old, new = slice(0, k), slice(k, n)
+            A22 = compliance_block(model, n, new, new)
+            A22[np.diag_indices(n - k)] += self.sigma
+            self.lu.extend(compliance_block(model, n, old, new),
+                           compliance_block(model, n, new, old), A22)
 
-    def _nested_solve(self, r: np.ndarray) -> np.ndarray:
+    def _nested_solve(self, r: np.ndarray, keep: bool = False) -> np.ndarray:
         if len(r) > self.lu.n:
             self._factor(max(len(r), int(NESTED_GROWTH * self.lu.n)))
-        return self.lu.solve(r)
+        return self.lu.solve(r, keep)
 
     def matvec(self, p: np.ndarray, sigma) -> np.ndarray:
         return transforms.from_1d_exact(transforms.line_load(p, self.dt)) / self.E + sigma * p
@@ -370,7 +386,7 @@ class ImplicitSystem:
         low = None
         if self.nested:
             if self.exact(sigma):
-                return self._nested_solve(r)
+                return self._nested_solve(r, keep=True)
             precond = self._nested_solve
         else:
             s0 = float(np.mean(sigma))
@@ -646,7 +662,8 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
             f[:n] += sigma * p
             M = min(N + 1, n + 2 + int(GAP_WINDOW * n)) if far_gap is not None else N + 1
             g = transforms.to_1d(f[:M])
-            below = np.flatnonzero(d - g[n:] > tol * d)
+            penetrates = d - g[n:] > tol * d
+            below = np.flatnonzero(penetrates) if penetrates.any() else ()
             if not len(below) and M <= N:
                 if not far_gap.clears(f, M, d, tol):
                     g = far_gap.full(f)

@@ -35,6 +35,20 @@ def base():
     return _run()
 
 
+@pytest.fixture(scope="module")
+def every_cycle():
+    """run(N): the run of :func:`_run` at k = 0.2 for 800 cycles with every cycle
+    simulated (no cycle jumping), made once per N and shared by the tests below
+    (each costs as much as the rest of a test: 16 000 increments)."""
+    runs = {}
+
+    def run(N):
+        if N not in runs:
+            runs[N] = _run(N=N, k=0.2, jump_tolerance=0.0)
+        return runs[N]
+    return run
+
+
 def test_stick_radius_stays_within_its_bounds_over_the_whole_history(base):
     case, res, u0 = base
     h = res.history
@@ -83,23 +97,26 @@ def test_stick_radius_does_not_shrink(base):
     assert c[-1] > c[0]
 
 
-def test_stick_radius_growth_is_independent_of_the_time_discretisation(base):
+def test_stick_radius_growth_is_independent_of_the_time_discretisation(base, every_cycle):
     # k only scales time (the wear per cycle is small against the profile);
     # cycle jumping and the increments per cycle only change the time
     # integration. c∞/c0 from the base run (k = 0.1, jumps at 0.02, 20
-    # increments) against k = 1 (80 cycles), no cycle jumping, 40 increments.
-    # Spread allowed 1e-4 c0: a tenth of what the grid changes from N = 200
-    # to 400 (9e-4 c0) and 1/170 of the growth (measured spread 1e-5).
+    # increments) against k = 1 (80 cycles), 40 increments, and no cycle
+    # jumping (the convergence test's run at N = 200: k = 0.2, 800 cycles,
+    # every cycle simulated; k alone is checked by the first run). Spread
+    # allowed 1e-4 c0: a tenth of what the grid changes from N = 200 to 400
+    # (9e-4 c0) and 1/170 of the growth (measured spread 1e-5).
     case, res, u0 = base
     c0 = rf.stick_radius_bounds(FORCE, case.E_star, case.G_star, MU, u0, R)[0]
     ref = res.history["stick_radius"][-1]
-    for kw in (dict(k=1.0, cycles=80), dict(jump_tolerance=0.0), dict(increments=40)):
-        _, r, _ = _run(**kw)
+    runs = [(kw, _run(**kw)[1]) for kw in (dict(k=1.0, cycles=80), dict(increments=40))]
+    runs.append(("no cycle jumping", every_cycle(200)[1]))
+    for kw, r in runs:
         assert r.history["stick_radius"][-1] == pytest.approx(ref, abs=1e-4 * c0), kw
     assert ref / c0 - 1 > 0.01
 
 
-def test_stick_radius_growth_and_limiting_depth_converge_in_N(base):
+def test_stick_radius_growth_and_limiting_depth_converge_in_N(base, every_cycle):
     # successive differences of c∞/c0 halve with N (first order: the edge
     # lies between nodes); the growth is far larger than what the grid changes.
     # Runs at k = 0.2 for 800 cycles (k n = 160): c is at its limit by k n = 80
@@ -113,7 +130,7 @@ def test_stick_radius_growth_and_limiting_depth_converge_in_N(base):
         # every cycle simulated: the depth's 1e-5 here is finer than the 2e-2 of
         # the wear that cycle jumping at 0.02 holds (with it, the Richardson limit
         # below came out -3.2e-5 against the 4.6e-5 mean raise; docs/fretting.md §4)
-        case, r, _ = _run(N=N, k=0.2, jump_tolerance=0.0)
+        case, r, _ = every_cycle(N)
         h = r.history
         c, d = h["stick_radius"][-1], h["depth"][-1]
         ratios.append(c / c0)

@@ -356,8 +356,11 @@ def test_pressure_exponent_asymptote(n, last):
     # cycles: n = 2: 0.74, 0.25, 0.050, 0.010; n = 4 (the top of the allowed
     # range, where the Newton iteration of the implicit step used to stop with
     # an error, its change stalled at 2-5e-7 of max p): 1.07, 0.65, 0.32, 0.10
-    # — the scar grows as s^(1/10), so the elastic start is forgotten later
-    case = ball("mdr.elements=200", f"wear.pressure_exponent={n}", "sliding.cycles=10000.0",
+    # — the scar grows as s^(1/10), so the elastic start is forgotten later.
+    # Run at N = 100 (half the time): the deviations differ from N = 200's by
+    # at most 4e-4 (n = 2: 0.7365, 0.2496, 0.0507, 0.0105; n = 4: 1.0696,
+    # 0.6453, 0.3172, 0.1019), far inside the bounds below
+    case = ball("mdr.elements=100", f"wear.pressure_exponent={n}", "sliding.cycles=10000.0",
                 "stages.cycles=[0.0, 10.0, 100.0, 1000.0, 10000.0]")
     res = mdr.solve(case)
     h = res.history

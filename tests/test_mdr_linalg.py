@@ -30,6 +30,66 @@ def test_nested_lu_solves_every_leading_block(blas, monkeypatch):
                                        rtol=1e-10, atol=1e-12 * np.max(np.abs(b)))
 
 
+def test_nested_lu_in_its_matrix_storage_solves_or_refuses_a_pivoted_matrix():
+    # overwrite=True factorises M in M's own storage (no copy): the same leading
+    # block solves as numpy's; a matrix LAPACK pivots is lost by then, so it is
+    # refused (linalg.Pivoted) and the caller factors a copy the other way
+    rng = np.random.default_rng(7)
+    A = np.asfortranarray(transforms.compliance_matrix(120, 1e-10, 2e11))
+    A[np.diag_indices(120)] += 0.05 * A[0, 0]
+    ref = A.copy()
+    lu = linalg.NestedLU(A, overwrite=True)
+    assert lu.lu is A                      # factored where it was, not copied
+    for n in (120, 61, 1):
+        b = rng.random(n)
+        np.testing.assert_allclose(lu.solve(b), np.linalg.solve(ref[:n, :n], b),
+                                   rtol=1e-10, atol=1e-12 * np.max(np.abs(b)))
+    B = np.asfortranarray(rng.random((50, 50)) + 50 * np.eye(50))
+    B[1, 0] = 1000.0
+    with pytest.raises(linalg.Pivoted):
+        linalg.NestedLU(B, overwrite=True)
+
+
+def test_implicit_system_falls_back_when_lapack_pivots(monkeypatch):
+    # the implicit step's factorisation in place meets a pivoting LAPACK: it must
+    # factor a fresh block without pivoting and solve as numpy does
+    from wearcheck.mdr import wear
+    model = wear.Model(x=transforms.grid(100, 1e-4), f0=np.zeros(101), E_star=1e11,
+                       wear_rate=1e-13, depth=1e-6, force=None)
+    real = linalg.lu_factor
+
+    def pivoting(a, overwrite_a=False, check_finite=True):
+        lu, piv = real(a, overwrite_a=overwrite_a, check_finite=check_finite)
+        return lu, piv[::-1].copy()          # reported as pivoted
+    monkeypatch.setattr(linalg, "lu_factor", pivoting)
+    system = wear.ImplicitSystem(model, 1e-5, nodes=60)
+    A = wear.compliance_block(model, 60)
+    A[np.diag_indices(60)] += system.sigma
+    b = np.random.default_rng(8).random(60)
+    np.testing.assert_allclose(system.solve(b, system.sigma), np.linalg.solve(A, b),
+                               rtol=1e-10, atol=1e-12 * np.max(np.abs(b)))
+
+
+def test_nested_lu_keeps_the_forward_solve_of_a_shared_leading_part():
+    # the contact iteration's next right-hand side is the last one cut or extended
+    # (the same gap, a node or two more or fewer): the kept forward solve must
+    # give numpy's solution of every such block, and a right-hand side that
+    # differs anywhere in its leading part must not reuse it
+    rng = np.random.default_rng(9)
+    A = transforms.compliance_matrix(200, 1e-10, 2e11)
+    A[np.diag_indices(200)] += 0.05 * A[0, 0]
+    lu = linalg.NestedLU(A)
+    b = rng.random(200)
+    for n in (150, 153, 149, 149, 200, 1, 37):
+        x = lu.solve(b[:n], keep=True)
+        np.testing.assert_allclose(x, np.linalg.solve(A[:n, :n], b[:n]), rtol=1e-10, atol=1e-12)
+    c = b.copy()
+    c[5] += 1.0
+    lu.solve(b[:120], keep=True)
+    x = lu.solve(c[:130], keep=True)
+    np.testing.assert_allclose(x, np.linalg.solve(A[:130, :130], c[:130]), rtol=1e-10, atol=1e-12)
+
+
 def test_lu_without_pivoting_matches_numpy():
     rng = np.random.default_rng(4)
     M = rng.random((200, 200)) + 200 * np.eye(200)
