@@ -294,16 +294,15 @@ INNER_REDUCTION = 1e-4
 #: not re-checked: |r_true| <= |r_arnoldi| + γ eps32 |r| for an inner solve on
 #: a residual r (eps32 = 2^-24), so the tolerance holds without a float64
 #: product when γ eps32 <= (1 - INNER_SHARE) rtol|b|/|r|, which INNER_REDUCTION
-#: guarantees up to γ = INNER_ERROR_BOUND = 168 (measured γ <= 22 on the paper
-#: case at N = 25600 and 102400, <= 63 with a pressure exponent, where the
-#: error took at most 4.4 % of its allowance; docs/mixed-precision.md).
-#: 0.5 took 6 % more iterations than float64 GMRES, 0.9 takes 1-2 %
+#: guarantees up to γ = INNER_ERROR_BOUND = 168, well above the γ measured on
+#: the shipped cases; a smaller share costs iterations (docs/mixed-precision.md;
+#: docs/performance.md, "Measurements behind the code")
 INNER_SHARE = 0.9
 INNER_ERROR_BOUND = (1.0 - INNER_SHARE) * INNER_REDUCTION / float(np.finfo(np.float32).eps)
 #: after a pass, the float64 residual is accepted at this share of the
 #: tolerance, not just under it: a unit response (force control, started from
-#: 0) landing at 0.6-0.9 rtol put an error of 1.0e-7 of max p into one step's p
-#: (the depth multiplies it), 1.8e-8 with 0.5 (float64 GMRES: 4.1e-8; N = 300)
+#: 0) landing just under the tolerance puts its error, multiplied by the depth,
+#: into one step's p (docs/performance.md, "Measurements behind the code")
 ACCEPT_SHARE = 0.5
 #: outer passes of iterative refinement before the float64 GMRES takes over
 REFINE_PASSES = 4

@@ -16,13 +16,13 @@ from wearcheck.numerics import stepping
 
 from . import contact, linalg, resolution, transforms, wear
 
-#: implicit Euler's default step in ŝ (sliding.step_hat = "auto"); see README/report:
-#: on the paper case its time error in F/F0 is 7.7e-3 (0.077 Δŝ, first order)
+#: implicit Euler's default step in ŝ (sliding.step_hat = "auto"): its time
+#: error, first order in Δŝ, is docs/performance.md's ("Measurements behind the code")
 IMPLICIT_STEP_HAT = 0.1
 #: the largest |V/(K F s) − 1| at the end of a force-controlled run with n = 1 that
 #: is taken as wear and not round-off: the grid's and the steps' own errors are far
-#: below it (tests/test_mdr_archard_balance.py), round-off past it (k = 1e-25 on
-#: ball_on_flat: 0.48)
+#: below it (tests/test_mdr_archard_balance.py), a wear that round-off swallows far
+#: past it (docs/performance.md, "Measurements behind the code")
 ARCHARD_BALANCE_TOL = 0.02
 #: BDF2's default step in ŝ, chosen for speed: on paper.toml its time error in
 #: F/F0 is 1/30 of implicit Euler's at its default step, second order in the
