@@ -565,3 +565,36 @@ def test_vtk_points_without_values_inside_the_surface_are_refused(no_figures, tm
     m = run_verify("paper", tail, tmp_path / "v-tail", fmt.VTK_MAP)
     assert m["passed"], json.dumps(failed_stages(m))
     assert any("without a finite value" in n for n in m["results"]["notes"])
+
+
+def test_a_history_wrong_between_the_stages_fails(no_figures, tmp_path, paper_run):
+    """Only the rows at the case's stages were judged: a history right at the seven
+    stage rows and 1.5× off everywhere between them passed (exit 0). Every row the
+    reference covers is now judged as a stage's history is; the same history with
+    every row right passes (the right results are the MDR's at N = 400, which pass
+    at the stages with the shipped tolerances)."""
+    h = paper_run.history
+    per_m = paper_run.scales["s_hat_per_m"]
+    s_hat = np.asarray(h["s"]) * per_m
+    stage_hat = np.asarray(wearcheck.load_case("paper").stages.s_hat, float)
+    near = np.zeros(len(s_hat), bool)
+    for x in stage_hat:
+        near[int(np.argmin(np.abs(s_hat - x)))] = True
+    for name, factor in (("right", 1.0), ("wrong", 1.5)):
+        d = tmp_path / name
+        d.mkdir()
+        force = np.where(near, h["force"], factor * np.asarray(h["force"]))
+        rows = [f"{s:.17g},{F:.17g}" for s, F in zip(h["s"], force)]
+        (d / "history.csv").write_text("s,force\n" + "\n".join(rows) + "\n", encoding="utf-8")
+        m = run_verify("paper", d, tmp_path / f"v-{name}")
+        rows_verdict = m["pairs"]["results"]["rows"]
+        assert rows_verdict["judged"] > 50
+        if factor == 1.0:
+            assert m["passed"], json.dumps(rows_verdict["worst"])
+        else:
+            assert not m["passed"] and not rows_verdict["passed"]
+            assert rows_verdict["failed"] >= rows_verdict["judged"] // 2
+            assert failed_stages(m) == {}          # the stages alone still pass
+    done = cli("verify", "paper", tmp_path / "wrong", "--out", tmp_path / "v-wrong-cli")
+    assert done.returncode == 1, done.stderr
+    assert "history row(s) between the stages beyond a tolerance" in done.stderr

@@ -266,16 +266,73 @@ def judge(reference, history: dict, stages: list, *, case_stage_s, scales: dict,
         not_given.append("f")
     if not has_p:
         not_given.append("p")
+    stage_rows = {sel["row"] for sel in chosen if sel["row"] is not None}
+    rows = judge_rows(reference, history, given, scales=scales, units=units,
+                      tolerances=tolerances, skip=stage_rows)
     return dict(stages=out_stages, stages_compared=len(out_stages),
                 worst=metrics.worst(out_stages, used), checks_used=[c.column for c in used],
                 not_given=not_given, not_judged=not_judged,
                 history=history_differences(reference, history, scales, depth, given),
+                rows=rows,
                 reach=(reach := reached(history, stages, case_stage_s, same_distance)),
                 last_stage=(last := judged_near_last([st["s"] for st in out_stages], history,
                                                      stages, case_stage_s, reference.covers,
                                                      same_distance)),
                 passed=(bool(out_stages) and all(st["passed"] for st in out_stages)
-                        and reach["passed"] and last["passed"]))
+                        and reach["passed"] and last["passed"] and rows["passed"]))
+
+
+def judge_rows(reference, history: dict, given, *, scales: dict, units: dict, tolerances: dict,
+               skip=()) -> dict:
+    """Judge every history row between the stages as a stage's history quantities are.
+
+    Each row the reference covers (except those in ``skip``, judged as stages) is
+    compared with the reference's history at its distance, each quantity relative to
+    the reference's own value there (or the tolerance's floor) as at a stage, and a
+    check is left out where the reference's error band there takes more than
+    :data:`CERTIFIED_SHARE` of the tolerance (unless the difference is beyond the
+    tolerance by more than the band). Rows are judged, not only stages, so a history
+    that is right at the stages and wrong between them fails.
+
+    Returns
+    -------
+    dict: ``judged`` (rows), ``failed`` (rows with a failed check), ``worst``
+    {quantity: {value, tolerance, s, row}} (value relative to the tolerance's scale,
+    at the row where it uses the largest share of the tolerance) and ``passed``.
+    """
+    s = np.asarray(history["s"], float)
+    ref = reference.history_at(s)
+    checks = [metrics.CHECK_BY_COLUMN[HISTORY_CHECKS[q]] for q in given]
+    judged, failed, worst = 0, 0, {}
+    for i in range(len(s)):
+        if i in skip or not np.isfinite(s[i]) or not np.isfinite(ref["force"][i]):
+            continue
+        st = {"stage_scales": {}}
+        cols = []
+        for c, q in zip(checks, given):
+            v = float(history[q][i])
+            if not np.isfinite(v):
+                continue
+            st[c.column] = abs(v - float(ref[q][i])) / units[q]
+            st["stage_scales"][c.column] = abs(float(ref[q][i])) / units[q]
+            cols.append(c)
+        if not cols:
+            continue
+        out = metrics.verdict(st, tolerances, cols)
+        band = reference.band_at(s[i]) if hasattr(reference, "band_at") else None
+        row_failed = False
+        for name, c in out.items():
+            b = (band or {}).get(name, 0.0) / units[name] / c["scale"]
+            if b > CERTIFIED_SHARE * c["tolerance"] and not c["value"] > c["tolerance"] + b:
+                continue
+            row_failed |= not c["passed"]
+            used = c["value"] / c["tolerance"]
+            if name not in worst or used > worst[name]["used"]:
+                worst[name] = dict(value=c["value"], tolerance=c["tolerance"], used=used,
+                                   scale=c["scale"], s=float(s[i]), row=i, passed=c["passed"])
+        judged += 1
+        failed += int(row_failed)
+    return dict(judged=judged, failed=failed, worst=worst, passed=failed == 0)
 
 
 def reached(history: dict, stages: list, case_stage_s, same: float = SAME_DISTANCE) -> dict:

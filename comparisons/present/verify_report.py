@@ -53,6 +53,14 @@ def failures(m) -> list[str]:
                    f"{last['from_s'] * per_m:.4g} up to the reference's end): the nearest are "
                    f"at {rows}; check the unit of the sliding distance (a column without "
                    "one is in metres: 's [mm]', 's [um]')")
+    rows = pair.get("rows")
+    if rows is not None and not rows["passed"]:
+        per_m = m["scales"]["s_hat_per_m"]
+        out.append(f"{rows['failed']} of {rows['judged']} history row(s) between the stages "
+                   "beyond a tolerance: " + ", ".join(
+                       f"{_label(name)} {report.fmt(w['value'])} > {w['tolerance']:g} of "
+                       f"{report.fmt(w['scale'], 4)} at ŝ = {w['s'] * per_m:.4g} (row {w['row']})"
+                       for name, w in rows["worst"].items() if not w["passed"]))
     if not pair["stages"]:
         out.append("no stage could be judged" + (": " + "; ".join(pair["not_judged"])
                                                  if pair["not_judged"] else ""))
@@ -155,8 +163,10 @@ def build_report(case, m, figure_names, prov) -> list:
                            "max|Δf|/d contact", "max|Δp|/p0 interior", "max|Δp|/p0 edge"],
                           values))
     h = pair["history"]
-    blocks.append(R.para(f"Over all {h['rows']} history rows the reference covers (not part of "
-                         "the verdict): " + ", ".join(
+    rows = pair.get("rows") or dict(judged=0, failed=0)
+    blocks.append(R.para(f"Over all {h['rows']} history rows the reference covers "
+                         f"({rows['judged']} judged between the stages as the stages are, "
+                         f"{rows['failed']} beyond a tolerance): " + ", ".join(
                              f"max |Δ{q}| = {fmt(h[q])}·{_unit_word(q)}"
                              for q in ("force", "contact_radius", "wear_center",
                                        "wear_volume", "depth") if q in h)
