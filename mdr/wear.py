@@ -120,7 +120,7 @@ DENSE_MAX = 2048
 EDGE_TOL = 1e-9
 #: GMRES tolerance of every pass of the contact iteration of fixed-step runs,
 #: the floor of adaptive ones (solver.ADAPTIVE_SOLVE_SHARE; far below the
-#: spatial error: 2e-5 of F0 at N = 800, falling as N^-1.5). Each pass starts
+#: spatial error, docs/performance.md "Measurements behind the code"). Each pass starts
 #: from the last iterate, so a loose pass while the set is found saves little
 #: and, deciding the marginal edge node differently, costs extra passes
 #: (docs/performance.md, "Measurements behind the code")
@@ -380,8 +380,8 @@ class ImplicitSystem:
     def solve(self, r, sigma, x0=None, stats=None, rtol=1e-9):
         """Solve on the contact nodes 0..len(r)-1; sigma is h K S there.
 
-        rtol: GMRES's relative residual (1e-9: far below the spatial error,
-        which is 2e-5 of F0 at N = 800 and falls as N^-1.5).
+        rtol: GMRES's relative residual (1e-9: far below the spatial error;
+        :data:`ACCURATE_RTOL`).
         """
         low = None
         if self.nested:
@@ -490,8 +490,8 @@ def implicit_step(model: Model, state: State, h: float, c: float = 1.0,
     factor S (tangential correction) is the end state's, as the scheme's wear
     rate at the end of the step is: the step is solved with the start state's
     S and again with the S of its result until S settles (SLIP_TOL; lagged by
-    one step instead, S made BDF2 first order: 3.5e-3 in F/F0 at Δŝ = 0.1,
-    ℓ = 5u*, against 2.2e-4 without the correction). ``system`` must be built
+    one step instead, S made BDF2 first order: docs/performance.md,
+    "Measurements behind the code"). ``system`` must be built
     for c h when it is to be used directly.
 
     ``p_guess`` (nodes 0..N) starts the iterative solves of finer grids (the
@@ -603,8 +603,9 @@ NEWTON_UNDAMPED = 8
 NEWTON_FLOOR = 0.05
 NEWTON_MARGINAL = 1e-3
 #: a change of p below NEWTON_STALL (of max p) that has not halved over the last
-#: NEWTON_STALL_AFTER iterations ends the iteration (measured: n = 4 on
-#: ball_on_flat settles into a 3-cycle at 2-5e-7, above NEWTON_TOL)
+#: NEWTON_STALL_AFTER iterations ends the iteration (a pressure exponent can
+#: settle into a cycle above NEWTON_TOL: docs/performance.md, "Measurements
+#: behind the code")
 NEWTON_STALL = 1e-5
 NEWTON_STALL_AFTER = 4
 
@@ -708,8 +709,8 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
     if system.exact(sigma):
         # a direct solve: the springs' line load is q = E*(d - g) in contact
         # (the solve's equation under T: g = T f = d - q/E* there), from the 1D
-        # profile at hand, equal to P⁻¹ p to round-off (measured 1e-12 of max q,
-        # paper case N = 800), one transform fewer per step
+        # profile at hand, equal to P⁻¹ p to round-off (docs/performance.md,
+        # "Measurements behind the code"), one transform fewer per step
         qq[:n] = np.maximum(E * (d - g[:n]), 0.0)
     else:
         # iterative: P⁻¹ p, the line load of the pressure found (the 1D gap
