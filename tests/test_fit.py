@@ -338,6 +338,12 @@ distance = 1.0
     ([], "cycles, D [mm], ± D [mm]\n300, 110.46, 2.19\n1000, 145.36, 2.89\n",
      r"row 2, column 'D \[mm\]': 0\.11046 m; the values imply a scar larger than the ball "
      r"\(indenter\.radius R = 0\.005 m: a ball scar diameter is at most 0\.01 m\)"),
+    # absurd but finite sliding: 1e308 cycles overflowed ŝ (exit 70, "math domain error")
+    ([], "cycles, D [um]\n1000, 300\n1e308, 500\n",
+     r"row 3, column 'cycles': 1e\+308, a sliding distance of 2e\+305 m; allowed: 1e-09 to "
+     r"1e\+12 m"),
+    ([], "s [m], D [um]\n1e-300, 150\n2, 160\n",
+     r"row 2, column 's \[m\]': 1e-300, a sliding distance of 1e-300 m; allowed"),
     (["--paper"], "s [m], D [um]\n1, 150\n2, 160\n",
      r"'loading\.control' = \"depth\": wearcheck fit fits a test under a constant normal force"),
 ])

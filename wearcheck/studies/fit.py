@@ -59,6 +59,10 @@ MEASUREMENTS = (
                                         "counterface volume"), "track volume"),
 )
 
+#: the sliding distances [m] a measurement may have: from a nanometre (less is no sliding)
+#: to 1e12 m (a bearing at 10 m/s for 30 years slides 1e10 m); beyond, ŝ = K E* s/a0
+#: leaves the floating-point range of the fit's search over K
+SLIDING_RANGE = (1e-9, 1e12)
 #: the first stage of a forward run, in ŝ, at most: below it a measurement is read as
 #: the start of wear (the scar the unworn contact, volume and depth ∝ ŝ:
 #: ``fitting.Curves``)
@@ -218,6 +222,10 @@ def read_measurements(data, case: cases.Case) -> tuple[fitting.Data, list, str]:
         if not x.values[i] > 0:
             raise CaseError(f"{table.where(i, given[0])}: {x.values[i]:g}; the fit needs "
                             "measurements after sliding (> 0)")
+        if not SLIDING_RANGE[0] <= s_all[i] <= SLIDING_RANGE[1]:
+            raise CaseError(f"{table.where(i, given[0])}: {x.values[i]:g}, a sliding distance "
+                            f"of {s_all[i]:g} m; allowed: {SLIDING_RANGE[0]:g} to "
+                            f"{SLIDING_RANGE[1]:g} m (check the column's unit)")
         found = False
         for q in measured:
             col = table[q]
