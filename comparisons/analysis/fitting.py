@@ -334,7 +334,7 @@ def outlier_test(data: Data, model: np.ndarray, leverage: np.ndarray,
     model linear in its parameters, Cook & Weisberg 1982). A measurement is flagged
     when |tᵢ| passes the two-sided limit at OUTLIER_P/N (the chance that clean data
     flag any is at most OUTLIER_P) and it is more than OUTLIER_FLOOR from the model. ``tested`` False when there are too few
-    measurements (N ≤ P, or N ≤ P + 1 without uncertainties).
+    measurements (N ≤ P, or N < P + 3 without uncertainties, as the trend test).
     """
     r = residuals(data, model)
     N, dof = len(data), len(data) - n_parameters
@@ -345,8 +345,10 @@ def outlier_test(data: Data, model: np.ndarray, leverage: np.ndarray,
         t = r / np.sqrt(1.0 - leverage)
         limit = float(scipy.stats.norm.isf(alpha))
     else:
-        if dof < 2:
-            return dict(tested=False, note=f"needs at least {n_parameters + 2} measurements")
+        # (with N − P − 1 = 1 the scatter left out is one residual, and the fit's
+        # nonlinearity alone can make it vanish: from 2 on, as the trend test)
+        if dof < 3:
+            return dict(tested=False, note=f"needs at least {n_parameters + 3} measurements")
         rss = float(r @ r)
         left = np.maximum(rss - r**2 / (1.0 - leverage), 0.0) / (dof - 1)
         with np.errstate(divide="ignore"):
@@ -645,8 +647,8 @@ def _goodness(data: Data, s_min: float, trend, n_parameters: int, model_at, thet
     model = model_at(np.asarray(theta, float))
     out = outlier_test(data, model, leverages(data, model_at, theta), n_parameters)
     gof["outliers"] = out
-    # the outlier test alone (N = P + 2 without uncertainties: one degree of freedom for
-    # the scatter) can condemn a fit but is too weak to pass one: untested then
+    # the outlier test where the χ² test is not made (never, as both need N > P) can
+    # condemn a fit but not pass one
     gof["fit_tested"] = gof["fits"] is not None
     if out["tested"] and out["flagged"]:
         gof["fits"] = False
