@@ -406,7 +406,7 @@ def fit(case: str | Path | Case, data, keys: str | Iterable[str] = ("wear.specif
     result = _fit.fit(load_case(case), data, keys, exponents=exponents, scheduler=scheduler,
                       workers=workers, quiet=quiet)
     for text in result.warnings:
-        if text.startswith("the residuals"):
+        if text.startswith(_fit.WARNING_STARTS):
             warnings.warn(text, stacklevel=2)
     if out is not None:
         _fit.write(result, out, data_path=data if isinstance(data, (str, Path)) else None)

@@ -55,6 +55,14 @@ _WIDTHS = ("scar_diameter", "track_width")
 LEVEL = 0.95
 #: the level below which a goodness-of-fit p-value says the model does not fit
 MISFIT_P = 0.01
+#: the false-alarm rate of the outlier check over all the measurements together: each
+#: one's studentized residual is tested two-sided at OUTLIER_P/N (Bonferroni)
+OUTLIER_P = 0.01
+#: and a measurement within 2 % of the model is never called an outlier: the model reads
+#: the scar's edge between nodes (0.2-1 % of D on the shipped grids), so noise-free data
+#: leave residuals of that size whose studentized values mean nothing; a microscope
+#: reads a scar to 2-3 %
+OUTLIER_FLOOR = 0.02
 
 
 # -- the model's curves --------------------------------------------------------
@@ -272,10 +280,14 @@ def interval(f, x_best: float, level: float, lo: float, hi: float):
 # -- goodness of fit -------------------------------------------------------------
 
 def chi2_test(chi2: float, dof: int) -> dict:
-    """The χ² test: p = P(χ²_dof ≥ χ²)."""
-    p = float(scipy.stats.chi2.sf(chi2, dof)) if dof > 0 else float("nan")
-    return dict(test="chi2", statistic=chi2, dof=dof, p_value=p,
-                reduced_chi2=chi2 / dof if dof > 0 else float("nan"),
+    """The χ² test: p = P(χ²_dof ≥ χ²); not made (``fits`` None) without a degree of
+    freedom."""
+    if dof <= 0:
+        return dict(test="chi2", statistic=chi2, dof=dof, p_value=float("nan"),
+                    reduced_chi2=float("nan"), fits=None, note="needs more measurements "
+                    "than parameters")
+    p = float(scipy.stats.chi2.sf(chi2, dof))
+    return dict(test="chi2", statistic=chi2, dof=dof, p_value=p, reduced_chi2=chi2 / dof,
                 fits=not (p < MISFIT_P))
 
 
@@ -289,10 +301,65 @@ def trend_test(data: Data, rss_model, rss_trend, n_parameters: int) -> dict:
     dof = len(data) - n_parameters - 2
     if dof <= 0:
         return dict(test="trend", statistic=float("nan"), dof=[2, dof], p_value=float("nan"),
-                    fits=True, note=f"needs at least {n_parameters + 3} measurements")
+                    fits=None, note=f"needs at least {n_parameters + 3} measurements")
     F = max(rss_model - rss_trend, 0.0) / 2.0 / (rss_trend / dof) if rss_trend > 0 else math.inf
     p = float(scipy.stats.f.sf(F, 2, dof))
     return dict(test="trend", statistic=F, dof=[2, dof], p_value=p, fits=not (p < MISFIT_P))
+
+
+def leverages(data: Data, model_at, theta) -> np.ndarray:
+    """The diagonal of the hat matrix J (JᵀJ)⁻¹ Jᵀ of the fit linearised at ``theta``:
+    J the derivatives of the residuals by central differences (step 1e-4), ``model_at``
+    the model's values at a parameter vector."""
+    theta = np.asarray(theta, float)
+    h = 1e-4
+    cols = []
+    for k in range(len(theta)):
+        e = np.zeros_like(theta)
+        e[k] = h
+        up, down = model_at(theta + e), model_at(theta - e)
+        cols.append((up - down) / data.sigma / (2 * h) if data.weighted else
+                    (np.log(up) - np.log(down)) / (2 * h))
+    J = np.column_stack(cols)
+    Q, _ = np.linalg.qr(J)
+    return np.clip(np.sum(Q**2, axis=1), 0.0, 1.0 - 1e-12)
+
+
+def outlier_test(data: Data, model: np.ndarray, leverage: np.ndarray,
+                 n_parameters: int) -> dict:
+    """The externally studentized residuals against the Bonferroni limit.
+
+    With uncertainties zᵢ = rᵢ/√(1 − hᵢ) ~ N(0, 1); without, the scatter estimated
+    leaving the measurement out, tᵢ = eᵢ/(s₍ᵢ₎ √(1 − hᵢ)) ~ t(N − P − 1) (exact for a
+    model linear in its parameters, Cook & Weisberg 1982). A measurement is flagged
+    when |tᵢ| passes the two-sided limit at OUTLIER_P/N (the chance that clean data
+    flag any is at most OUTLIER_P) and it is more than OUTLIER_FLOOR from the model. ``tested`` False when there are too few
+    measurements (N ≤ P, or N < P + 3 without uncertainties, as the trend test).
+    """
+    r = residuals(data, model)
+    N, dof = len(data), len(data) - n_parameters
+    alpha = OUTLIER_P / (2.0 * N)
+    if data.weighted:
+        if dof < 1:
+            return dict(tested=False, note="needs more measurements than parameters")
+        t = r / np.sqrt(1.0 - leverage)
+        limit = float(scipy.stats.norm.isf(alpha))
+    else:
+        # (with N − P − 1 = 1 the scatter left out is one residual, and the fit's
+        # nonlinearity alone can make it vanish: from 2 on, as the trend test)
+        if dof < 3:
+            return dict(tested=False, note=f"needs at least {n_parameters + 3} measurements")
+        rss = float(r @ r)
+        left = np.maximum(rss - r**2 / (1.0 - leverage), 0.0) / (dof - 1)
+        with np.errstate(divide="ignore"):
+            t = np.where(left > 0, r / np.sqrt(left * (1.0 - leverage)), np.inf * np.sign(r))
+        limit = float(scipy.stats.t.isf(alpha, dof - 1))
+    gross = np.abs(np.log(data.y) - np.log(model)) > OUTLIER_FLOOR
+    flagged = [int(i) for i in np.flatnonzero((np.abs(t) > limit) & gross)]
+    return dict(tested=True, statistic="externally studentized residual" if not data.weighted
+                else "standardized residual (uncertainties given)",
+                values=[float(v) for v in t], limit=limit, false_alarm=OUTLIER_P,
+                floor=OUTLIER_FLOOR, flagged=flagged)
 
 
 def trend_rss(data: Data, model: np.ndarray) -> float:
@@ -387,7 +454,9 @@ def fit_rate(curves: Curves, data: Data, s_hat_per_K_m: float, lo: float, hi: fl
                         max(lo, u - 3.0), min(hi, u + 3.0), points=31)[1]
     return dict(log_K=u, interval=(a, b), misfit=s_min, level=level,
                 model=predict(curves, data, u, s_hat_per_K_m),
-                goodness_of_fit=_goodness(data, s_min, trend, 1))
+                goodness_of_fit=_goodness(
+                    data, s_min, trend, 1,
+                    lambda t: predict(curves, data, t[0], s_hat_per_K_m), [u]))
 
 
 def fit_rate_and_exponent(family: ExponentCurves, data: Data, s_hat_per_K_m: float,
@@ -432,7 +501,9 @@ def fit_rate_and_exponent(family: ExponentCurves, data: Data, s_hat_per_K_m: flo
     return dict(log_K=u, exponent=n, interval=(a, b), exponent_interval=(na, nb),
                 misfit=s_min, level=level,
                 model=predict_between(family, data, u, n, s_hat_per_K_m),
-                goodness_of_fit=_goodness(data, s_min, trend, 2))
+                goodness_of_fit=_goodness(
+                    data, s_min, trend, 2,
+                    lambda t: predict_between(family, data, t[0], t[1], s_hat_per_K_m), [u, n]))
 
 
 def fit_rates(family: RatioCurves, data: Data, s_hat_per_K_m: float, free: tuple,
@@ -477,6 +548,10 @@ def fit_rates(family: RatioCurves, data: Data, s_hat_per_K_m: float, free: tuple
 
         def trend():
             return minimise(lambda x: trend_rss(data, at_u(x)), r0, r1, points=41)[1]
+
+        def model_at(t):
+            return at_u(t[0])
+        theta = [r]
     elif free == ("ball",):
         v = log_K_flat
         u_lo, u_hi = max(lo, v - r1), min(hi, v - r0)
@@ -496,6 +571,10 @@ def fit_rates(family: RatioCurves, data: Data, s_hat_per_K_m: float, free: tuple
             return minimise(lambda x: trend_rss(data, predict_rates(
                 family, data, x, v, s_hat_per_K_m)), max(u_lo, u - 3.0), min(u_hi, u + 3.0),
                 points=31)[1]
+
+        def model_at(t):
+            return predict_rates(family, data, t[0], v, s_hat_per_K_m)
+        theta = [u]
     else:
         starts = []
         for j, cv in enumerate(family.curves):
@@ -539,17 +618,39 @@ def fit_rates(family: RatioCurves, data: Data, s_hat_per_K_m: float, free: tuple
                 [u, r], method="Nelder-Mead", bounds=[(lo, hi), (r0, r1)],
                 options=dict(xatol=1e-9, fatol=1e-14, maxiter=4000))
             return float(t.fun)
+
+        def model_at(t):
+            return predict_rates(family, data, t[0], t[0] + t[1], s_hat_per_K_m)
+        theta = [u, r]
     log_K_flat = u + r
     return dict(log_K_ball=u, log_K_flat=log_K_flat, intervals=intervals,
                 log_ratios=[float(x) for x in reached], misfit=s_min, level=level,
                 model=predict_rates(family, data, u, log_K_flat, s_hat_per_K_m),
-                goodness_of_fit=_goodness(data, s_min, trend, len(free)))
+                goodness_of_fit=_goodness(data, s_min, trend, len(free), model_at, theta))
 
 
-def _goodness(data: Data, s_min: float, trend, n_parameters: int) -> dict:
-    """χ² test with uncertainties; the trend F-test (``trend()`` its RSS) without."""
+def _goodness(data: Data, s_min: float, trend, n_parameters: int, model_at, theta) -> dict:
+    """χ² test with uncertainties; the trend F-test (``trend()`` its RSS) without; and
+    with either the outlier test (:func:`outlier_test`; ``model_at`` the model at a
+    parameter vector, ``theta`` the estimate).
+
+    ``fits``: False when a test fails, True when the χ² or trend test was made and both
+    pass, None when the χ² or trend test could not be made (``fit_tested`` False: too
+    few measurements for the parameters) and no outlier was found.
+    """
     if data.weighted:
-        return chi2_test(s_min, len(data) - n_parameters)
-    if len(data) - n_parameters - 2 <= 0:
-        return trend_test(data, s_min, s_min, n_parameters)
-    return trend_test(data, s_min, min(trend(), s_min), n_parameters)
+        gof = chi2_test(s_min, len(data) - n_parameters)
+    elif len(data) - n_parameters - 2 <= 0:
+        gof = trend_test(data, s_min, s_min, n_parameters)
+    else:
+        gof = trend_test(data, s_min, min(trend(), s_min), n_parameters)
+    model = model_at(np.asarray(theta, float))
+    out = outlier_test(data, model, leverages(data, model_at, theta), n_parameters)
+    gof["outliers"] = out
+    # the outlier test where the χ² test is not made (never, as both need N > P) can
+    # condemn a fit but not pass one
+    gof["fit_tested"] = gof["fits"] is not None
+    if out["tested"] and out["flagged"]:
+        gof["fits"] = False
+    gof["measurements"], gof["parameters"] = len(data), n_parameters
+    return gof

@@ -94,7 +94,7 @@ def figure(result, path=None, axes=None):
         for band in (-2.0, 2.0):
             ax.axhline(band, color="0.7", lw=0.8, ls=":")
     gof = result.goodness_of_fit
-    verdict = "fits" if gof["fits"] else "does NOT fit"
+    verdict = {True: "fits", False: "does NOT fit", None: "fit not tested"}[gof["fits"]]
     ax.set(xscale="log", xlabel=xlabel,
            ylabel="(measured − model)/σ" if weighted else "ln(measured/model) [%]",
            title=f"residuals: {verdict} (p = {gof['p_value']:.2g})")
@@ -141,8 +141,17 @@ def text(result) -> str:
                 if gof.get("note") else
                 f"trend of the residuals with ln s: F = {_g(gof['statistic'])} on "
                 f"{gof['dof'][0]}, {gof['dof'][1]} degrees of freedom")
-    verdict = "the model fits" if gof["fits"] else "the model does NOT fit"
-    lines.append(f"goodness of fit: {test}, p = {_g(gof['p_value'], '.3g')}: {verdict}")
+    if gof["fits"] is None:
+        lines.append(f"goodness of fit: not tested: too few measurements to test the model's "
+                     f"fit: {gof['measurements']} points, {gof['parameters']} parameter(s) "
+                     f"({test})")
+    else:
+        verdict = "the model fits" if gof["fits"] else "the model does NOT fit"
+        out = gof["outliers"]
+        if out["tested"]:
+            test += (f"; outliers: largest |{out['statistic']}| "
+                     f"{max(abs(v) for v in out['values']):.3g}, limit {out['limit']:.3g}")
+        lines.append(f"goodness of fit: {test}, p = {_g(gof['p_value'], '.3g')}: {verdict}")
     weighted = result.measurements[0]["uncertainty"] is not None
     lines += ["", f"{'row':>4} {'cycles':>10} {'s [m]':>10} {'quantity':<22} {'measured':>11} "
                   f"{'±':>9} {'model':>11} {'residual':>9} {'lab K':>10}"]

@@ -71,7 +71,7 @@ def _exponents(text):
 def main(args) -> int:
     from wearcheck.outputs import check_output
     from wearcheck.comparisons.present.fit_report import text
-    from wearcheck.studies.fit import fit, write
+    from wearcheck.studies.fit import WARNING_STARTS, fit, write
     case = load_case(args)
     if args.out is not None:
         check_output(args.out, "fit")   # before the runs: a path we may not write fails at once
@@ -83,7 +83,8 @@ def main(args) -> int:
     if args.out is not None:
         write(result, args.out, data_path=args.measurements)
     for remark in result.warnings:
-        print(f"warning: {remark}" if remark.startswith("the residuals") else f"note: {remark}",
+        warned = remark.startswith(WARNING_STARTS)
+        print(f"warning: {remark}" if warned else f"note: {remark}",
               file=sys.stderr)
     if args.json:
         from wearcheck.rundir import jsonable
@@ -92,4 +93,6 @@ def main(args) -> int:
         print(text(result))
         if args.out is not None:
             print(f"-> {args.out}")
-    return 0 if result.goodness_of_fit["fits"] else 1
+    # exit 1 only when a test says the model does not fit; untested (too few
+    # measurements) is 0 with the statement printed and fit_tested false in the JSON
+    return 1 if result.goodness_of_fit["fits"] is False else 0

@@ -59,6 +59,10 @@ MEASUREMENTS = (
                                         "counterface volume"), "track volume"),
 )
 
+#: the sliding distances [m] a measurement may have: from a nanometre (less is no sliding)
+#: to 1e12 m (a bearing at 10 m/s for 30 years slides 1e10 m); beyond, ŝ = K E* s/a0
+#: leaves the floating-point range of the fit's search over K
+SLIDING_RANGE = (1e-9, 1e12)
 #: the first stage of a forward run, in ŝ, at most: below it a measurement is read as
 #: the start of wear (the scar the unworn contact, volume and depth ∝ ŝ:
 #: ``fitting.Curves``)
@@ -218,6 +222,10 @@ def read_measurements(data, case: cases.Case) -> tuple[fitting.Data, list, str]:
         if not x.values[i] > 0:
             raise CaseError(f"{table.where(i, given[0])}: {x.values[i]:g}; the fit needs "
                             "measurements after sliding (> 0)")
+        if not SLIDING_RANGE[0] <= s_all[i] <= SLIDING_RANGE[1]:
+            raise CaseError(f"{table.where(i, given[0])}: {x.values[i]:g}, a sliding distance "
+                            f"of {s_all[i]:g} m; allowed: {SLIDING_RANGE[0]:g} to "
+                            f"{SLIDING_RANGE[1]:g} m (check the column's unit)")
         found = False
         for q in measured:
             col = table[q]
@@ -553,9 +561,10 @@ def _result(case, keys, data, rows, source, found, runs, family, c, notes, secon
     lab, lab_K = lab_formulas(case, data)
     measurements = measurement_rows(data, rows, found["model"], lab_K)
     gof = found["goodness_of_fit"]
-    warning = misfit_warning(gof)
+    warning = misfit_warning(gof, rows)
     if warning:
         notes.insert(0, warning)
+    notes += below_hertz_notes(case, data, rows)
     method = interval_method(data)
     curve = _curve(family, data, found, c)
     notes += _validity_remarks(fitted, family, data, found, c)
@@ -618,17 +627,55 @@ def measurement_rows(data: fitting.Data, rows: list, model, lab_K) -> list[dict]
     return out
 
 
-def misfit_warning(gof: dict) -> str | None:
-    """The warning when the goodness of fit says the model does not fit, else None."""
+#: how the remarks that are warnings (not notes) begin: the model does not fit, its fit
+#: could not be tested, a scar no K gives
+WARNING_STARTS = ("the residuals", "too few measurements", "scar diameter below")
+
+
+def misfit_warning(gof: dict, rows: list | None = None) -> str | None:
+    """The warning when the goodness of fit says the model does not fit, or that it
+    could not be tested; None when the tests made pass. ``rows``: each measurement's
+    row (a dict with "row"), to name an outlier's."""
+    if gof["fits"] is None:
+        return (f"too few measurements to test the model's fit: {gof['measurements']} "
+                f"points, {gof['parameters']} parameter(s); the values are the best fit, "
+                "but nothing here says the model describes the measurements")
     if gof["fits"]:
         return None
-    what = (f"χ² = {gof['statistic']:.4g} for {gof['dof']} degrees of freedom"
-            if gof["test"] == "chi2" else
-            f"a trend of the residuals with ln s, F = {gof['statistic']:.4g} on "
-            f"{gof['dof'][0]} and {gof['dof'][1]} degrees of freedom")
-    return (f"the residuals say the model does not fit: {what}, p = {gof['p_value']:.3g} < "
-            f"{fitting.MISFIT_P:g}; the wear law (or the uncertainties) do not describe these "
-            "measurements, and the intervals are then too narrow")
+    said = []
+    p = gof["p_value"]
+    if p < fitting.MISFIT_P:
+        what = (f"χ² = {gof['statistic']:.4g} for {gof['dof']} degrees of freedom"
+                if gof["test"] == "chi2" else
+                f"a trend of the residuals with ln s, F = {gof['statistic']:.4g} on "
+                f"{gof['dof'][0]} and {gof['dof'][1]} degrees of freedom")
+        said.append(f"{what}, p = {p:.3g} < {fitting.MISFIT_P:g}")
+    out = gof["outliers"]
+    if out.get("flagged"):
+        names = [f"row {rows[i]['row']}" if rows else f"measurement {i + 1}"
+                 for i in out["flagged"]]
+        worst = max(abs(out["values"][i]) for i in out["flagged"])
+        said.append(f"an outlier at {', '.join(names)} (|{out['statistic']}| = {worst:.3g} > "
+                    f"{out['limit']:.3g}, the limit at a false-alarm rate of "
+                    f"{out['false_alarm']:g} over all points)")
+    return (f"the residuals say the model does not fit: {'; '.join(said)}; the wear law (or "
+            "the uncertainties) do not describe these measurements, and the intervals are "
+            "then too narrow")
+
+
+def below_hertz_notes(case: cases.Case, data: fitting.Data, rows: list) -> list[str]:
+    """One remark naming the rows whose scar diameter is below the unworn Hertz contact's
+    2a0: wear only widens the contact under a constant force, so no K ≥ 0 gives them
+    (a scar read too small, or a load or radius in the case that is not the test's)."""
+    two_a0 = 2.0 * reference.scales(case)["a0"]
+    below = [i for i in range(len(data))
+             if data.quantity[i] == "scar_diameter" and data.y[i] < two_a0]
+    if not below:
+        return []
+    shown = ", ".join(f"row {rows[i]['row']} ({data.y[i]:.4g} m)" for i in below)
+    return [f"scar diameter below the unworn Hertz contact's 2a0 = {two_a0:.4g} m at {shown}: "
+            "the model cannot give a scar smaller than the unworn contact at any K ≥ 0; "
+            "check the reading, the load and the ball's radius"]
 
 
 def interval_method(data: fitting.Data) -> str:

@@ -263,7 +263,7 @@ def _result(case, keys, free, data, rows, source, found, family, runs, c, notes,
     lab, lab_K = ball_fit.lab_formulas(case, data)
     measurements = ball_fit.measurement_rows(data, rows, found["model"], lab_K)
     gof = found["goodness_of_fit"]
-    warning = ball_fit.misfit_warning(gof)
+    warning = ball_fit.misfit_warning(gof, rows)
     if warning:
         notes.insert(0, warning)
     if resolution is not None:
