@@ -454,9 +454,11 @@ def solve(case, progress=None):
                 jump_tolerance=tol, run_moves=moves, **counters)
     if out.get("jumping") is not None:
         info["cycle_jumping"] = out["jumping"]
-    remark = track.coarse_wear_remark(counters["largest_wear_per_move"], sc["d0"], "move")
-    if remark:
-        info["warnings"] = [remark]
+    remarks = [r for r in (track.curved_track_remark(sl, sc["a0"]) if periodic else None,
+                           track.coarse_wear_remark(counters["largest_wear_per_move"],
+                                                    sc["d0"], "move")) if r]
+    if remarks:
+        info["warnings"] = remarks
     if progress is not None:
         progress(1.0, "done")
     return RunResult(history=hist, stage_s=np.asarray(st["move"], float) * dx, r=r, f=f_avg,

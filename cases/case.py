@@ -477,18 +477,39 @@ def _similarity_note(case: Case) -> str:
 #: the notes issued through :mod:`warnings` in this process (each kind once)
 _NOTED: set[str] = set()
 
+#: the friction coefficient above which a case gets a remark (not refused): dry
+#: metal pairs in air slide at μ ≈ 0.1-1 (steel on steel 0.6-0.8, aluminium on steel
+#: up to about 1.2); μ well above 1 means adhesion and junction growth (clean metals in
+#: vacuum, seizure), where the gross-slip Reye-Archard setting with τ = μp no longer
+#: describes the contact. 1.5 leaves the measured dry range, vacuum excepted, unremarked.
+FRICTION_REMARK_MU = 1.5
+
+
+def _friction_note(case: Case) -> str | None:
+    mu = case.wear.mu
+    if not mu > FRICTION_REMARK_MU:
+        return None
+    return (f"key 'wear.mu' = {mu!r}: a friction coefficient above {FRICTION_REMARK_MU:g} is "
+            "outside dry sliding of metals in air (μ ≈ 0.1-1.2); past it the contact adheres "
+            "or seizes, which the gross-slip Reye–Archard model with τ = μp does not describe "
+            "(docs/case-files.md, \"Friction\"); results are approximate")
+
 
 def _warnings(case: Case) -> tuple[str, ...]:
-    """The case's remarks (recorded in every output); the elastic-similarity note only
-    where the coupling matters (:func:`coupling_matters`), issued through
-    :mod:`warnings` once per process (a μ sweep would repeat it for every run)."""
+    """The case's remarks (recorded in every output): the elastic-similarity note only
+    where the coupling matters (:func:`coupling_matters`), the friction note above
+    :data:`FRICTION_REMARK_MU`; each kind issued through :mod:`warnings` once per
+    process (a μ sweep would repeat it for every run)."""
     out = []
-    if coupling_matters(case):
-        out.append(_similarity_note(case))
-        if "similarity" not in _NOTED:
-            _NOTED.add("similarity")
+    for kind, note in (("similarity", coupling_matters(case) and _similarity_note(case)),
+                       ("friction", _friction_note(case))):
+        if not note:
+            continue
+        out.append(note)
+        if kind not in _NOTED:
+            _NOTED.add(kind)
             import warnings
-            warnings.warn(out[-1] + " (said once per process; each case's own is in "
+            warnings.warn(note + " (said once per process; each case's own is in "
                           "case.warnings)", RunWarning, stacklevel=_outside_wearcheck())
     return tuple(out)
 

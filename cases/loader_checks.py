@@ -204,6 +204,29 @@ def unworn_contact(case) -> None:
                            if case.indenter.radius is not None else ""))
 
 
+def track_radius_beyond_contact(case) -> None:
+    """A pin-on-disc track's radius holds the unworn contact (a0 from reference.scales).
+
+    A track radius below the contact radius puts the disc's centre inside the
+    contact: the pin spins about a point of its own contact instead of sliding
+    along a track, and no solver's model (a groove along the track, the ball
+    moving over the flat) describes that.
+    """
+    sl = case.sliding
+    if sl is None or sl.motion != "unidirectional" or sl.track_radius is None:
+        return
+    try:
+        a0 = reference.scales(case)["a0"]
+    except (ArithmeticError, ValueError, RuntimeError):
+        return   # unworn_contact says so
+    if _usable(a0) and sl.track_radius < a0:
+        raise CaseError(f"key 'sliding.track_radius' = {sl.track_radius!r}: smaller than the "
+                        f"unworn contact radius a0 = {a0:.4g} m, so the disc's centre lies "
+                        "inside the contact (the pin spins instead of sliding along a track); "
+                        f"the track radius must be at least a0 = {a0:.4g} m (a pin-on-disc "
+                        "track is many contact radii: docs/both-bodies.md, \"Range\")")
+
+
 def stroke_beyond_reversal(case) -> None:
     """The correction is the springs' reversal at each stroke end: it needs a stroke
     longer than that reversal (docs/theory.md §4). (That it needs a stroke at all is a

@@ -162,6 +162,9 @@ RULES = (
                 "wear.hardness"),
                "the unworn contact and the sliding scale are finite and positive "
                "(a tabulated profile: the load within the table)", lc.unworn_contact),
+    LoaderOnly(("sliding.track_radius",),
+               "`sliding.track_radius` >= the unworn contact radius a0",
+               lc.track_radius_beyond_contact),
     LoaderOnly(("sliding.stroke", "wear.tangential_correction"),
                "with `wear.tangential_correction`, `sliding.stroke` > the springs' reversal "
                "2μE*d0/G*", lc.stroke_beyond_reversal),

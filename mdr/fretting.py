@@ -69,6 +69,14 @@ NORMAL_RESOLVE = 1e-7
 #: (depth control) from one recorded cycle to the next: wear only removes
 #: material, so either would mean the explicit wear went unstable
 MONOTONE_TOLERANCE = 1e-6
+#: longest wall time a run that simulates every cycle (fretting.jump_tolerance = 0)
+#: may be estimated to take, fretting.cycles × the measured cost of its first cycles,
+#: before it is refused: ten minutes, a run one waits for at the terminal; the cycle
+#: count is known up front, so the run stops after its first cycles instead of late
+EVERY_CYCLE_SECONDS = 600.0
+#: simulated cycles and seconds measured before the estimate is judged (the timer's
+#: resolution and the first cycles' set-up kept small beside the measurement)
+ESTIMATE_CYCLES, ESTIMATE_SECONDS = 5, 0.2
 #: largest increment wear number (k/σ0) μ E* |Δslip|/Δr a run may reach: the
 #: wear within a cycle is forward Euler, stable at the grid scale while
 #: Λ β_max <= 2, β_max = 1.47 the largest eigenvalue of (Δr/E*) ∂p/∂f on the
@@ -460,6 +468,41 @@ def run(model: Model, cycles: int, tol: float, stage_cycles, progress=None, watc
                 loops=loops, counters=counters, jumping=out.info())
 
 
+def _every_cycle_estimate(fr, watch, clock=time.perf_counter):
+    """``watch``, and for a run without cycle jumping its refusal after the first
+    cycles when ``fr.cycles`` of them would take more than :data:`EVERY_CYCLE_SECONDS`.
+
+    The cost per cycle is measured from the end of the initial ramp (cycle 0) over
+    at least :data:`ESTIMATE_CYCLES` cycles and :data:`ESTIMATE_SECONDS`; every cycle
+    costs the same grid and increments, so it projects to the run's end.
+    """
+    if fr.jump_tolerance != 0:
+        return watch
+    seen = {}
+
+    def estimated(s, contact_radius, scar_radius, cycle=None):
+        watch(s, contact_radius, scar_radius, cycle=cycle)
+        now = clock()
+        if "start" not in seen:
+            seen["start"] = now
+            return
+        spent = now - seen["start"]
+        if seen.get("judged") or cycle < ESTIMATE_CYCLES or spent < ESTIMATE_SECONDS:
+            return
+        seen["judged"] = True
+        estimate = spent / cycle * fr.cycles
+        if estimate > EVERY_CYCLE_SECONDS:
+            largest = int(EVERY_CYCLE_SECONDS * cycle / spent)
+            raise CaseError(
+                f"key 'fretting.jump_tolerance' = {fr.jump_tolerance!r}: simulating every one "
+                f"of fretting.cycles = {fr.cycles} cycles would take about {estimate:.3g} s "
+                f"({spent / cycle * 1e3:.3g} ms per cycle, measured on the first {cycle}), more "
+                f"than the {EVERY_CYCLE_SECONDS:g} s allowed without cycle jumping; give "
+                f"fretting.jump_tolerance > 0 (the default is 0.02) or at most "
+                f"about {largest} cycles")
+    return estimated
+
+
 def _check_resolution(model, acc, counters):
     """SolverError if the increments do not resolve the wear (docs/fretting.md, §5).
 
@@ -696,7 +739,8 @@ def _solve(case, progress=None) -> RunResult:
     stage_cycles = (default_stage_cycles(fr.cycles) if fr.stage_cycles is None
                     else [int(c) for c in fr.stage_cycles])
     watch = validity.BodyWatch(case)
-    out = run(model, fr.cycles, fr.jump_tolerance, stage_cycles, progress, watch=watch)
+    out = run(model, fr.cycles, fr.jump_tolerance, stage_cycles, progress,
+              watch=_every_cycle_estimate(fr, watch))
     hist = out["history"]
     hist["s_hat"] = hist["s"] * sc["s_hat_per_m"]
     a0, F0 = sc["a0"], sc["F0"]

@@ -132,6 +132,8 @@ BREAK_LOADER_ONLY = {
                      "loading.control": "force", "loading.force": 1e12},
     "unworn_contact": {"indenter.profile": "paraboloid", "indenter.radius": 0.01,
                        "loading.control": "depth", "loading.depth": 1e-300},
+    "track_radius_beyond_contact": {"sliding.motion": "unidirectional",
+                                    "sliding.track_radius": 1e-12},
     "stroke_beyond_reversal": {"wear.tangential_correction": True, "sliding.stroke": 1e-9},
     "force_amplitude_below_friction": {"fretting.force_amplitude": 100.0,
                                        "fretting.cycles": 10},
