@@ -335,3 +335,22 @@ def test_an_over_deep_force_on_a_sphere_says_so_and_gives_the_limit(force):
     assert f"below {limit:.4g} N" in text
     below = wearcheck.load_case("ball_on_flat", {"loading.force": 0.99 * limit})
     assert reference.scales(below)["d0"] < R
+
+
+def test_a_table_coarser_than_the_contact_gets_a_remark(tmp_path):
+    """A 3-row table r = 0, 1, 2 mm of the paper's paraboloid (a0 = 0.1 mm) was read as
+    a cone inside the contact with no word: F0 26.5 N against 30.8 N (the second
+    adversarial review). Its F0 by quadrature is checked against Hertz's to show the
+    remark's premise, and a table with a row every a0/4 (F0 within 1e-4 of Hertz's,
+    measured 1.5e-4 at a0/2) gets none."""
+    from wearcheck.cases import reference
+    hertz = reference.scales(wearcheck.load_case("paper"))
+    coarse = _table(tmp_path / "coarse.csv", 2e-3, rows=3)
+    case = wearcheck.load_case("paper", {"indenter.profile": "table",
+                                         "indenter.file": str(coarse)})
+    assert abs(reference.scales(case)["F0"] / hertz["F0"] - 1) > 0.05
+    assert any("holds 0 radius(es) inside the unworn contact radius" in w for w in case.warnings)
+    fine = _table(tmp_path / "fine.csv", 4e-3, rows=161)     # every 2.5e-5 m = a0/4
+    case = wearcheck.load_case("paper", {"indenter.profile": "table", "indenter.file": str(fine)})
+    assert abs(reference.scales(case)["F0"] / hertz["F0"] - 1) < 1e-4
+    assert not any("profile table holds" in w for w in case.warnings)
