@@ -159,7 +159,9 @@ def _damage_npz(path: Path, change) -> None:
                                                           "finite"),
     (lambda z: z.update(p=np.where(z["p"] > 0, np.inf, z["p"])), "'p' holds 13 values"),
     (lambda z: z.update(s=np.array(["a"])), "'s' holds <U1 values"),
-], ids=["p-cut", "s_hat-long", "r-2d", "f-nan", "p-inf", "s-text"])
+    # reversed radii rendered a scrambled profile with exit 0 (the second review)
+    (lambda z: z.update(r=z["r"][::-1].copy()), "'r' is not increasing"),
+], ids=["p-cut", "s_hat-long", "r-2d", "f-nan", "p-inf", "s-text", "r-reversed"])
 @pytest.mark.parametrize("command", ["export", "render"])
 def test_damaged_stage_arrays_are_one_line_naming_the_array(tmp_path, capsys, damage, words,
                                                             command):

@@ -305,6 +305,11 @@ def stages_damage(stages: dict) -> str | None:
         bad = int(np.size(arr) - np.count_nonzero(np.isfinite(arr)))
         if bad:
             return f"'{name}' holds {bad} values that are not finite (NaN or infinite)"
+    r = arrays["r"]
+    # every solver writes its radii from the axis outwards; reversed or shuffled radii
+    # would be drawn and exported as a scrambled profile without a word
+    if M and (r[0] < 0 or np.any(np.diff(r) <= 0)):
+        return "'r' is not increasing from r >= 0 (as wearcheck writes its radii)"
     return None
 
 
