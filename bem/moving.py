@@ -44,8 +44,11 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.fft as sfft
 
-from wearcheck.cases import SolverError
+from wearcheck.cases import CaseError, RunResult, SolverError, programme, reference, validity
+from wearcheck.cases.result import scar_radius
 from wearcheck.numerics import cycle_jumping
+
+from . import track
 
 from . import contact
 from .operator import HalfSpace, rectangle_displacement
@@ -162,8 +165,6 @@ def slide(model: MovingModel, f, H, last, offsets, visit=None, sliding=False) ->
 
 def observer(model: MovingModel, middle: int, ring=None):
     """The history's columns and ``add(s, f, H, contact)``, which appends one row."""
-    from wearcheck.cases.result import scar_radius
-    from .track import track_width
     n, dx = model.op.n, model.op.spacing
     area = dx * dx
     y = (np.arange(n) - n // 2) * dx
@@ -183,11 +184,11 @@ def observer(model: MovingModel, middle: int, ring=None):
         hist["wear_center"].append(float(w[i0, i0]))
         hist["wear_volume"].append(float(np.sum(w)) * area)
         hist["wear_volume_counterface"].append(float(np.sum(H)) * area)
-        hist["track_width"].append(track_width(y, H[middle]))
+        hist["track_width"].append(track.track_width(y, H[middle]))
         hist["track_depth"].append(float(np.max(H[middle])))
         hist["track_area"].append(float(np.sum(H[middle])) * dx)
-        hist["scar_length"].append(track_width(y, w[:, i0]))
-        hist["scar_width"].append(track_width(y, w[i0, :]))
+        hist["scar_length"].append(track.track_width(y, w[:, i0]))
+        hist["scar_width"].append(track.track_width(y, w[i0, :]))
         hist["max_pressure"].append(float(np.max(c.pressure)))
         hist["cg_iterations"].append(c.iterations)
         if ring is not None:
@@ -360,8 +361,7 @@ MAX_HISTORY_ROWS = 2000
 
 def supports(case) -> str | None:
     """None when the moving-contact model can run ``case``, else why not."""
-    from .track import supports as track_supports
-    reason = track_supports(case)
+    reason = track.supports(case)
     if reason is None and case.sliding.until == "force_fraction":
         reason = ("the moving-contact model (bem.track_model = \"moving\") slides a given "
                   "distance: set sliding.until = \"cycles\" or \"distance\"")
@@ -370,10 +370,7 @@ def supports(case) -> str | None:
 
 def solve(case, progress=None):
     """The BEM run of a case whose counterface wears: the moving-contact model."""
-
-    from wearcheck.cases import CaseError, RunResult, programme, reference, validity
-
-    from . import track
+    # lazy (c): bem.solver imports this module
     from .solver import ring_average
     reason = supports(case)
     if reason is not None:

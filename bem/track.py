@@ -41,7 +41,7 @@ import numpy as np
 import scipy.fft as sfft
 
 from wearcheck.cases import CaseError, RunResult, SolverError, both_bodies, programme
-from wearcheck.cases import reference, validity
+from wearcheck.cases import profiles, reference, validity
 from wearcheck.cases.result import SCAR_THRESHOLD, scar_radius
 from wearcheck.numerics import stepping
 
@@ -336,6 +336,7 @@ def largest_track_radius(case, sc: dict) -> float:
     alone) and w the width of a groove cut by the unworn ball that holds
     V_flat = K_flat F s (parabolic section w³/(12R) = V_flat/L). Under depth
     control the contact never passes f = d, as for the ball alone."""
+    # lazy (c): bem.solver imports this module
     from .solver import largest_contact_radius
     a_ball = largest_contact_radius(case, sc)
     ind, ld = case.indenter, case.loading
@@ -354,8 +355,8 @@ def setup(case, sc: dict, spacing: float | None = None) -> tuple[TrackModel, np.
     ``spacing``: a pixel side at most the case's (the moving-contact model's,
     which divides the stroke), instead of the case's.
     """
+    # lazy (c): bem.solver imports this module
     from .solver import grid
-    from wearcheck.cases import profiles
     n = case.bem.grid
     x, dx, a_max = grid(case, sc, largest_track_radius(case, sc),
                         " in a box that holds the worn track")
@@ -460,6 +461,7 @@ def balance(history: dict, K_ball: float, K_flat: float, force=None) -> dict:
 
 def solve(case, progress=None) -> RunResult:
     """The BEM run of a case whose counterface wears: the long-stroke model."""
+    # lazy (c): bem.solver imports this module
     from .solver import ring_average
     reason = supports(case)
     if reason is not None:

@@ -14,7 +14,7 @@ from wearcheck.cases.result import scar_radius
 
 from wearcheck.numerics import stepping
 
-from . import contact, linalg, resolution, transforms, wear
+from . import contact, fretting, linalg, resolution, transforms, wear
 
 #: implicit Euler's default step in ŝ (sliding.step_hat = "auto"): its time
 #: error, first order in Δŝ, is docs/performance.md's ("Measurements behind the code")
@@ -489,8 +489,7 @@ def solve(case, progress=None) -> RunResult:
     A case with a [fretting] section runs :func:`mdr.fretting.solve`.
     """
     if getattr(case, "fretting", None) is not None:
-        from .fretting import solve as solve_fretting
-        return solve_fretting(case, progress)
+        return fretting.solve(case, progress)
     with linalg.single_threaded_blas():
         return _solve(case, progress)
 

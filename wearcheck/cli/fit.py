@@ -28,6 +28,11 @@ import json
 import sys
 from pathlib import Path
 
+from wearcheck.cases import CaseError
+from wearcheck.comparisons.present.fit_report import text
+from wearcheck.outputs import check_output
+from wearcheck.rundir import jsonable
+from wearcheck.studies.fit import WARNING_STARTS, fit, write
 from ._common import add_case_arguments, load_case
 from .refine import add_cluster_arguments
 
@@ -69,14 +74,10 @@ def _exponents(text):
 
 
 def main(args) -> int:
-    from wearcheck.outputs import check_output
-    from wearcheck.comparisons.present.fit_report import text
-    from wearcheck.studies.fit import WARNING_STARTS, fit, write
     case = load_case(args)
     if args.out is not None:
         check_output(args.out, "fit")   # before the runs: a path we may not write fails at once
     if args.exponents is not None and "wear.pressure_exponent" not in args.keys:
-        from wearcheck.cases import CaseError
         raise CaseError("--exponents: the scan over n needs --fit wear.pressure_exponent")
     result = fit(case, args.measurements, args.keys, exponents=args.exponents,
                  scheduler=args.scheduler, workers=args.workers, quiet=args.quiet or args.json)
@@ -87,7 +88,6 @@ def main(args) -> int:
         print(f"warning: {remark}" if warned else f"note: {remark}",
               file=sys.stderr)
     if args.json:
-        from wearcheck.rundir import jsonable
         print(json.dumps(jsonable(result.to_dict()), indent=2, allow_nan=True))
     else:
         print(text(result))

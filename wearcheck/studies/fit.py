@@ -12,6 +12,7 @@ statistics give the intervals: ``comparisons.analysis.fitting`` and
 from __future__ import annotations
 
 import hashlib
+import json
 import math
 import shutil
 import tempfile
@@ -22,9 +23,15 @@ from pathlib import Path
 
 import numpy as np
 
-from wearcheck import cases
+from wearcheck import cases, layout, registry
 from wearcheck.cases import CaseError, RunWarning, SolverError, reference, validity
 from wearcheck.comparisons.analysis import fitting
+from wearcheck.comparisons.present.fit_report import figure
+from wearcheck.comparisons.present.progress import ProgressBar
+from wearcheck.mdr import resolution
+from wearcheck.outputs import atomic_directory
+from wearcheck.rundir import jsonable, provenance
+from wearcheck.studies.distributed import Task, run_cases
 from wearcheck.numerics.stepping import ADAPTIVE_MAX_S_HAT
 from wearcheck.user_tables import Quantity, from_columns, read_table
 
@@ -320,8 +327,6 @@ def plan(case: cases.Case, data: fitting.Data, c: float, n: float) -> tuple[floa
 
 
 def solve_here(case: cases.Case, quiet: bool, label: str, solver: str = "mdr"):
-    from wearcheck import registry
-    from wearcheck.comparisons.present.progress import ProgressBar
     bar = ProgressBar(label, quiet=quiet)
     try:
         with warnings.catch_warnings():
@@ -361,6 +366,7 @@ def fit(case: cases.Case, data, keys=("wear.specific_rate",), *, exponents=None,
     check_case(case)
     data, rows, source = read_measurements(data, case)
     if case.counterface_wear_rate is not None or "counterface.specific_rate" in keys:
+        # lazy (c): fit_track builds on this module (the ball's fit)
         from . import fit_track     # both bodies wearing: the BEM's long-stroke model
         return fit_track.fit(case, data, rows, source, keys, scheduler=scheduler,
                              workers=workers, quiet=quiet, t0=t0)
@@ -424,7 +430,6 @@ def _fit_rate(case, data, c, quiet, notes):
 def coarse_elements(case: cases.Case) -> int:
     """The elements of the resolution check's model: N/2, or the fewest the MDR accepts
     (:mod:`wearcheck.mdr.resolution`) when N/2 is below them."""
-    from wearcheck.mdr import resolution
     factor = case.mdr.domain_factor
     fewest = max(math.ceil(resolution.MIN_CONTACT_CELLS * 2.0 * factor**2 * (1.0 - 1e-12)),
                  resolution.MIN_ELEMENTS)
@@ -487,7 +492,6 @@ def _reach(log_K, upper, data, c) -> float:
 
 def _fit_exponent(case, data, c, exponents, scheduler, workers, quiet, notes):
     """n free: one forward run per exponent, on Dask."""
-    from wearcheck.studies.distributed import Task, run_cases
     exponents = np.asarray(EXPONENTS if exponents is None else sorted(set(map(float, exponents))),
                            float)
     if len(exponents) < 4 or exponents[0] < 1.0 or exponents[-1] > 4.0:
@@ -731,10 +735,6 @@ def file_digest(path) -> str | None:
 def write(result: FitResult, out, data_path=None, argv=None) -> Path:
     """Write the fit directory ``out`` atomically: case.toml, fitted_case.toml, fit.json,
     measurements.csv, fit.png and meta.json (provenance)."""
-    import json
-    from wearcheck import layout
-    from wearcheck.outputs import atomic_directory
-    from wearcheck.rundir import jsonable, provenance
     with atomic_directory(out, "fit") as tmp:
         (tmp / "case.toml").write_text(cases.to_toml(result.case), encoding="utf-8")
         (tmp / "fitted_case.toml").write_text(cases.to_toml(result.fitted_case),
@@ -743,7 +743,6 @@ def write(result: FitResult, out, data_path=None, argv=None) -> Path:
                                       encoding="utf-8")
         (tmp / "measurements.csv").write_text(measurements_csv(result.measurements),
                                               encoding="utf-8")
-        from wearcheck.comparisons.present.fit_report import figure
         figure(result, tmp / "fit.png")
         meta = dict(kind="fit", resolved_case=cases.to_toml(result.case),
                     fitted_case=cases.to_toml(result.fitted_case), keys=list(result.keys),
@@ -761,8 +760,7 @@ def write(result: FitResult, out, data_path=None, argv=None) -> Path:
 
 def measurements_csv(rows: list) -> str:
     """measurements.csv: one row per measurement (SI; ``pandas.read_csv`` reads it as is)."""
-    from wearcheck.layout import FIT_COLUMNS
-    names = [c.name for c in FIT_COLUMNS]
+    names = [c.name for c in layout.FIT_COLUMNS]
     lines = [",".join(names)]
     for row in rows:
         cells = []

@@ -28,6 +28,7 @@ from wearcheck.cases import CaseError, SolverError, both_bodies, reference
 from wearcheck.comparisons.analysis import fitting
 
 from . import fit as ball_fit
+from .distributed import Task, run_cases
 
 FLAT = "counterface.specific_rate"
 BALL = "wear.specific_rate"
@@ -150,7 +151,6 @@ def _run_all(case, tasks, scheduler, workers, quiet) -> list:
                                 f"measurement, on the first guess of the rates): {exc}") from None
             out.append((result.history, result.info, time.perf_counter() - t, None))
         return out
-    from wearcheck.studies.distributed import Task, run_cases
     scratch = Path(tempfile.mkdtemp(prefix="wearcheck-fit-"))
     try:
         outcomes = run_cases(case, [Task(name=n, solver="bem", changes=c) for n, c in tasks],
