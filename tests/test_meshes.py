@@ -132,17 +132,19 @@ def test_a_killed_cache_writer_s_temporary_is_removed_a_live_one_s_kept(_cache):
     import sys
     import time
     env = dict(os.environ, WEARCHECK_CACHE=str(_cache))
-    dead = subprocess.run([sys.executable, "-c", _WRITER, "die", "10"], env=env)
-    assert dead.returncode == -9
-    left = [f.name for f in _cache.iterdir()]
-    assert len(left) == 1 and left[0].startswith(".sphere-"), left  # the kill's leftover
+    # the live writer first: every writer clears dead writers' leftovers before it
+    # saves, so a writer started after the kill would clear it before this test's call
     live = subprocess.Popen([sys.executable, "-c", _WRITER, "live", "12"], env=env)
     try:
         deadline = time.monotonic() + 60
-        while len(list(_cache.iterdir())) < 2 and time.monotonic() < deadline:
+        while not (_cache.is_dir() and list(_cache.iterdir())) and time.monotonic() < deadline:
             time.sleep(0.05)
-        live_tmp = [f for f in _cache.iterdir() if f.name not in left]
-        assert len(live_tmp) == 1
+        live_tmp = list(_cache.iterdir())
+        assert len(live_tmp) == 1 and live_tmp[0].name.startswith(".sphere-"), live_tmp
+        dead = subprocess.run([sys.executable, "-c", _WRITER, "die", "10"], env=env)
+        assert dead.returncode == -9
+        left = [f.name for f in _cache.iterdir() if f != live_tmp[0]]
+        assert len(left) == 1 and left[0].startswith(".sphere-"), left  # the kill's leftover
         meshes.sphere_mesh(_params(10))
         names = sorted(f.name for f in _cache.iterdir())
         assert live_tmp[0].name in names and left[0] not in names, names
