@@ -754,7 +754,8 @@ def test_refine_rerun_where_every_level_fails_removes_the_old_figures(tmp_path, 
 def test_refine_interrupt_message_says_what_was_written(tmp_path, capsys, monkeypatch):
     def interrupted(out):
         raise KeyboardInterrupt
-    monkeypatch.setattr("wearcheck.comparisons.present.study_figures.write_figures", interrupted)
+    # where the study calls it (wearcheck.studies.refine imports it by name at its top)
+    monkeypatch.setattr("wearcheck.studies.refine.write_figures", interrupted)
     out = tmp_path / "study"
     assert cli_main(["refine", HERTZ, "--levels", "20,40", "--workers", "1", "--quiet",
                      "--out", str(out)]) == 130
