@@ -45,7 +45,6 @@ import numpy as np
 import scipy.fft as sfft
 
 from wearcheck.cases import CaseError, RunResult, SolverError, programme, reference, validity
-from wearcheck.cases.result import scar_radius
 from wearcheck.numerics import cycle_jumping
 
 from . import track
@@ -176,29 +175,12 @@ def observer(model: MovingModel, middle: int, ring=None):
 
     def add(s, f, H, c):
         w = f - model.f0
-        hist["s"].append(s)
-        hist["force"].append(c.force)
-        hist["depth"].append(c.depth)
-        loaded = np.count_nonzero(c.pressure > model.tol * model.p_scale)
-        hist["contact_radius"].append(math.sqrt(loaded * area / math.pi))
-        hist["wear_center"].append(float(w[i0, i0]))
-        hist["wear_volume"].append(float(np.sum(w)) * area)
+        track.record_ball(hist, model, s, w, c.force, c.depth, c.pressure, c.iterations, y,
+                          i0, i0, ring)
         hist["wear_volume_counterface"].append(float(np.sum(H)) * area)
         hist["track_width"].append(track.track_width(y, H[middle]))
         hist["track_depth"].append(float(np.max(H[middle])))
         hist["track_area"].append(float(np.sum(H[middle])) * dx)
-        hist["scar_length"].append(track.track_width(y, w[:, i0]))
-        hist["scar_width"].append(track.track_width(y, w[i0, :]))
-        hist["max_pressure"].append(float(np.max(c.pressure)))
-        hist["cg_iterations"].append(c.iterations)
-        if ring is not None:
-            index, rings, radii = ring
-            inside = index < rings
-            total = np.bincount(index[inside], w[inside], minlength=rings)
-            count = np.maximum(np.bincount(index[inside], minlength=rings), 1)
-            hist["scar_radius"].append(scar_radius(radii, total / count))
-        else:
-            hist["scar_radius"].append(math.nan)
     return hist, add
 
 

@@ -253,6 +253,26 @@ def track_width(y: np.ndarray, groove: np.ndarray, threshold: float = SCAR_THRES
     return right + left
 
 
+def record_ball(hist: dict, model, s: float, w: np.ndarray, force: float, depth: float,
+                p: np.ndarray, iterations: int, y: np.ndarray, i: int, j: int, ring) -> None:
+    """Append the ball's history columns (both track models): force, depth, contact
+    radius (loaded pixels), central wear w[i, j], worn volume, scar along and across
+    the sliding, ring-averaged scar radius, peak pressure, CG iterations."""
+    area = model.op.spacing ** 2
+    hist["s"].append(s)
+    hist["force"].append(force)
+    hist["depth"].append(depth)
+    loaded = np.count_nonzero(p > model.tol * model.p_scale)
+    hist["contact_radius"].append(math.sqrt(loaded * area / math.pi))
+    hist["wear_center"].append(float(w[i, j]))
+    hist["wear_volume"].append(float(np.sum(w)) * area)
+    hist["scar_length"].append(track_width(y, w[:, j]))
+    hist["scar_width"].append(track_width(y, w[i, :]))
+    hist["scar_radius"].append(ring_scar_radius(ring, w))
+    hist["max_pressure"].append(float(np.max(p)))
+    hist["cg_iterations"].append(iterations)
+
+
 def run(model: TrackModel, plan: stepping.Plan, progress=None, *, y=None, ring=None,
         watch=None) -> dict:
     """Step both bodies' wear from the unworn state as ``plan`` says.
@@ -263,7 +283,6 @@ def run(model: TrackModel, plan: stepping.Plan, progress=None, *, y=None, ring=N
     ``scar_length`` and ``scar_width``, read as :func:`track_width`), the stages (s, f, p, gap, depth, groove) and counters.
     """
     n = model.op.n
-    area = model.op.spacing**2
     dy = model.op.spacing
     y = np.arange(n) * dy if y is None else y
     i0, j0 = model.centre
@@ -280,25 +299,14 @@ def run(model: TrackModel, plan: stepping.Plan, progress=None, *, y=None, ring=N
 
     def record(st, s, reached):
         w = st.f - model.f0
-        hist["s"].append(s)
-        hist["force"].append(st.force)
-        hist["depth"].append(st.depth)
-        loaded = np.count_nonzero(st.p > model.tol * model.p_scale)
-        hist["contact_radius"].append(math.sqrt(loaded * area / math.pi))
-        hist["wear_center"].append(float(w[i0, j0]))
-        hist["wear_volume"].append(float(np.sum(w)) * area)
+        record_ball(hist, model, s, w, st.force, st.depth, st.p, st.iterations, y, i0, j0, ring)
         section = float(np.sum(st.groove)) * dy
         hist["wear_volume_counterface"].append(section * model.pass_length)
         hist["track_area"].append(section)
         hist["track_width"].append(track_width(y, st.groove))
         hist["track_depth"].append(float(np.max(st.groove)))
-        hist["scar_length"].append(track_width(y, w[:, j0]))
-        hist["scar_width"].append(track_width(y, w[i0, :]))
-        hist["max_pressure"].append(float(np.max(st.p)))
         column[0] = max(column[0], float(np.max(st.p.sum(axis=0))))
-        hist["cg_iterations"].append(st.iterations)
         hist["complementarity_residual"].append(st.residual)
-        hist["scar_radius"].append(ring_scar_radius(ring, w))
         if watch is not None:
             watch(s, hist["contact_radius"][-1], hist["scar_radius"][-1])
         for _ in range(reached):
