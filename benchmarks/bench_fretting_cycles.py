@@ -95,13 +95,16 @@ def worker(kind: str, cycles: int, rev: str, tol: float, write: str | None) -> d
     """One run in this (fresh) process; a JSON line on stdout."""
     from wearcheck.cases import reference_fretting as rf
 
+    from bench_fretting import every_cycle_unlimited   # benchmarks/ is on the path
+
     if kind == "old":
         solver = baseline_module(rev)
     else:
         from wearcheck.mdr import fretting as solver
     case = load_case(cycles, tol)
     cpu = time.process_time()
-    res = solver.solve(case)
+    with every_cycle_unlimited():   # --write-every-cycle: 10⁵ cycles, 5–20 minutes
+        res = solver.solve(case)
     cpu = time.process_time() - cpu
     h = res.history
     c, d = float(h["stick_radius"][-1]), float(h["depth"][-1])
@@ -145,6 +148,9 @@ def main():
     ap.add_argument("--worker", choices=("ros2", "old"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     counts = [int(float(c)) for c in args.cycles.split(",")]
+    if args.every_cycle and not Path(args.every_cycle).is_file():
+        ap.error(f"--every-cycle {args.every_cycle}: no such file (write it with "
+                 f"--write-every-cycle {args.every_cycle})")
     if args.worker:
         row = worker(args.worker, counts[0], args.baseline_rev, load_tol(), None)
         print(json.dumps(row))

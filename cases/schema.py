@@ -372,9 +372,13 @@ class Fretting:
                               "docs/fretting.md §5) is refused, naming the number that "
                               "would do")
     jump_tolerance: float = key(0.02, unit="1", minimum=0.0, maximum=1.0, open_maximum=True,
-                                doc="cycle jumping: a jump over many cycles is accepted when "
-                                    "the wear per cycle changed by at most 2·jump_tolerance "
-                                    "(relative, max norm) across it; 0 simulates every cycle")
+                                doc="cycle jumping (ROS2 on the wear per simulated cycle, "
+                                    "docs/fretting.md §4): the estimated error of the worn "
+                                    "profile against the run that simulates every cycle, "
+                                    "held at this fraction of the largest wear and reported "
+                                    "in meta.json (info.cycle_jumping.error_estimate); 0 "
+                                    "simulates every cycle (refused when that would take "
+                                    "more than ten minutes)")
     stage_cycles: tuple[float, ...] | None = key(None, unit="1", minimum=0.0, multiple_of=1,
                                                  why="cycle numbers",
                                                  doc="cycle numbers (increasing integers) at "

@@ -752,8 +752,17 @@ def _solve(case, progress=None) -> RunResult:
                 jump_tolerance=fr.jump_tolerance, stage_cycles=stg["cycles"].tolist(),
                 gross_slip_displacement_unworn=u_star, cycle_jumping=out["jumping"],
                 increment_wear_number_limit=WEAR_NUMBER_LIMIT, **out["counters"])
-    if watch.remarks:
-        info["warnings"] = watch.remarks
+    remarks = list(watch.remarks)
+    if K and stg["cycles"][-1] < fr.cycles:
+        # an explicit list that ends early (the shipped case's, run longer with
+        # --set fretting.cycles=...): the final profile would be in no output
+        remarks.append(f"the stored stages end at cycle {int(stg['cycles'][-1])} of "
+                       f"fretting.cycles = {fr.cycles}: stages.npz holds no profile, "
+                       "pressure or shear traction after it; add the last cycle to "
+                       "fretting.stage_cycles (or leave the key out: its default ends "
+                       "at the last cycle)")
+    if remarks:
+        info["warnings"] = remarks
     loops = out["loops"]
     fields = None
     if loops["cycles"]:

@@ -212,3 +212,22 @@ def test_the_bem_refusal_of_fretting_does_not_deny_its_tangential_solver():
     assert hasattr(importlib.import_module("wearcheck.bem.tangential"), "__file__")
     reason = registry.get("bem").supports(cases.load(cases.shipped("fretting")))
     assert "bem.tangential" in reason and "does not solve" not in reason and "MDR" in reason
+
+
+def test_stages_that_end_before_the_last_cycle_are_remarked_on():
+    # the shipped case run longer (--set fretting.cycles=1e8) kept its stages
+    # 0 ... 10⁵: the final worn profile was in no output, and nothing said so
+    import warnings
+    import wearcheck
+    base = {"mdr.elements": 100, "fretting.cycles": 40}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        short = wearcheck.solve(wearcheck.load_case(
+            "fretting", dict(base, **{"fretting.stage_cycles": [0, 10]})), "mdr")
+        full = wearcheck.solve(wearcheck.load_case(
+            "fretting", dict(base, **{"fretting.stage_cycles": [0, 10, 40]})), "mdr")
+    said = [w for w in short.info.get("warnings", []) if "stored stages end" in w]
+    assert len(said) == 1
+    assert "cycle 10 of fretting.cycles = 40" in said[0] and "fretting.stage_cycles" in said[0]
+    assert not [w for w in full.info.get("warnings", []) if "stored stages end" in w]
+    assert full.history["cycles"][-1] == 40 and len(full.stages["s"]) == 3

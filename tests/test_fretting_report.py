@@ -89,3 +89,32 @@ def test_force_controlled_tangential_loading_is_checked_too(tmp_path):
     assert f"refused above {fretting.WEAR_NUMBER_LIMIT}" in text
     assert 0.0 < result.info["increment_wear_number"] <= fretting.WEAR_NUMBER_LIMIT
     assert (path / "fretting_loops.png").stat().st_size > 1000
+
+
+def test_the_report_states_the_cycle_jumping_error_estimate_of_meta_json(run):
+    # the estimate a user is told about (docs/fretting.md §4; the key's doc in the
+    # schema names where it is) is the one in meta.json, and within the tolerance
+    import re
+    from wearcheck.cases import schema
+    case, result, path = run
+    meta = json.loads((path / "meta.json").read_text())
+    estimate = meta["info"]["cycle_jumping"]["error_estimate"]
+    assert 0.0 < estimate <= case.fretting.jump_tolerance
+    text = (path / "report.md").read_text()
+    said = re.search(r"estimated error against every cycle simulated ([0-9.e+-]+) of the "
+                     r"largest wear", text)
+    assert said is not None, text[:600]
+    assert float(said.group(1)) == pytest.approx(estimate, rel=0.05)   # printed to 2 digits
+    doc = dict(schema.section_fields("fretting"))["jump_tolerance"].metadata["doc"]
+    assert "info.cycle_jumping.error_estimate" in doc
+    assert "2·jump_tolerance" not in doc     # the forward-Euler jumps' criterion, removed
+
+
+def test_a_run_without_cycle_jumping_says_so(tmp_path):
+    case = wearcheck.load_case("fretting", {"fretting.cycles": 6, "mdr.elements": 100,
+                                            "fretting.jump_tolerance": 0,
+                                            "fretting.stage_cycles": [0, 6]})
+    path = wearcheck.solve(case, "mdr").write(tmp_path / "run")
+    text = (path / "report.md").read_text()
+    assert "every cycle simulated: 6" in text
+    assert "cycle jumping" not in text

@@ -80,7 +80,7 @@ class Result:
         sliding distance, radii, worn profile and pressure at the stored stages.
     fields : the solver's own arrays (FEM: mesh, displacement, stress), or None.
     info : what the solver reports about its run (steps, step size, grid, ...).
-    solve_seconds : time in the solver proper.
+    solve_seconds : wall-clock time in the solver proper.
     path : the run directory, once written or when read from one.
     meta : its meta.json (provenance, scales, data dictionary), when read from one;
         for a certified reference (:func:`reference`), how it was made.

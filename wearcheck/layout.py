@@ -63,7 +63,8 @@ META = (
     Item("solver", "", "the solver's registry name"),
     Item("scales", "", "E_star, G_star [Pa], a0, d0 [m], F0 [N], p0 [Pa], s_hat_per_m [1/m]: "
                        "the unworn contact of the case's profile under its load"),
-    Item("solve_seconds", "s", "time in the solver proper"),
+    Item("solve_seconds", "s", "wall-clock time in the solver proper (the machine's load "
+                               "counts in it; no CPU time is recorded)"),
     Item("stages_requested_s_hat", "", "the stages the case asked for"),
     Item("stages_reached", "", "how many of them the run stored"),
     Item("warnings", "", "remarks on the case and the run (e.g. elastic similarity violated, "
@@ -294,7 +295,7 @@ _TASK_COLUMNS = (
     Item("status", "", "ok, or the run's error"),
     Item("wall_seconds", "s", "wall time of the task in its worker (case, solve; not writing)"),
     Item("cpu_seconds", "s", "CPU time of the task in its worker"),
-    Item("solve_seconds", "s", "time in the solver proper"),
+    Item("solve_seconds", "s", "wall-clock time in the solver proper"),
     Item("peak_rss_mb", "MB", "worker process RSS, sampled every 10 ms during the task"),
     Item("steps", "", "steps the run took"),
 )

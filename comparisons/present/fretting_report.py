@@ -133,6 +133,21 @@ def _figures(directory: Path, case, result, checks) -> list[str]:
     return names
 
 
+def _cycles_done(fr, info) -> str:
+    """How the cycles were done: every one simulated, or by cycle jumping with the
+    error estimate that meta.json reports (docs/fretting.md §4)."""
+    simulated = info.get("simulated_cycles", "?")
+    if fr.jump_tolerance == 0:
+        return f"every cycle simulated: {simulated}"
+    text = (f"{simulated} simulated, the rest by cycle jumping at "
+            f"fretting.jump_tolerance = {fr.jump_tolerance:g}")
+    estimate = info.get("cycle_jumping", {}).get("error_estimate")
+    if estimate is not None:
+        text += (f"; estimated error against every cycle simulated {estimate:.2g} of the "
+                 "largest wear, info.cycle_jumping in meta.json")
+    return text
+
+
 def write(directory, case, result) -> list[Path]:
     """Write ``report.md``, ``report.html`` and the fretting figures into a run
     directory; nothing for a case without a ``[fretting]`` section."""
@@ -151,8 +166,7 @@ def write(directory, case, result) -> list[Path]:
     blocks = [R.heading("Fretting run"),
               R.para(f"Case file: {case.source}. {case.indenter.profile}, "
                      f"{case.loading.control} control, {load}, {fr.cycles:g} cycles "
-                     f"({result.info.get('simulated_cycles', '?')} simulated, the rest by "
-                     f"cycle jumps at tolerance {fr.jump_tolerance:g}). u* = "
+                     f"({_cycles_done(fr, result.info)}). u* = "
                      f"{checks['u_star']:.4g} m"
                      + (f" ({checks['regime']})." if "regime" in checks else "."))]
     rows = [["energy–wear identity max |V − (k/σ0)W| / max V", fmt(
