@@ -24,7 +24,7 @@ from pathlib import Path
 
 import pytest
 
-from wearcheck import outputs
+from wearcheck import outputs, temporaries
 
 def _payload(out: Path, payload: str) -> None:
     with outputs.atomic_directory(out, "run") as tmp:
@@ -314,15 +314,15 @@ def test_only_the_temporary_files_of_dead_writers_of_this_host_are_removed(tmp_p
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
     names = {
-        "dead": outputs._temporary(tmp_path, "sweep.csv", ".csv").name.replace(
+        "dead": temporaries.new(tmp_path, "sweep.csv", ".csv").name.replace(
             f"-{os.getpid()}@", f"-{dead.pid}@"),
-        "alive": outputs._temporary(tmp_path, "sweep.csv", ".csv").name,
+        "alive": temporaries.new(tmp_path, "sweep.csv", ".csv").name,
         "other host": f".sweep.csv.partial-{dead.pid}@00000000@abcdefgh.csv",
         "user": ".sweep.csv.partial-notes.csv",
     }
     for name in names.values():
         (tmp_path / name).write_text("x")
-    assert outputs.remove_dead_temporaries(tmp_path) == [tmp_path / names["dead"]]
+    assert temporaries.remove_dead(tmp_path) == [tmp_path / names["dead"]]
     assert {p.name for p in tmp_path.iterdir()} >= {names["alive"], names["other host"],
                                                     names["user"]}
     assert not (tmp_path / names["dead"]).exists()
