@@ -900,6 +900,33 @@ def _copy_attributes(path: Path, tmp: Path) -> None:
                         follow_symlinks=False)
 
 
+#: sets to which :func:`atomic_directory` adds the name of each directory it builds
+#: an output in (:func:`watching_builds`)
+_BUILD_WATCHERS: list[set] = []
+
+
+@contextlib.contextmanager
+def watching_builds():
+    """Collect the names of the hidden directories :func:`atomic_directory` builds
+    outputs in while inside; :func:`installed_from` then tells whether a path holds,
+    complete, one of them (the command line: an interrupt that came after its output
+    was in place says so)."""
+    names: set = set()
+    _BUILD_WATCHERS.append(names)
+    try:
+        yield names
+    finally:
+        _BUILD_WATCHERS.remove(names)
+
+
+def installed_from(path, names) -> bool:
+    """Whether ``path`` holds a complete output built in one of the hidden directories
+    ``names`` (its marker names the directory it was built in)."""
+    marker = read_marker(Path(path))
+    return marker is not None and marker.get("complete") is True \
+        and marker.get("built_in") in names
+
+
 @contextlib.contextmanager
 def atomic_directory(path, kind: str = "run"):
     """Yield a fresh temporary directory that replaces ``path`` on success.
@@ -915,6 +942,8 @@ def atomic_directory(path, kind: str = "run"):
     recover(path)
     occupant = _directory_stat(path)
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
+    for names in list(_BUILD_WATCHERS):
+        names.add(tmp.name)
     handed_over = False
     try:
         os.chmod(tmp, 0o777 & ~temporaries.umask())  # mkdtemp: 0700; outputs are shared
