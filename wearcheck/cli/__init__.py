@@ -272,7 +272,13 @@ def _after_output(args, built) -> str:
 
 
 def main(argv=None) -> int:
-    program = argv is None      # the process's own command line (the console script)
+    """Run the command ``argv`` (a list of words) and return its exit code.
+
+    Without ``argv`` it is the process's own command line (the console script,
+    ``python -m wearcheck``): once the command has ended, Ctrl-C is ignored for the
+    rest of the process (:func:`_closing`).
+    """
+    program = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser({_command(argv)})
     args, extra = parser.parse_known_args(argv)
@@ -334,10 +340,10 @@ def main(argv=None) -> int:
               "(a bug in wearcheck; WEARCHECK_TRACEBACK=1 shows where)", file=sys.stderr)
         return EXIT_INTERNAL
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
         if program:
             _closing()     # (an error's exit as well)
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":
