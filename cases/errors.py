@@ -117,9 +117,11 @@ def warn_once(kind: str, text: str) -> None:
             return
         _SAID.add(kind)
     try:
-        # (no registry: the record above says it once; Python's would be reset)
+        # (no registry: the record above says it once; Python's would be reset. No
+        # module_globals: their loader is asked for the source, and that of a
+        # `python -c` program raises ImportError; the line is read by file name)
         warnings.warn_explicit(text, RunWarning, frame.f_code.co_filename, frame.f_lineno,
-                               module=module, registry=None, module_globals=frame.f_globals)
+                               module=module, registry=None)
     except BaseException:
         with _SAID_LOCK:
             _SAID.discard(kind)

@@ -254,3 +254,16 @@ def test_the_yield_warning_is_said_once_per_process_from_several_threads(fresh):
     assert len(results) == 6
     assert all(sum("onset of yield" in w for w in r.warnings) == 1 for r in results)
 
+
+
+def test_a_remark_said_once_reaches_a_program_given_with_python_c(fresh):
+    """The first caller outside wearcheck may be a ``python -c`` program, whose module
+    has the built-in importer as its loader, which raises ImportError when asked for
+    the source (warnings.warn_explicit asks it when handed the module's globals)."""
+    import importlib.machinery
+    program = {"__name__": "__main__", "__loader__": importlib.machinery.BuiltinImporter,
+               "errors": errors}
+    with pytest.warns(RunWarning, match="^a probe remark$") as caught:
+        exec(compile("errors.warn_once('probe', 'a probe remark')", "<string>", "exec"),
+             program)
+    assert caught[0].filename == "<string>" and caught[0].lineno == 1
