@@ -257,8 +257,8 @@ def remark(remarks: list, text: str, once: str | None = None) -> None:
     """
     remarks.append(text)
     if once:
-        warn_once(once, text + " (said once per process; each run's own is in its "
-                  "warnings, Result.warnings and meta.json)")
+        warn_once(once, text + " (said once per process; each run keeps it in "
+                  "Result.warnings and meta.json)")
     else:
         warnings.warn(text, RunWarning, stacklevel=_caller_level())
 
