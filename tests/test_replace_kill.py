@@ -205,6 +205,9 @@ def _cli_signalled(step, exchange, signum, argv, err: Path):
     from wearcheck.cli import main as cli_main
     if not exchange:
         renames._RENAMEAT2 = None
+    # Python's Ctrl-C handler, which it does not install where SIGINT came ignored
+    # (pytest started by a non-interactive shell's `&`): the test then failed there
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
     def hook(name):
         if name == step:
