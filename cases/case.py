@@ -21,7 +21,7 @@ from .schema import (BEMSettings, CCXSettings, did_you_mean, OPTIONAL_SECTIONS, 
                      section_fields, toml_string)
 from . import both_bodies
 from . import reference
-from .errors import RunWarning
+from .errors import warn_once
 
 
 @dataclass(frozen=True)
@@ -474,9 +474,6 @@ def _similarity_note(case: Case) -> str:
     return text + "."
 
 
-#: the notes issued through :mod:`warnings` in this process (each kind once)
-_NOTED: set[str] = set()
-
 #: the friction coefficient above which a case gets a remark (not refused): dry
 #: metal pairs in air slide at μ ≈ 0.1-1 (steel on steel 0.6-0.8, aluminium on steel
 #: up to about 1.2); μ well above 1 means adhesion and junction growth (clean metals in
@@ -529,22 +526,8 @@ def _warnings(case: Case) -> tuple[str, ...]:
         if not note:
             continue
         out.append(note)
-        if kind not in _NOTED:
-            _NOTED.add(kind)
-            import warnings
-            warnings.warn(note + " (said once per process; each case's own is in "
-                          "case.warnings)", RunWarning, stacklevel=_outside_wearcheck())
+        warn_once(kind, note + " (said once per process; each case's own is in case.warnings)")
     return tuple(out)
-
-
-def _outside_wearcheck() -> int:
-    """The stack level of the first caller outside the wearcheck package (the user's
-    line, whichever of load_case, derive or a study loaded the case)."""
-    import sys
-    frame, level = sys._getframe(2), 2   # (the caller of warnings.warn's caller)
-    while frame is not None and frame.f_globals.get("__name__", "").split(".")[0] == "wearcheck":
-        frame, level = frame.f_back, level + 1
-    return level
 
 
 # --------------------------------------------------------------------------

@@ -1,8 +1,13 @@
-"""Exceptions shared by every part of wearcheck.
+"""Exceptions shared by every part of wearcheck, and the remarks on a run (:class:`RunWarning`).
 
-They carry a message meant for the user; the command line prints it without a
-traceback and exits non-zero.
+The exceptions carry a message meant for the user; the command line prints it
+without a traceback and exits non-zero.
 """
+
+
+import sys
+import threading
+import warnings
 
 
 class WearcheckError(Exception):
@@ -80,3 +85,54 @@ class RunWarning(UserWarning):
     records it in the run's ``info["warnings"]`` (so ``meta.json`` has it) and
     the command line prints it as a ``note:`` line.
     """
+
+
+#: the kinds of remark said through :mod:`warnings` in this process (:func:`warn_once`)
+_SAID: set[str] = set()
+_SAID_LOCK = threading.Lock()
+
+
+def warn_once(kind: str, text: str) -> None:
+    """Issue ``text`` as a :class:`RunWarning` the first time a remark of ``kind`` is
+    made in this process, pointing at the first caller outside wearcheck.
+
+    Once per process whatever the thread: the record is wearcheck's own, not Python's
+    warnings registry, which forgets what it said whenever any code enters
+    ``warnings.catch_warnings`` (libraries and test harnesses do, in every thread).
+    A remark that the filters ignore where it is made (the command line prints
+    remarks as note lines; a fit's forward runs) is not used up; one they make an
+    error is raised every time.
+    """
+    frame = sys._getframe(1)
+    while frame is not None and \
+            str(frame.f_globals.get("__name__", "")).split(".")[0] == "wearcheck":
+        frame = frame.f_back
+    if frame is None:
+        frame = sys._getframe(1)
+    module = frame.f_globals.get("__name__", "<string>")
+    if _action(text, module, frame.f_lineno) == "ignore":
+        return
+    with _SAID_LOCK:
+        if kind in _SAID:
+            return
+        _SAID.add(kind)
+    try:
+        # (no registry: the record above says it once; Python's would be reset. No
+        # module_globals: their loader is asked for the source, and that of a
+        # `python -c` program raises ImportError; the line is read by file name)
+        warnings.warn_explicit(text, RunWarning, frame.f_code.co_filename, frame.f_lineno,
+                               module=module, registry=None)
+    except BaseException:
+        with _SAID_LOCK:
+            _SAID.discard(kind)
+        raise
+
+
+def _action(text: str, module: str, lineno: int) -> str:
+    """The action of the first of :data:`warnings.filters` that a RunWarning ``text``
+    issued from ``module`` at ``lineno`` matches (as :func:`warnings.warn_explicit` finds it)."""
+    for action, message, category, mod, line in warnings.filters:
+        if (message is None or message.match(text)) and issubclass(RunWarning, category) \
+                and (mod is None or mod.match(module)) and line in (0, lineno):
+            return action
+    return warnings.defaultaction

@@ -17,7 +17,8 @@ Every solver calls :func:`check_planned` before its run and a
   sphere) the run warns once (:class:`RunWarning`) and goes on.
 * **elasticity stretched.** Every solver takes the bodies as elastic. When
   the unworn contact's peak pressure passes the onset of yield estimated from
-  ``wear.hardness`` (:func:`yield_remark`) the run warns once, the same way.
+  ``wear.hardness`` (:func:`yield_remark`) every run keeps the remark; the
+  :class:`RunWarning` is said once per process, as the case's own notes.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import profiles, reference
-from .errors import CaseError, RunWarning
+from .errors import CaseError, RunWarning, warn_once
 
 #: largest slope of the unworn surface at the edge of the contact or scar
 #: within which half-space theory is taken to hold: a/R = 0.1 on a paraboloid,
@@ -172,9 +173,9 @@ class BodyWatch:
     (the solver's node or pixel spacing: its contact radius is read between
     nodes, the BEM's from the area in contact), and issues one
     :class:`RunWarning` per run when the unworn surface's slope at the outer of
-    the two passes :data:`HALF_SPACE_SLOPE`, and one at the first step when the
-    peak pressure passes the yield estimate (:func:`yield_remark`);
-    ``watch.remarks`` holds their texts for the run's ``info["warnings"]``
+    the two passes :data:`HALF_SPACE_SLOPE`, and at the first step, when the
+    peak pressure passes the yield estimate (:func:`yield_remark`), one per
+    process; ``watch.remarks`` holds their texts for the run's ``info["warnings"]``
     (:func:`remark`).
     """
 
@@ -203,7 +204,7 @@ class BodyWatch:
             self.started = True
             plastic = yield_remark(self.case)
             if plastic:
-                remark(self.remarks, plastic)
+                remark(self.remarks, plastic, once="yield")
         if not radii:
             return
         what = max(radii, key=radii.get)     # (the contact where the two are equal)
@@ -243,16 +244,23 @@ class BodyWatch:
             f"the worn body stops being the case's sphere; {remedy}")
 
 
-def remark(remarks: list, text: str) -> None:
+def remark(remarks: list, text: str, once: str | None = None) -> None:
     """Issue ``text`` as a :class:`RunWarning` and keep it in ``remarks`` (a run's info["warnings"]).
 
     The warning reaches a Python caller; the list reaches meta.json, the
     reports and the command line's ``note:`` lines (which ignore Python
-    warnings), also from Dask workers. No global warning state is touched, so
-    runs in several threads keep their remarks apart.
+    warnings), also from Dask workers. Runs in several threads keep their
+    remarks apart. ``once``: a remark on the case rather than on this run's
+    course (the yield estimate), said through :mod:`warnings` once per process
+    under that kind (:func:`~wearcheck.cases.errors.warn_once`, as the case's
+    own notes); every run keeps it in ``remarks``.
     """
     remarks.append(text)
-    warnings.warn(text, RunWarning, stacklevel=_caller_level())
+    if once:
+        warn_once(once, text + " (said once per process; each run keeps it in "
+                  "Result.warnings and meta.json)")
+    else:
+        warnings.warn(text, RunWarning, stacklevel=_caller_level())
 
 
 def _caller_level() -> int:

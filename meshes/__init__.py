@@ -21,14 +21,10 @@ Meshes are written to a cache directory (``$WEARCHECK_CACHE`` or
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import math
 import os
-import platform
-import re
-import tempfile
 import threading
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -37,6 +33,7 @@ import numpy as np
 
 from wearcheck.cases import CaseError, SolverError, reference
 from wearcheck.extras import need
+from wearcheck import temporaries
 
 #: bump when the geometry or meshing recipe changes (invalidates the cache)
 RECIPE = 1
@@ -180,60 +177,11 @@ def _generate(params: SphereMeshParameters, msh_path: Path) -> dict:
     return arrays
 
 
-#: a temporary file of :func:`atomic_save`: '.STEM.PID@HOST.XXXXXXXX.SUFFIX'
-_TEMPORARY = re.compile(r"^\.[^/]+\.(\d+)@([0-9a-f]{8})\.[^./]+\.[^./]+$")
-
-
-def _host_tag() -> str:
-    """8 hex digits naming this host in a temporary file's name."""
-    return hashlib.sha256(platform.node().encode("utf-8", "replace")).hexdigest()[:8]
-
-
-def _gone(pid: int) -> bool:
-    """Whether process ``pid`` of this host has ended."""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    except OSError:           # alive, another user's
-        return False
-    return False
-
-
-def remove_dead_temporaries(directory: Path) -> list[Path]:
-    """Remove the temporary files of :func:`atomic_save` in ``directory`` that a
-    process of this host left when it was killed (gmsh writing a mesh for minutes);
-    those of running writers, and of other hosts sharing the cache, are kept."""
-    removed = []
-    try:
-        entries = list(os.scandir(directory))
-    except OSError:
-        return removed
-    for e in entries:
-        m = _TEMPORARY.match(e.name)
-        if m and m.group(2) == _host_tag() and _gone(int(m.group(1))):
-            with contextlib.suppress(OSError):
-                if e.is_file(follow_symlinks=False):
-                    os.unlink(e.path)
-                    removed.append(Path(e.path))
-    return removed
-
-
 def atomic_save(path: Path, write) -> None:
     """Write ``path`` through a temporary file in its directory, then rename (caches use
-    it). The temporary's name says which process writes it: what a killed writer left is
-    removed by the next save into the directory (:func:`remove_dead_temporaries`)."""
-    remove_dead_temporaries(path.parent)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.{os.getpid()}@{_host_tag()}.",
-                               suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        write(Path(tmp))
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    finally:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
+    it). The temporary's name says which process writes it: what a killed writer left
+    anywhere in the cache is removed first (:mod:`wearcheck.temporaries`)."""
+    temporaries.atomic_write(path, write, mode=0o644, clean="all")
 
 
 def _from_arrays(arrays, params, path) -> SphereMesh:

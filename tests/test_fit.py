@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import wearcheck
-from wearcheck.cases import CaseError, RunWarning, reference
+from wearcheck.cases import CaseError, RunWarning, errors, reference
 from wearcheck.comparisons.analysis import fitting
 from wearcheck.cli import main as cli_main
 from wearcheck.studies import fit as fit_study
@@ -214,7 +214,8 @@ def test_the_verdict_fails_on_a_different_wear_law(tmp_path, case, model, truth,
 
 # -- the run's remarks over the measured range --------------------------------------------
 
-def test_the_fitted_scar_past_half_space_theory_and_a_soft_ball_are_said_once(case, model):
+def test_the_fitted_scar_past_half_space_theory_and_a_soft_ball_are_said_once(case, model,
+                                                                              monkeypatch):
     """The fit hands the fitted model's scar at each measured distance to the watch every
     run has (cases/validity.py): at K_TRUE the scars stay within b/R = 0.055 (no remark);
     at 40 K_TRUE they pass the unworn sphere's slope 0.1, r/√(R² − r²) > 0.1, first at a
@@ -238,6 +239,7 @@ def test_the_fitted_scar_past_half_space_theory_and_a_soft_ball_are_said_once(ca
     assert f"s = {S[first]:.4g} m" in remarks[0]
     p0 = reference.scales(case)["p0"]
     soft = case.derive({"wear.hardness": 3 * p0 / 1.6 * 0.9})
+    monkeypatch.setattr(errors, "_SAID", set())     # (said once per process)
     with pytest.warns(RunWarning, match="onset of yield"):
         remarks = fit_study._validity_remarks(soft, curves, data, quiet, c)
     assert len(remarks) == 1 and "onset of yield" in remarks[0]

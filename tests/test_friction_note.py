@@ -15,13 +15,13 @@ import warnings
 import pytest
 
 import wearcheck
-from wearcheck.cases import CaseError, RunWarning, case as case_module
+from wearcheck.cases import CaseError, RunWarning, case as case_module, errors
 
 
 @pytest.fixture
 def fresh(monkeypatch):
     """A process that has not said the notes yet."""
-    monkeypatch.setattr(case_module, "_NOTED", set())
+    monkeypatch.setattr(errors, "_SAID", set())
 
 
 def _load(mu):

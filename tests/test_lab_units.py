@@ -12,7 +12,7 @@ import pytest
 import wearcheck
 from wearcheck import cases
 from wearcheck.cases import CaseError, reference
-from wearcheck.cases import RunWarning, validity
+from wearcheck.cases import RunWarning, errors, validity
 from wearcheck.cli import main as cli_main
 
 BALL = cases.shipped("ball_on_flat")   # k = 2e-5, μ = 0.3, σ0 = 6 GPa: K = 1e-15 m³/(N·m)
@@ -156,11 +156,17 @@ def test_two_forms_of_stages_in_one_file_are_one_error():
 
 # -- the warning past a yield estimate ----------------------------------------
 
-def test_peak_pressure_past_the_yield_estimate_warns_once_per_run():
-    """The yield remark goes the way of the half-space remark (cases/validity.py): one
-    RunWarning at the run's first recorded step, kept in the watch's remarks (the run's
-    info["warnings"], meta.json, the note lines), not repeated, and not in the way of
-    the half-space remark."""
+@pytest.fixture
+def fresh(monkeypatch):
+    """A process that has said no remark through warnings yet."""
+    monkeypatch.setattr(errors, "_SAID", set())
+
+
+def test_peak_pressure_past_the_yield_estimate_warns_once(fresh):
+    """The yield remark is checked where the half-space remark is (cases/validity.py):
+    one RunWarning at the run's first recorded step, kept in the watch's remarks (the
+    run's info["warnings"], meta.json, the note lines), not repeated, and not in the
+    way of the half-space remark."""
     # ball_on_flat: p0 = 0.94 GPa. The estimate: onset of yield at p0 = 1.6 Y, Y = H/3
     case = ball()
     p0 = reference.scales(case)["p0"]
@@ -199,3 +205,65 @@ def test_the_cli_prints_the_yield_note_once(tmp_path, capsys):
     assert err.count("passes the onset of yield") == 1
     meta = json.loads((out / "meta.json").read_text())
     assert sum("onset of yield" in w for w in meta["warnings"]) == 1
+
+
+def test_the_yield_warning_is_said_once_per_process_from_several_threads(fresh):
+    """The API from several threads, each of which (as libraries and test harnesses
+    do) enters warnings.catch_warnings before it solves: the yield RunWarning once in
+    the process, as the case's own notes (before: once per thread, since entering
+    catch_warnings resets Python's record of what it said), and every run keeps its
+    remark. A filter that ignores it (the command line, a fit's forward runs) does
+    not use it up; one that makes it an error raises it every time."""
+    import threading
+    hertz = wearcheck.load_case("hertz", {"mdr.elements": 40})   # p0 1.47 > 1.07 GPa
+    assert validity.yield_remark(hertz)
+    results = []
+
+    def solve(barrier=None):
+        if barrier is not None:
+            barrier.wait()
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", category=DeprecationWarning)
+        results.append(wearcheck.solve(hertz, "mdr"))
+
+    def yields(caught):
+        return [w for w in caught if issubclass(w.category, RunWarning)
+                and "onset of yield" in str(w.message)]
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("ignore", RunWarning)
+        wearcheck.solve(hertz, "mdr")                       # ignored: not used up
+        warnings.simplefilter("error", RunWarning)
+        for _ in range(2):
+            with pytest.raises(RunWarning, match="onset of yield"):
+                wearcheck.solve(hertz, "mdr")
+        warnings.resetwarnings()
+        warnings.simplefilter("default")                    # Python's default for it
+        for _ in range(3):                                  # one thread after another
+            thread = threading.Thread(target=solve)
+            thread.start()
+            thread.join()
+        barrier = threading.Barrier(3)                      # three at once
+        threads = [threading.Thread(target=solve, args=(barrier,)) for _ in range(3)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+    said = yields(caught)
+    assert len(said) == 1 and "said once per process" in str(said[0].message)
+    assert len(results) == 6
+    assert all(sum("onset of yield" in w for w in r.warnings) == 1 for r in results)
+
+
+
+def test_a_remark_said_once_reaches_a_program_given_with_python_c(fresh):
+    """The first caller outside wearcheck may be a ``python -c`` program, whose module
+    has the built-in importer as its loader, which raises ImportError when asked for
+    the source (warnings.warn_explicit asks it when handed the module's globals)."""
+    import importlib.machinery
+    program = {"__name__": "__main__", "__loader__": importlib.machinery.BuiltinImporter,
+               "errors": errors}
+    with pytest.warns(RunWarning, match="^a probe remark$") as caught:
+        exec(compile("errors.warn_once('probe', 'a probe remark')", "<string>", "exec"),
+             program)
+    assert caught[0].filename == "<string>" and caught[0].lineno == 1

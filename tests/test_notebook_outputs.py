@@ -87,6 +87,66 @@ def test_netcdf_into_a_missing_directory_is_one_clear_error(result, tmp_path):
     assert not (tmp_path / "nowhere").exists()
 
 
+_NETCDF_WRITER = """
+import sys, time
+from pathlib import Path
+import xarray
+import wearcheck
+def blocked(ds, path, **kw):       # half the file written, then the writer waits
+    Path(path).write_bytes(b"CDF half a file")
+    Path(sys.argv[2]).write_text("writing")
+    time.sleep(120)
+xarray.Dataset.to_netcdf = blocked
+result = wearcheck.solve(wearcheck.load_case("hertz", {"mdr.elements": 40}), "mdr")
+result.to_netcdf(sys.argv[1])
+"""
+
+
+def test_netcdf_temporaries_of_killed_writers_are_removed_those_of_live_ones_kept(
+        result, tmp_path):
+    """Two writers of the same netCDF path stopped mid-write: one killed (SIGKILL, no
+    clean-up runs), one still at work. The next write removes the killed one's hidden
+    temporary (before, '.run.nc.XXXX.partial' stayed for ever) and leaves the live
+    one's, as the mesh cache does (wearcheck.temporaries). The file gets the
+    permissions of a new file (mkstemp's 0600 before)."""
+    import os
+    import signal
+    import stat
+    import subprocess
+    import time
+    path = tmp_path / "run.nc"
+    writers = {}
+    for name in ("live", "dead"):
+        ready = tmp_path.parent / f"{tmp_path.name}-{name}.ready"
+        writers[name] = (subprocess.Popen([sys.executable, "-c", _NETCDF_WRITER, str(path),
+                                           str(ready)]), ready)
+    try:
+        deadline = time.monotonic() + 120
+        while not all(r.exists() for _, r in writers.values()):
+            assert time.monotonic() < deadline and all(p.poll() is None
+                                                       for p, _ in writers.values())
+            time.sleep(0.05)
+        dead = writers["dead"][0]
+        dead.send_signal(signal.SIGKILL)
+        assert dead.wait() == -signal.SIGKILL
+        left = {p.name for p in tmp_path.iterdir()}
+        assert len(left) == 2 and all(n.startswith(".run.nc.") for n in left), left
+        live = {n for n in left if f"-{writers['live'][0].pid}@" in n}
+        assert len(live) == 1, left
+        result.to_netcdf(path)
+        assert {p.name for p in tmp_path.iterdir()} == live | {"run.nc"}
+        mask = os.umask(0)
+        os.umask(mask)
+        assert stat.S_IMODE(path.stat().st_mode) == 0o666 & ~mask
+        with xr.open_dataset(path, engine="scipy") as ds:
+            np.testing.assert_array_equal(ds["force"].values, result.history["force"])
+    finally:
+        for proc, ready in writers.values():
+            proc.kill()
+            proc.wait()
+            ready.unlink(missing_ok=True)
+
+
 def test_plot_helpers_draw_into_the_given_axes(result):
     import matplotlib
     matplotlib.use("Agg")

@@ -24,7 +24,7 @@ from pathlib import Path
 
 import pytest
 
-from wearcheck import outputs
+from wearcheck import outputs, temporaries
 
 def _payload(out: Path, payload: str) -> None:
     with outputs.atomic_directory(out, "run") as tmp:
@@ -205,6 +205,9 @@ def _cli_signalled(step, exchange, signum, argv, err: Path):
     from wearcheck.cli import main as cli_main
     if not exchange:
         renames._RENAMEAT2 = None
+    # Python's Ctrl-C handler, which it does not install where SIGINT came ignored
+    # (pytest started by a non-interactive shell's `&`): the test then failed there
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
     def hook(name):
         if name == step:
@@ -241,6 +244,10 @@ def test_an_interrupt_at_each_step_leaves_the_old_or_the_new_run(tmp_path, excha
         said = err.read_text()
         assert "nothing incomplete was written" in said and "nothing was written" not in said
         before = step in ("built", "checked", "complete", "graveyard", "aside")
+        # once the new run is in place the message says so, naming it (before: the same
+        # words as for an interrupt that left the earlier run)
+        after = f"after its output was complete: '{out}' holds it, whole"
+        assert (after in said) == (not before), (step, said)
         left = [p.name for p in tmp_path.iterdir() if p.name != "out"]
         if step == "retiring":
             # interrupted while removing the old run (new one in place): what is left
@@ -254,6 +261,89 @@ def test_an_interrupt_at_each_step_leaves_the_old_or_the_new_run(tmp_path, excha
         assert Run(out).case.mdr.elements == (40 if before else 41), (step, signum)
         if not before:
             assert cli_main(argv + ["mdr.elements=40"]) == 0
+
+
+_PROGRAM = """
+import os, signal, sys
+from wearcheck import outputs
+from wearcheck.cli import main
+when, out = sys.argv[1], sys.argv[2]
+
+
+class AtClose:
+    def __del__(self):         # runs while the interpreter closes (its modules torn down)
+        os.kill(os.getpid(), signal.SIGINT)
+
+
+if when == "installed":          # the new run in place, its last messages not yet written
+    outputs.STEP_HOOK = lambda step: step in ("exchanged", "installed") and os.kill(
+        os.getpid(), signal.SIGINT)
+elif when == "closing":
+    at_close = AtClose()
+sys.argv = ["wearcheck", "run", "hertz", "--out", out, "--set", "mdr.elements=40"]
+code = main()                    # as the console script: sys.exit(main())
+if when == "returned":
+    os.kill(os.getpid(), signal.SIGINT)
+sys.exit(code)
+"""
+
+
+@pytest.mark.parametrize("when", ["installed", "returned", "closing"])
+def test_a_ctrl_c_once_the_run_is_in_place_is_said_in_one_line_or_ignored(tmp_path, when):
+    """Ctrl-C once the new run is installed, as the command (the console script's
+    ``sys.exit(main())``) finishes: while it writes its last lines, one line naming the
+    output, whole, and exit 130; after its last line, as main returns or while the
+    interpreter closes (about 0.2 s, with Ctrl-C at its default), it is ignored and the
+    command's own code stands. Before: a traceback, or the process ended by the signal
+    with no word. The child gets SIGINT's default disposition: started from a
+    non-interactive shell's ``&`` it would inherit it ignored."""
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-c", _PROGRAM, when, str(out)],
+                          capture_output=True, text=True, timeout=120,
+                          preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    assert "Traceback" not in proc.stderr, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    if when == "installed":
+        assert proc.returncode == 130, proc.stderr
+        assert lines[-1] == (f"wearcheck run: interrupted after its output was complete: "
+                             f"'{out}' holds it, whole; nothing incomplete was written")
+    else:
+        assert proc.returncode == 0, proc.stderr
+        assert lines[-1].startswith("mdr: ") and lines[-1].endswith(f"-> {out}")
+    from wearcheck.rundir import Run
+    assert Run(out).case.mdr.elements == 40          # the run, whole
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+def test_an_interrupt_once_the_comparison_is_in_place_names_it(tmp_path, monkeypatch,
+                                                                capsys):
+    """``compare`` the same way: Ctrl-C (here raised at the step that put the new
+    comparison in place) says the comparison directory is whole, exit 130."""
+    from wearcheck.cli import main as cli_main
+
+    def hook(step):
+        if step == "installed":
+            raise KeyboardInterrupt
+    monkeypatch.setattr(outputs, "STEP_HOOK", hook)
+    out = tmp_path / "cmp"
+    code = cli_main(["compare", "hertz", "--solvers", "mdr,bem", "--no-render", "--quiet",
+                     "--set", "mdr.elements=50", "--set", "bem.grid=32", "--out", str(out)])
+    assert code == 130
+    assert capsys.readouterr().err.strip().splitlines()[-1] == (
+        f"wearcheck compare: interrupted after its output was complete: '{out}' holds it, "
+        "whole; nothing incomplete was written")
+    assert _content_is_whole(out)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cmp"]
+
+
+def _content_is_whole(directory: Path) -> bool:
+    """Complete, and holding exactly the files its marker lists (nothing missing or added)."""
+    marker = outputs.read_marker(directory) or {}
+    listed = set(marker.get("files", {}))
+    present = {str(p.relative_to(directory)) for p in directory.rglob("*")
+               if p.name != outputs.OUTPUT_MARKER}
+    return marker.get("complete") is True and "metrics.json" in listed and listed == present \
+        and outputs.foreign_content(directory) is None
 
 
 @pytest.mark.parametrize("step", outputs.STUDY_FILE_STEPS)
@@ -314,15 +404,15 @@ def test_only_the_temporary_files_of_dead_writers_of_this_host_are_removed(tmp_p
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
     names = {
-        "dead": outputs._temporary(tmp_path, "sweep.csv", ".csv").name.replace(
+        "dead": temporaries.new(tmp_path, "sweep.csv", ".csv").name.replace(
             f"-{os.getpid()}@", f"-{dead.pid}@"),
-        "alive": outputs._temporary(tmp_path, "sweep.csv", ".csv").name,
+        "alive": temporaries.new(tmp_path, "sweep.csv", ".csv").name,
         "other host": f".sweep.csv.partial-{dead.pid}@00000000@abcdefgh.csv",
         "user": ".sweep.csv.partial-notes.csv",
     }
     for name in names.values():
         (tmp_path / name).write_text("x")
-    assert outputs.remove_dead_temporaries(tmp_path) == [tmp_path / names["dead"]]
+    assert temporaries.remove_dead(tmp_path) == [tmp_path / names["dead"]]
     assert {p.name for p in tmp_path.iterdir()} >= {names["alive"], names["other host"],
                                                     names["user"]}
     assert not (tmp_path / names["dead"]).exists()

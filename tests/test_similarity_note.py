@@ -13,13 +13,13 @@ import warnings
 import pytest
 
 import wearcheck
-from wearcheck.cases import RunWarning, case as case_module, dundurs_beta
+from wearcheck.cases import RunWarning, case as case_module, dundurs_beta, errors
 
 
 @pytest.fixture
 def fresh(monkeypatch):
     """A process that has not said the note yet."""
-    monkeypatch.setattr(case_module, "_NOTED", set())
+    monkeypatch.setattr(errors, "_SAID", set())
 
 
 def _notes(caught):

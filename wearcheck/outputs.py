@@ -25,7 +25,6 @@ import hashlib
 import json
 import os
 import platform
-import re
 import shutil
 import stat
 import struct
@@ -36,7 +35,7 @@ import time
 from pathlib import Path
 
 from wearcheck import cases
-from wearcheck import renames
+from wearcheck import renames, temporaries
 
 try:
     import fcntl
@@ -377,7 +376,7 @@ def check_output(path, kind: str) -> Path:
 #: mkdtemp's 8 characters (a file's side marker '.NAME.wearcheck-output' is as long)
 _HIDDEN_EXTRA = len("..partial-") + 8
 #: the same for a file wearcheck replaces (:func:`write_file`): its temporary
-#: '.NAME.partial-PID@HOST@XXXXXXXX' (:func:`_temporary`, a pid of up to 7 digits)
+#: '.NAME.partial-PID@HOST@XXXXXXXX' (:func:`wearcheck.temporaries.new`, a pid of up to 7 digits)
 _FILE_HIDDEN_EXTRA = len("..partial-") + 7 + 1 + 8 + 1 + 8
 #: room kept below PATH_MAX for the deepest file inside an output
 #: ('<solver>/vtk/.vtk.partial-XXXXXXXX/solid_stage000.vtu' and the like)
@@ -514,16 +513,6 @@ def _inside_output(path: Path, kind: str) -> str | None:
     return None
 
 
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, OverflowError, ValueError):
-        return True
-    return True
-
-
 def left_behind(name: str, marker: dict) -> bool:
     """Whether the hidden directory ``name`` (a ``.NAME.partial-*`` or ``.NAME.old-*``)
     with ``marker`` is what a writer that is gone left behind.
@@ -540,7 +529,7 @@ def left_behind(name: str, marker: dict) -> bool:
             return True   # killed right after the exchange, before it said whose it is
     pid = writer.get("pid")
     return writer.get("host") == platform.node() and isinstance(pid, int) \
-        and not _pid_alive(pid)
+        and not temporaries.pid_alive(pid)
 
 
 def _siblings(path: Path) -> list[Path]:
@@ -702,51 +691,6 @@ def _settle_graveyard(graveyard: Path, path: Path, restore: bool = True) -> None
             remove_tree(graveyard)
 
 
-def _host_tag() -> str:
-    """8 hex digits naming this host in the name of a temporary file."""
-    return hashlib.sha256(platform.node().encode("utf-8", "replace")).hexdigest()[:8]
-
-
-#: a temporary file of :func:`_temporary`: '.NAME.partial-PID@HOST@XXXXXXXX[.suffix]'
-_TEMPORARY = re.compile(r"\.partial-(\d+)@([0-9a-f]{8})@[^@/]*$")
-
-
-def _temporary(directory: Path, name: str, suffix: str = "") -> Path:
-    """A new empty temporary file for ``name`` in ``directory`` whose name says which
-    process writes it: what a killed one left is found by :func:`remove_dead_temporaries`."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{name}.partial-{os.getpid()}@{_host_tag()}@",
-                               suffix=suffix, dir=directory)
-    os.close(fd)
-    return Path(tmp)
-
-
-def remove_dead_temporaries(directory: Path, names=None) -> list[Path]:
-    """Remove the temporary files (:func:`_temporary`) in ``directory`` (those of
-    ``names`` only, if given) that a process of this host left when it was killed;
-    those of running processes and of other hosts are left. Returns them."""
-    removed = []
-    try:
-        entries = list(os.scandir(directory))
-    except OSError:
-        return removed
-    prefixes = None if names is None else tuple(f".{n}.partial-" for n in names)
-    for e in entries:
-        m = _TEMPORARY.search(e.name)
-        if not m or not e.name.startswith(".") or \
-                (prefixes is not None and not e.name.startswith(prefixes)):
-            continue
-        try:
-            if not e.is_file(follow_symlinks=False):
-                continue
-        except OSError:
-            continue
-        if m.group(2) == _host_tag() and not _pid_alive(int(m.group(1))):
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(e.path)
-                removed.append(Path(e.path))
-    return removed
-
-
 def is_partial(path: Path) -> bool:
     """A ``.partial`` directory of another process: being written, or abandoned.
 
@@ -758,12 +702,6 @@ def is_partial(path: Path) -> bool:
     if marker is not None and marker.get("complete", True) is False:
         return not (marker.get("pid") == os.getpid() and marker.get("host") == platform.node())
     return marker is None and path.name.startswith(".") and ".partial-" in path.name
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 #: the steps of replacing an output, in the order they happen; :func:`_step` marks
@@ -962,6 +900,33 @@ def _copy_attributes(path: Path, tmp: Path) -> None:
                         follow_symlinks=False)
 
 
+#: sets to which :func:`atomic_directory` adds the name of each directory it builds
+#: an output in (:func:`watching_builds`)
+_BUILD_WATCHERS: list[set] = []
+
+
+@contextlib.contextmanager
+def watching_builds():
+    """Collect the names of the hidden directories :func:`atomic_directory` builds
+    outputs in while inside; :func:`installed_from` then tells whether a path holds,
+    complete, one of them (the command line: an interrupt that came after its output
+    was in place says so)."""
+    names: set = set()
+    _BUILD_WATCHERS.append(names)
+    try:
+        yield names
+    finally:
+        _BUILD_WATCHERS.remove(names)
+
+
+def installed_from(path, names) -> bool:
+    """Whether ``path`` holds a complete output built in one of the hidden directories
+    ``names`` (its marker names the directory it was built in)."""
+    marker = read_marker(Path(path))
+    return marker is not None and marker.get("complete") is True \
+        and marker.get("built_in") in names
+
+
 @contextlib.contextmanager
 def atomic_directory(path, kind: str = "run"):
     """Yield a fresh temporary directory that replaces ``path`` on success.
@@ -977,9 +942,11 @@ def atomic_directory(path, kind: str = "run"):
     recover(path)
     occupant = _directory_stat(path)
     tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.partial-", dir=path.parent))
+    for names in list(_BUILD_WATCHERS):
+        names.add(tmp.name)
     handed_over = False
     try:
-        os.chmod(tmp, 0o777 & ~_umask())  # mkdtemp makes 0700; outputs are shared like any dir
+        os.chmod(tmp, 0o777 & ~temporaries.umask())  # mkdtemp: 0700; outputs are shared
         if occupant is not None:
             # now, so that a default ACL of the directory replaced reaches the
             # files written into the new one, as it would have there
@@ -1069,7 +1036,7 @@ def study_directory(path, runs=(), files=()) -> Path:
                           "of its files, so it cannot tell whether you changed any; remove it "
                           "yourself or choose another output path")
     # the study's files (and its marker) half written by a study that was killed
-    remove_dead_temporaries(path)
+    temporaries.remove_dead(path)
     for name in sorted({*recorded, *files}):
         if (path / name).exists() or (path / name).is_symlink():
             _check_study_file(path, name, recorded, marker)
@@ -1125,10 +1092,10 @@ def _write_study_file(study: Path, name: str, write) -> Path:
         _check_study_file(study, name, recorded, marker)
         current = _path_fingerprint(path)
     # (the suffix kept: writers choose the format by it, e.g. a figure's .png)
-    tmp = _temporary(study, name, Path(name).suffix)
+    tmp = temporaries.new(study, name, Path(name).suffix)
     try:
         write(Path(tmp))
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; study files are shared
+        os.chmod(tmp, 0o666 & ~temporaries.umask())  # mkstemp makes 0600; study files are shared
         # the marker lists the new file before it takes the old one's place, and keeps
         # the old one's as it is replaced: a kill in between leaves a file the
         # marker accepts (either), never one a later study refuses as not its own
@@ -1186,10 +1153,10 @@ def _remove_study_file(study: Path, name: str) -> bool:
 
 
 def _rewrite_marker(directory: Path, data: dict) -> None:
-    tmp = _temporary(Path(directory), OUTPUT_MARKER[1:])
+    tmp = temporaries.new(Path(directory), OUTPUT_MARKER[1:])
     with open(tmp, "w", encoding="utf-8") as fh:
         fh.write(json.dumps(data) + "\n")
-    os.chmod(tmp, 0o666 & ~_umask())
+    os.chmod(tmp, 0o666 & ~temporaries.umask())
     os.replace(tmp, Path(directory) / OUTPUT_MARKER)
 
 
@@ -1290,11 +1257,11 @@ def write_file(path, source: Path, kind: str = "mesh") -> Path:
     """Copy ``source`` to ``path`` atomically, with its side marker."""
     path = check_output_file(path, kind)
     path.parent.mkdir(parents=True, exist_ok=True)
-    remove_dead_temporaries(path.parent, [path.name])    # of a write that was killed
-    tmp = _temporary(path.parent, path.name)
+    temporaries.remove_dead(path.parent, [path.name])    # of a write that was killed
+    tmp = temporaries.new(path.parent, path.name)
     try:
         shutil.copyfile(source, tmp)
-        os.chmod(tmp, 0o666 & ~_umask())
+        os.chmod(tmp, 0o666 & ~temporaries.umask())
         side = dict(marker_data(kind, True), sha256=_sha256(Path(tmp)))
         # the side marker names the new file before it takes the old one's place, and
         # the old one's until it has: a kill in between leaves a file it accepts
@@ -1315,12 +1282,12 @@ def write_file(path, source: Path, kind: str = "mesh") -> Path:
 def _write_sidecar(path: Path, data: dict) -> None:
     """The side marker of ``path`` by rename: never half written, never written
     through a link put in its place."""
-    stmp = _temporary(path.parent, path.name)
+    stmp = temporaries.new(path.parent, path.name)
     try:
         with open(stmp, "w", encoding="utf-8") as fh:
             fh.write(json.dumps(data) + "\n")
         # mkstemp makes 0600: others sharing the file could not read that wearcheck wrote it
-        os.chmod(stmp, 0o666 & ~_umask())
+        os.chmod(stmp, 0o666 & ~temporaries.umask())
         os.replace(stmp, _sidecar(path))
     except BaseException:
         with contextlib.suppress(FileNotFoundError):

@@ -9,8 +9,6 @@ dictionary (``wearcheck.layout``), the same one meta.json carries.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +17,7 @@ from wearcheck import cases
 from wearcheck.cases import CaseError, reference
 from wearcheck import layout, registry
 from wearcheck.extras import need
-from wearcheck import rundir
+from wearcheck import rundir, temporaries
 
 #: the global attribute that marks a netCDF file as wearcheck's (only such a file is
 #: ever replaced)
@@ -129,12 +127,5 @@ def write_netcdf(result, path: str | Path) -> Path:
     if not path.parent.is_dir():
         raise CaseError(f"cannot write '{path}': its directory '{path.parent}' does not exist")
     ds = to_xarray(result)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial", dir=path.parent)
-    os.close(fd)
-    try:
-        ds.to_netcdf(tmp, engine="scipy")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-    return path
+    # through a temporary that names its writer: what a killed writer left is removed
+    return temporaries.atomic_write(path, lambda tmp: ds.to_netcdf(tmp, engine="scipy"))

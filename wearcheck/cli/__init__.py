@@ -27,6 +27,7 @@ import sys
 import warnings
 
 from wearcheck.cases import ArgumentError, WearcheckError
+from wearcheck.outputs import installed_from, watching_builds
 from wearcheck.rundir import set_command
 from wearcheck.extras import missing
 
@@ -250,7 +251,34 @@ def _command(argv: list) -> str | None:
     return next((a for a in argv if not a.startswith("-")), None)
 
 
+def _closing() -> None:
+    """The command has ended: a Ctrl-C from here on is ignored, while the interpreter
+    closes (its own finalisation, about 0.2 s with numpy and scipy loaded, restores
+    Ctrl-C's default, which would end the process silently, exit status 130 with
+    the command's output whole and its last line printed). The process exits with
+    the command's code."""
+    try:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:   # not the main thread
+        pass
+
+
+def _after_output(args, built) -> str:
+    """What an interrupt leaves: the command's output, if it was already in place."""
+    out = getattr(args, "out", None)
+    if out is not None and installed_from(os.path.abspath(out), built):
+        return f" after its output was complete: '{out}' holds it, whole"
+    return ""
+
+
 def main(argv=None) -> int:
+    """Run the command ``argv`` (a list of words) and return its exit code.
+
+    Without ``argv`` it is the process's own command line (the console script,
+    ``python -m wearcheck``): once the command has ended, Ctrl-C is ignored for the
+    rest of the process (:func:`_closing`).
+    """
+    program = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser({_command(argv)})
     args, extra = parser.parse_known_args(argv)
@@ -263,8 +291,9 @@ def main(argv=None) -> int:
         previous = signal.signal(signal.SIGTERM, _on_sigterm)
     except ValueError:  # not the main thread (e.g. called from a test's thread)
         pass
+    built: set = set()
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), watching_builds() as built:
             # library warnings (numpy overflow inside a solver that then reports
             # the failure itself, Dask, pyvista) are not the user's business;
             # wearcheck's own remarks are printed as "note:" lines
@@ -272,18 +301,22 @@ def main(argv=None) -> int:
             os.environ.setdefault("PYTHONWARNINGS", "ignore")  # Dask worker processes
             code = int(args._main(args) or 0)
             sys.stdout.flush()     # a reader that has gone shows here, not at exit
+            if program:
+                # (inside the try: an interrupt before this is the one said below)
+                _closing()
             return code
     except WearcheckError as exc:
         # a study's argument is named by its flag here, by its Python name in Python
         said = exc.on_command_line() if isinstance(exc, ArgumentError) else exc
         print(f"{name}: error: {_one_line(said)}", file=sys.stderr)
         return exc.exit_code
-    except Terminated:
-        print(f"{name}: terminated; nothing incomplete was written", file=sys.stderr)
-        return EXIT_TERMINATED
-    except KeyboardInterrupt:
-        print(f"{name}: interrupted; nothing incomplete was written", file=sys.stderr)
-        return EXIT_INTERRUPTED
+    except KeyboardInterrupt as exc:
+        if program:
+            _closing()     # a second Ctrl-C does not cut this message short
+        said = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        print(f"{name}: {said}{_after_output(args, built)}; nothing incomplete was written",
+              file=sys.stderr)
+        return EXIT_TERMINATED if isinstance(exc, Terminated) else EXIT_INTERRUPTED
     except MemoryError:
         print(f"{name}: error: out of memory; nothing was written (reduce the resolution)",
               file=sys.stderr)
@@ -307,6 +340,8 @@ def main(argv=None) -> int:
               "(a bug in wearcheck; WEARCHECK_TRACEBACK=1 shows where)", file=sys.stderr)
         return EXIT_INTERNAL
     finally:
+        if program:
+            _closing()     # (an error's exit as well)
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
 

@@ -35,6 +35,13 @@ def load_case(args) -> cases.Case:
     return case
 
 
+def output(args, default: Path) -> Path:
+    """The command's output directory: ``--out``, else ``default``; kept in
+    ``args.out`` so that an interrupt after it was written names it."""
+    args.out = args.out or default
+    return args.out
+
+
 def varied(args) -> dict[str, list]:
     """The ``--vary`` flags, typed once: ``{"section.key": [values]}`` as ``--set`` reads
     them (a relative ``indenter.file`` relative to the case file, as there).

@@ -15,7 +15,7 @@ from wearcheck import registry
 from wearcheck.comparisons.present.compare_report import print_summary
 from wearcheck.studies.compare import compare
 from wearcheck.studies.sphere_sweep import SPHERE_RATIOS
-from ._common import add_case_arguments, load_case, print_json, verdict
+from ._common import add_case_arguments, load_case, output, print_json, verdict
 from wearcheck.comparisons.analysis import diagnosis
 
 
@@ -66,7 +66,7 @@ def add_parser(sub):
 
 def main(args) -> int:
     case = load_case(args)
-    out = args.out or Path("runs") / args.case.stem
+    out = output(args, Path("runs") / args.case.stem)
     m = compare(case, out, solvers=args.solvers, reference_solver=args.reference,
                 edge=args.edge_study, sphere=args.sphere_sweep,
                 sphere_ratios=args.sphere_ratios, quiet=args.quiet,

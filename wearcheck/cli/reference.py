@@ -15,6 +15,7 @@ from pathlib import Path
 from wearcheck.cases import CaseError
 from wearcheck.api import reference
 from wearcheck.references import certified
+from ._common import output
 
 
 def add_parser(sub):
@@ -40,7 +41,7 @@ def main(args) -> int:
     if not args.name:
         raise CaseError("name a reference (wearcheck reference --list shows them)")
     result = reference(args.name)
-    out = args.out or Path("runs") / f"reference-{result.certified.name}"
+    out = output(args, Path("runs") / f"reference-{result.certified.name}")
     path = result.write(out)
     if not args.quiet:
         print(f"reference {args.name}: {len(result.stages['s'])} stages -> {path}",

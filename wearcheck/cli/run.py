@@ -12,7 +12,7 @@ from wearcheck.resources import _estimator, check_export, check_memory
 from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.rundir import write_run_files
 from wearcheck import registry
-from ._common import add_case_arguments, load_case, print_json
+from ._common import add_case_arguments, load_case, output, print_json
 from wearcheck.extras import need
 from wearcheck.comparisons.present.vtk import export_run
 from wearcheck.cases import reference
@@ -44,7 +44,7 @@ def main(args) -> int:
     if args.vtk:   # said before the solve
         need("pyvista", "writing ParaView files (--vtk)")
     case = load_case(args)
-    out = args.out or Path("runs") / f"{args.case.stem}-{args.solver}"
+    out = output(args, Path("runs") / f"{args.case.stem}-{args.solver}")
     check_output(out, "run")  # before the solve: a path we may not write fails at once
     check_memory(case, args.solver)
     if args.revolve:

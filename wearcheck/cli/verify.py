@@ -20,7 +20,7 @@ from pathlib import Path
 
 from wearcheck import registry
 from wearcheck.external import parse_mapping
-from ._common import add_case_arguments, load_case, print_json, verdict
+from ._common import add_case_arguments, load_case, output, print_json, verdict
 from wearcheck.comparisons.present.verify_report import print_summary
 from wearcheck.studies.verify import verify
 
@@ -51,7 +51,7 @@ def add_parser(sub):
 def main(args) -> int:
     case = load_case(args)
     mapping = parse_mapping(args.mapping)
-    out = args.out or Path("runs") / f"verify-{args.case.stem}"
+    out = output(args, Path("runs") / f"verify-{args.case.stem}")
     m = verify(case, args.results, out, mapping=mapping,
                reference_solver=args.reference_solver, quiet=args.quiet)
     if args.json:
