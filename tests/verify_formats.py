@@ -41,7 +41,7 @@ def csv_dir(directory, result, *, scale=1.0, time="s", stages=True) -> Path:
         # run's cycles are not proportional to its s: both tables count alike)
         if time == "cycles":
             column = "cycles"
-            when = (np.asarray(result.case.fretting.stage_cycles, float)[:len(st["s"])]
+            when = (np.asarray(result.info["stage_cycles"], float)[:len(st["s"])]
                     if fretting else np.asarray(st["s"]) * result.case.cycles_per_metre)
         else:
             column, when = "s_hat", np.asarray(st["s_hat"])
