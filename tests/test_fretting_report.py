@@ -24,6 +24,11 @@ def test_fretting_run_directory_has_its_report(run):
     text = (path / "report.md").read_text()
     assert "c_CM/a" in text and "W_MD" in text and "Q*_CM" in text
     assert "energy–wear identity" in text
+    # the shipped file leaves fretting.stage_cycles to its default (0, 1, 10, … and
+    # the last cycle): the table of stored cycles ends at the run's last cycle
+    stored = text.split("History at the stored cycles")[1].split("![")[0]
+    assert [row.split("|")[1].strip() for row in stored.splitlines() if row.startswith("| ")
+            and row[2].isdigit()] == ["0", "1", "10", "30"]
     # every file is described in the run's data dictionary
     d = json.loads((path / "meta.json").read_text())["data_dictionary"]["files"]
     assert {p.name for p in path.iterdir()} <= set(d)

@@ -194,7 +194,7 @@ def write(directory, case, result) -> list[Path]:
     blocks += [R.heading("Against the closed forms", 3),
                R.table(["check", "value", "reference"], rows)]
     h = result.history
-    stage = [i for i, n in enumerate(h["cycles"]) if n in set(fr.stage_cycles)
+    stage = [i for i, n in enumerate(h["cycles"]) if n in set(result.info["stage_cycles"])
              or i == len(h["cycles"]) - 1]
     blocks += [R.heading("History at the stored cycles", 3),
                R.table(["cycles", "F [N]", "Q* [N]", "c [m]", "W per cycle [J]",
