@@ -8,7 +8,7 @@ RESOURCE_KEY = "mdr.elements"
 _DENSE_MAX = 2048
 
 
-#: dense N x N matrices a run keeps at once, by time scheme (nested LU factors
+#: dense N x N matrices a run keeps at once, by time scheme (nested Cholesky factors
 #: of the implicit step; adaptive stepping keeps several step sizes' factors)
 DENSE_MATRICES = {"adaptive": 8.0, "implicit": 8.0, "bdf2": 8.0, "explicit": 1.0}
 

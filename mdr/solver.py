@@ -234,7 +234,7 @@ class Wear(stepping.Problem):
     """The MDR's implicit wear step on its grid, as :mod:`numerics.stepping` steps it.
 
     What the stepper cannot know and this keeps between its calls: one
-    implicit system per wear compliance (direct solves: a nested LU per step
+    implicit system per wear compliance (direct solves: a nested factorisation per step
     size of the ladder, the regular step's for fixed steps, the nearest one
     preconditioning a stage landing; GMRES grids: the coarse-grid
     preconditioner, the same at any step), the guesses of the contact edge

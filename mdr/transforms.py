@@ -577,3 +577,46 @@ def compliance_matrix(n: int, dt: float, E_star: float, method: str | None = Non
         Ld = np.convolve(B[:m], d)[:m]
         out[1:] = LDQ + (1.0 - Ld)[:, None] * Q[0][None, :]
     return out / E_star
+
+
+#: the tip node's weight in the symmetric part of :func:`compliance_split`: any
+#: positive value splits the matrix exactly; this one, the next node's 1/(2 sqrt 1),
+#: keeps the symmetric part as well conditioned as the whole matrix and the
+#: rank-one term's Sherman–Morrison denominator near 1 (1.1-1.9 on the paper case)
+SPLIT_TIP_WEIGHT = 0.5
+
+
+def compliance_split(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The unit compliance matrix (dt = E* = 1) of n nodes as S + u vᵀ, S symmetric
+    positive definite: (S_upper, u, v).
+
+    :func:`compliance_matrix` is T⁻¹ P⁻¹ with P⁻¹ = (π/2) Lᵀ and T⁻¹ = L D + a e₀ᵀ
+    (L lower Toeplitz of kernel B, D = diag(δ, 1/(2 sqrt i)) with δ =
+    SPLIT_TIP_WEIGHT, a its first column less δ B), so it is (π/2)(L D Lᵀ + a Bᵀ):
+    S = (π/2) W Wᵀ with W = L D^½ lower triangular, u = (π/2) a, v = B. Its leading
+    blocks are the same split of the leading blocks. Only S's upper triangle is
+    formed (``S_upper``, Fortran-ordered; below the diagonal it holds other
+    values), by LAPACK's ``lauum`` (n³/3 operations against the n³ of the
+    product of the two triangular factors) on the index-reversed W, which is
+    upper triangular.
+    """
+    from scipy.linalg import toeplitz
+    from scipy.linalg.lapack import dlauum
+
+    B = np.cumsum(_kernel(abel_kernel_inverse, n)[:n])
+    d = np.r_[SPLIT_TIP_WEIGHT, 1.0 / (2.0 * np.sqrt(np.arange(1, n)))]
+    # V = J W J (J the reversal): V[i, j] = B[j - i] sqrt(d[n-1-j]) for j >= i
+    V = toeplitz(np.r_[B[0], np.zeros(n - 1)], B)
+    V *= np.sqrt(d[::-1])[None, :]
+    # V.T (lower, Fortran-ordered: no copy): lauum's (V.T)ᵀ V.T = V Vᵀ = J S J
+    # in its lower triangle, which reversed is S's upper triangle
+    VVt, info = dlauum(V.T, lower=1, overwrite_c=1)
+    if info != 0:
+        raise ArithmeticError(f"LAPACK dlauum failed (info {info})")
+    S = np.multiply(VVt[::-1, ::-1], 0.5 * math.pi, order="F")
+    # a = T⁻¹'s first column less δ B: 1 - Σ_{1<=j<=i} B[i-j] d_j - δ B_i
+    first = np.ones(n)
+    if n > 1:
+        first[1:] -= np.convolve(B, d[1:])[:n - 1]
+    u = (0.5 * math.pi) * (first - d[0] * B)
+    return S, u, B
