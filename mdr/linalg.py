@@ -196,9 +196,15 @@ class NestedCholesky:
         self.u, self.n = U, m
         self._last = None       # (b, U⁻ᵀ b) of the last solve (:meth:`solve`)
         self._rank_one = None   # (f, g, 1 + cumsum(g f)) of :meth:`rank_one`, this size
-        # the factor's address and leading dimension for BLAS, read once per growth
-        # (ndarray.ctypes is slow for a per-solve call; docs/performance.md)
+        # the factor's address and leading dimension for BLAS, read once per growth,
+        # and a work vector solved in place at a known address (ndarray.ctypes and
+        # ctypes.byref cost microseconds per call, a share of a small run's solves;
+        # docs/performance.md)
         self._address, self._lda = U.ctypes.data, ctypes.c_int(U.shape[0])
+        self._work = np.empty(U.shape[0])
+        self._work_address = self._work.ctypes.data
+        self._size = ctypes.c_int(0)
+        self._refs = (ctypes.byref(self._size), ctypes.byref(self._lda), ctypes.byref(_ONE))
 
     def _forward_kept(self, x: np.ndarray) -> int:
         """How many leading entries of the forward solve of ``x`` the last solve
@@ -257,25 +263,29 @@ class NestedCholesky:
             raise ValueError(f"NestedCholesky.solve: {n} unknowns, factored {self.n}")
         if _DTRSV is None:
             return self.backward(self._with_rank_one(self.forward(b)))
-        x = np.array(b, dtype=float)     # a fresh contiguous copy, solved in place
-        if n:
-            lda, one = ctypes.byref(self._lda), ctypes.byref(_ONE)
-            a, xp = self._address, x.ctypes.data
-            # the forward solve y = U⁻ᵀ b is nested: y[:k] depends on b[:k] alone,
-            # so a right-hand side that shares its leading entries with the last
-            # one's (the contact iteration's next set: the same gap, a node or two
-            # more or fewer) keeps that part of y
-            k = self._forward_kept(x) if keep else 0
-            if k < n:
-                if k:
-                    x[k:] -= x[:k] @ self.u[:k, k:n]
-                _DTRSV(b"U", b"T", b"N", ctypes.byref(ctypes.c_int(n - k)),
-                       a + 8 * k * (self._lda.value + 1), lda, xp + 8 * k, one)
-            if keep:
-                self._last = (np.array(b, dtype=float), x.copy())
-            self._with_rank_one(x)
-            _DTRSV(b"U", b"N", b"N", ctypes.byref(ctypes.c_int(n)), a, lda, xp, one)
-        return x
+        if not n:
+            return np.zeros(0)
+        x = self._work[:n]
+        x[...] = b                       # solved in place in the work vector
+        size, lda, one = self._refs
+        a, xp = self._address, self._work_address
+        # the forward solve y = U⁻ᵀ b is nested: y[:k] depends on b[:k] alone,
+        # so a right-hand side that shares its leading entries with the last
+        # one's (the contact iteration's next set: the same gap, a node or two
+        # more or fewer) keeps that part of y
+        k = self._forward_kept(x) if keep else 0
+        if k < n:
+            if k:
+                x[k:] -= x[:k] @ self.u[:k, k:n]
+            self._size.value = n - k
+            _DTRSV(b"U", b"T", b"N", size, a + 8 * k * (self._lda.value + 1), lda,
+                   xp + 8 * k, one)
+        if keep:
+            self._last = (np.array(b, dtype=float), x.copy())
+        self._with_rank_one(x)
+        self._size.value = n
+        _DTRSV(b"U", b"N", b"N", size, a, lda, xp, one)
+        return x.copy()
 
     def _with_rank_one(self, y: np.ndarray) -> np.ndarray:
         """y - f (g·y)/(1 + g·f) on y's nodes, in place (y itself without a rank-one term)."""

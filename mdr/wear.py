@@ -652,7 +652,8 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
                                          "during wear")
         n = m + 1
         sigma = hc * K * (S[:n] if isinstance(S, np.ndarray) else S)
-        if len(x0) != n:
+        direct = system.exact(sigma)      # (a direct solve ignores the start x0)
+        if not direct and len(x0) != n:
             # the last iterate's pressure, cut or extended by its edge value: the
             # sets of successive iterations differ by a node or two at the edge
             # (from the step's start pressure instead, each GMRES pass took
@@ -666,7 +667,8 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
         else:
             # p = d p1 + p2 is linear in the unknown depth; the force fixes d
             p1, F1 = system.unit_response(n, sigma, stats, rtol)
-            p2 = system.solve(-base[:n], sigma, x0 - d_last * p1, stats, rtol)
+            p2 = system.solve(-base[:n], sigma, None if direct else x0 - d_last * p1, stats,
+                              rtol)
             w = transforms.force_weights(N, model.dt)[:n]
             F2 = w @ transforms.line_load(p2, model.dt)
             d = (model.force - F2) / F1
@@ -696,9 +698,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
         if len(below):
             m_new = n + int(below[-1])
         elif tension:
-            q = transforms.line_load(p, model.dt)
-            pos = np.flatnonzero(q > 0.0)
-            m_new = int(pos[-1]) if pos.size else 0
+            m_new = transforms.last_loaded(p)
         else:
             break
         if marginal == m and m_new == m - 1 and \
@@ -730,7 +730,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
                                   f"(nodes {m} <-> {m_new}); reduce sliding.step_hat")
         m = m_new
     qq = np.zeros(N + 1)
-    if system.exact(sigma):
+    if direct:
         # a direct solve: the springs' line load is q = E*(d - g) in contact
         # (the solve's equation under T: g = T f = d - q/E* there), from the 1D
         # profile at hand, equal to P⁻¹ p to round-off (docs/performance.md,

@@ -141,6 +141,21 @@ def test_compliance_split_is_the_matrix_as_symmetric_plus_rank_one(n):
     np.testing.assert_allclose(vm, v[:m], rtol=1e-14, atol=0)   # (kernels of two lengths)
 
 
+@pytest.mark.parametrize("negative", [0, 1, 3, 40, 300])
+def test_last_loaded_node_by_sums_from_the_edge(negative):
+    # the contact iteration's shrink: the last node with line load q > 0, from
+    # sums at the edge (and past LAST_LOADED_SCAN nodes by the transform), must
+    # be the last positive node of the whole line load (the FFT product), for a
+    # pressure whose last ``negative`` nodes pull (0 when every node pulls)
+    rng = np.random.default_rng(11)
+    p = 1.0 + rng.random(300)
+    if negative:
+        p[-negative:] = -5.0 * (1.0 + rng.random(negative))
+    q = transforms.line_load(p, 1e-10)
+    pos = np.flatnonzero(q > 0.0)
+    assert transforms.last_loaded(p) == (int(pos[-1]) if pos.size else 0)
+
+
 @pytest.mark.parametrize("backend", ["fftw", "pocketfft", "scipy.fft"])
 def test_toeplitz_products_against_the_direct_sum(backend, monkeypatch):
     # the FFT convolutions (FFTW through pyFFTW from FFTW_FROM points on;
