@@ -636,7 +636,8 @@ def compliance_split(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The unit compliance matrix (dt = E* = 1) of n nodes as S + u vᵀ, S symmetric
     positive definite: (S_upper, u, v).
 
-    :func:`compliance_matrix` is T⁻¹ P⁻¹ with P⁻¹ = (π/2) Lᵀ and T⁻¹ = L D + a e₀ᵀ
+    :func:`compliance_matrix` is T⁻¹ P⁻¹ with P⁻¹ = (π/2) Lᵀ and
+    T⁻¹ = L D + a e₀ᵀ
     (L lower Toeplitz of kernel B, D = diag(δ, 1/(2 sqrt i)) with δ =
     SPLIT_TIP_WEIGHT, a its first column less δ B), so it is (π/2)(L D Lᵀ + a Bᵀ):
     S = (π/2) W Wᵀ with W = L D^½ lower triangular, u = (π/2) a, v = B. Its leading

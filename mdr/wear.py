@@ -19,11 +19,12 @@ T⁻¹ and P⁻¹ are triangular, so on the contact set only their leading block
 enter: solved directly (mdr.linear_solver; "auto": up to DENSE_MAX nodes) one
 Cholesky factorisation of the matrix's symmetric part (its rank-one rest by
 Sherman–Morrison) serves every contact set (its factor's leading blocks),
-started at the present contact and grown by bordering as the contact grows; solved iteratively (finer grids) each operator is applied as
-one FFT convolution and the step solved by GMRES with a
-coarse-grid preconditioner (a handful of iterations whatever the grid: the
-operator's condition number is about 1 + 2.4/Δŝ), each contact iteration
-starting from the last one's pressure.
+started at the present contact and grown by bordering as the contact grows;
+solved iteratively (finer grids) each operator is applied as one FFT
+convolution and the step solved by GMRES with a coarse-grid preconditioner
+(a handful of iterations whatever the grid: the operator's condition number
+is about 1 + 2.4/Δŝ), each contact iteration starting from the last one's
+pressure.
 """
 
 from __future__ import annotations
@@ -222,8 +223,9 @@ class ImplicitSystem:
     """(T⁻¹ P⁻¹/E* + σ) p = r on the contact nodes, σ = h K S, for any contact set.
 
     Direct (:func:`solves_directly`): the nested Cholesky factorisation of the
-    whole grid's matrix (:class:`linalg.NestedCholesky`) for the run's regular step, exact for every contact set. Iterative: GMRES,
-    preconditioned by the same operator on a coarse t-uniform grid whose
+    whole grid's matrix (:class:`linalg.NestedCholesky`) for the run's regular
+    step, exact for every contact set. Iterative: GMRES, preconditioned by the
+    same operator on a coarse t-uniform grid whose
     contact edge coincides with the fine one (linear interpolation in t
     between the grids) plus 1/σ on what the coarse grid cannot represent
     (grid-scale modes, where the wear compliance σ dominates the elastic one).

@@ -136,7 +136,8 @@ def test_compliance_split_is_the_matrix_as_symmetric_plus_rank_one(n):
     assert np.linalg.eigvalsh(full).min() > 0.0
     m = (n + 1) // 2
     Sm, um, vm = transforms.compliance_split(m)
-    np.testing.assert_allclose(np.triu(Sm), np.triu(S[:m, :m]), rtol=0, atol=1e-14 * np.max(np.abs(C)))
+    np.testing.assert_allclose(np.triu(Sm), np.triu(S[:m, :m]), rtol=0,
+                               atol=1e-14 * np.max(np.abs(C)))
     np.testing.assert_allclose(um, u[:m], rtol=0, atol=1e-14)
     np.testing.assert_allclose(vm, v[:m], rtol=1e-14, atol=0)   # (kernels of two lengths)
 
