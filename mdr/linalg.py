@@ -141,6 +141,7 @@ class NestedCholesky:
     folded into the solve: with f = U⁻ᵀ u and g = U⁻ᵀ v (nested, like every
     forward solve), (M_n + u_n v_nᵀ)⁻¹ b = U_n⁻¹ (y - f_n (g_n·y)/(1 + g_n·f_n)),
     y = U_n⁻ᵀ b: two dot products and no further triangular solve per block.
+    One solve at a time: it solves in a work vector of its own.
     """
 
     def __init__(self, M: np.ndarray, limit: int | None = None, overwrite: bool = False):
