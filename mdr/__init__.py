@@ -17,7 +17,7 @@ single-threaded during a solve.
 
 Modules: :mod:`mdr.transforms` (the MDR transforms, pure functions),
 :mod:`mdr.contact` (normal contact), :mod:`mdr.wear` (the wear steps),
-:mod:`mdr.linalg` (nested-block LU, GMRES), :mod:`mdr.solver` (the run: the
+:mod:`mdr.linalg` (nested-block Cholesky, GMRES), :mod:`mdr.solver` (the run: the
 implicit step and the growing grid as :mod:`numerics.stepping` steps them).
 
 A case with a [fretting] section is a partial-slip run: :mod:`mdr.fretting`

@@ -1,13 +1,15 @@
-"""Linear algebra for the implicit wear step: nested-block LU and GMRES.
+"""Linear algebra for the implicit wear step: nested-block Cholesky and GMRES.
 
 The implicit step's matrix on the contact nodes 0..n-1 is the leading n×n
 block of one matrix of the whole grid, because its factors T⁻¹ (lower) and
-P⁻¹ (upper) are triangular. An LU factorisation without pivoting has the
-same nesting: the factors of a leading block are the leading blocks of the
-factors. So one factorisation serves every contact set: BLAS solves the
-leading block in place through its leading dimension (or, where scipy's
-BLAS entry points are not reachable, a prefix of packed copies), and a
-factorisation grows to a larger contact by bordering.
+P⁻¹ (upper) are triangular; it is a symmetric positive definite matrix plus
+a rank-one term (:func:`mdr.transforms.compliance_split`). A Cholesky
+factorisation has the same nesting: the factor of a leading block is the
+leading block of the factor. So one factorisation serves every contact set:
+BLAS solves the leading block in place through its leading dimension (or,
+where scipy's BLAS entry points are not reachable, through copies), the
+rank-one term by Sherman–Morrison inside the solve, and a factorisation
+grows to a larger contact by bordering.
 """
 
 from __future__ import annotations
@@ -19,8 +21,8 @@ import threading
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
-from scipy.linalg import lu_factor, solve_triangular
-from scipy.linalg.blas import dtpsv
+from scipy.linalg import solve_triangular
+from scipy.linalg.lapack import dpotrf
 
 from wearcheck.cases import SolverError
 
@@ -62,26 +64,6 @@ def single_threaded_blas():
             if _blas_users == 0:
                 _blas_limiter.restore_original_limits()
                 _blas_limiter = None
-
-
-def lu_nopivot(M: np.ndarray, block: int = 64) -> np.ndarray:
-    """In-place blocked LU without pivoting; returns L (unit, strictly lower) and U in one array."""
-    M = np.array(M, dtype=float, order="C")
-    n = len(M)
-    for k0 in range(0, n, block):
-        k1 = min(k0 + block, n)
-        for k in range(k0, k1):
-            piv = M[k, k]
-            if not abs(piv) > 0.0:
-                raise SolverError("implicit wear step: zero pivot in the contact matrix")
-            M[k + 1:, k] /= piv
-            if k + 1 < k1:
-                M[k + 1:, k + 1:k1] -= np.outer(M[k + 1:, k], M[k, k + 1:k1])
-        if k1 < n:
-            M[k0:k1, k1:] = solve_triangular(M[k0:k1, k0:k1], M[k0:k1, k1:], lower=True,
-                                             unit_diagonal=True, check_finite=False)
-            M[k1:, k1:] -= M[k1:, k0:k1] @ M[k0:k1, k1:]
-    return M
 
 
 def _cython_blas(name: str, signature):
@@ -128,8 +110,9 @@ _DTRSM = _dtrsm() if _DTRSV is not None else None
 
 
 def _trsm_in_place(side: bytes, uplo: bytes, diag: bytes, a: np.ndarray, rows: int,
-                   cols: int, b_offset: int) -> None:
-    """B := op(A)⁻¹ B (side L) or B A⁻¹ (side R), all blocks inside one Fortran array.
+                   cols: int, b_offset: int, trans: bytes = b"N") -> None:
+    """B := op(A)⁻¹ B (side L) or B op(A)⁻¹ (side R), all blocks inside one Fortran
+    array; op(A) = A, or Aᵀ with ``trans`` b"T".
 
     A is the array's leading block, B the rows×cols block starting at flat
     (column-major) element ``b_offset``; no copies (scipy's wrappers copy
@@ -137,106 +120,92 @@ def _trsm_in_place(side: bytes, uplo: bytes, diag: bytes, a: np.ndarray, rows: i
     """
     lda = ctypes.c_int(a.shape[0])
     one = ctypes.c_double(1.0)
-    _DTRSM(side, uplo, b"N", diag, ctypes.byref(ctypes.c_int(rows)),
+    _DTRSM(side, uplo, trans, diag, ctypes.byref(ctypes.c_int(rows)),
            ctypes.byref(ctypes.c_int(cols)), ctypes.byref(one), a.ctypes.data,
            ctypes.byref(lda), a.ctypes.data + 8 * b_offset, ctypes.byref(lda))
 
 
-class Pivoted(Exception):
-    """LAPACK's partial pivoting permuted a matrix that :class:`NestedLU` was given to
-    factorise in its own storage (``overwrite``): that matrix is overwritten, so the
-    factorisation without pivoting needs a fresh copy of it."""
+class NestedCholesky:
+    """Cholesky factor of a symmetric positive definite matrix M whose leading blocks
+    are solved as often as the whole, and of M plus a rank-one term.
 
+    M = Uᵀ U with U upper triangular: the factor of a leading block is the
+    leading block of U, so one factorisation serves every contact set, as an
+    LU without pivoting would, at half its operations (``potrf``: n³/3 against
+    ``getrf``'s 2n³/3; a bordering one ``trsm`` instead of two). Only the upper
+    triangles of the matrices given are read. ``solve(b)`` solves the leading
+    len(b)×len(b) block by two triangular solves (BLAS trsv) in place in the
+    factor's storage; ``extend`` grows the factorisation by bordering.
 
-class NestedLU:
-    """LU of a matrix whose leading blocks are solved as often as the whole.
-
-    ``solve(b)`` solves the leading len(b)×len(b) block: two triangular
-    solves (BLAS trsv) on the leading block of the factors, in place with
-    the factors' leading dimension, or, without access to BLAS's own entry
-    points, on packed copies of the factors (BLAS tpsv). ``extend`` grows
-    the factorisation to a larger leading block of the same matrix by
-    bordering, so it can start at the size needed now.
+    With :meth:`rank_one` (u, v) it solves M + u vᵀ instead, by Sherman–Morrison
+    folded into the solve: with f = U⁻ᵀ u and g = U⁻ᵀ v (nested, like every
+    forward solve), (M_n + u_n v_nᵀ)⁻¹ b = U_n⁻¹ (y - f_n (g_n·y)/(1 + g_n·f_n)),
+    y = U_n⁻ᵀ b: two dot products and no further triangular solve per block.
+    One solve at a time: it solves in a work vector of its own.
     """
 
     def __init__(self, M: np.ndarray, limit: int | None = None, overwrite: bool = False):
-        """``overwrite``: M (a square float64 array in Fortran order) may become the
-        factors' storage, spared a copy; should LAPACK pivot it, :class:`Pivoted` is
-        raised (M is then lost) and the caller factors a fresh copy without it."""
+        """``overwrite``: M (a square float64 array in Fortran order) becomes the
+        factor's storage, spared a copy."""
         self.n = 0
         self.limit = limit          # the largest size it may grow to (storage is capped there)
         own = overwrite and M.dtype == np.float64 and M.flags.f_contiguous \
             and M.flags.writeable and M.shape[0] == M.shape[1]
-        self.lu = M if own else np.zeros((0, 0), order="F")
-        self.extend(M[:0, :], M[:, :0], M)
+        self.u = M if own else np.zeros((0, 0), order="F")
+        self.extend(M[:0, :], M)
 
-    @staticmethod
-    def _factor(M: np.ndarray, out: np.ndarray) -> None:
-        """LU of M without pivoting, written to ``out`` (a Fortran-ordered block)."""
-        # LAPACK's partial pivoting leaves these matrices (a compliance plus a
-        # positive diagonal, or its Schur complements) unpermuted in practice;
-        # use it when it does. In place where ``out`` is a whole array: the
-        # first factorisation of a system is its largest matrix
-        whole = out.flags.f_contiguous and out.base is None
-        if whole and out is not M:
-            out[...] = M
-        lu, piv = lu_factor(out if whole else M, overwrite_a=whole, check_finite=False)
-        if np.any(piv != np.arange(len(piv))):
-            if out is M:
-                raise Pivoted("LAPACK pivoted a matrix factorised in its own storage")
-            lu = lu_nopivot(M)
-        if lu is not out:
-            out[...] = lu
+    def extend(self, A12: np.ndarray, A22: np.ndarray) -> None:
+        """Factor [[A11, A12], [A12ᵀ, A22]] from the factor of A11 (the current matrix).
 
-    def extend(self, A12: np.ndarray, A21: np.ndarray, A22: np.ndarray) -> None:
-        """Factor [[A11, A12], [A21, A22]] from the factors of A11 (the current matrix).
-
-        U12 = L11⁻¹ A12, L21 = A21 U11⁻¹, and the Schur complement A22 - L21 U12
-        factored: 2 n² k + k³ operations for k new rows, where factoring
-        afresh costs (n + k)³ (LU without pivoting: the leading factors stay).
+        U12 = U11⁻ᵀ A12 and the Schur complement A22 - U12ᵀ U12 factored:
+        n² k + k³/3 operations for k new rows, where factoring afresh costs
+        (n + k)³/3.
         """
         n, k = self.n, len(A22)
         m = n + k
-        lu = self.lu
-        if m > lu.shape[0]:
+        U = self.u
+        if m > U.shape[0]:
             size = m if n == 0 else int(1.25 * m) + 8
             if self.limit is not None:
                 size = max(m, min(size, self.limit))
             grown = np.empty((size, size), order="F")
-            grown[:n, :n] = lu[:n, :n]
-            lu = grown
-        if n and _DTRSM is not None:
-            lu[:n, n:m] = A12
-            lu[n:m, :n] = A21
-            ld = lu.shape[0]
-            # U12 = L11⁻¹ A12 and L21 = A21 U11⁻¹, in place in the factors' storage
-            _trsm_in_place(b"L", b"L", b"U", lu, n, k, n * ld)
-            _trsm_in_place(b"R", b"U", b"N", lu, k, n, n)
-            S = A22 - lu[n:m, :n] @ lu[:n, n:m]
-        elif n:
-            F11 = lu[:n, :n]          # L11 below the diagonal, U11 on and above
-            U12 = solve_triangular(F11, A12, lower=True, unit_diagonal=True, check_finite=False)
-            L21 = solve_triangular(F11, A21.T, trans="T", lower=False,
-                                   check_finite=False).T
-            S = A22 - L21 @ U12
-            lu[:n, n:m] = U12
-            lu[n:m, :n] = L21
+            grown[:n, :n] = U[:n, :n]
+            U = grown
+        if n:
+            U[:n, n:m] = A12
+            if _DTRSM is not None:
+                _trsm_in_place(b"L", b"U", b"N", U, n, k, n * U.shape[0], trans=b"T")
+            else:
+                U[:n, n:m] = solve_triangular(U[:n, :n], A12, trans="T", lower=False,
+                                              check_finite=False)
+            U12 = U[:n, n:m]
+            S = A22 - U12.T @ U12
         else:
             S = A22
-        self._factor(S, lu if m == lu.shape[0] and n == 0 else lu[n:m, n:m])
-        if not np.all(np.isfinite(lu[n:m, :m])) or not np.all(np.isfinite(lu[:n, n:m])):
+        block = U if m == U.shape[0] and n == 0 else U[n:m, n:m]
+        if block is not S:
+            block[...] = S
+        # in place where the block is a whole array (a system's first factorisation)
+        c, info = dpotrf(block, lower=0, clean=0, overwrite_a=1)
+        if info != 0:
+            raise SolverError("implicit wear step: the contact matrix is not positive "
+                              f"definite (Cholesky factorisation failed at row {n + info})")
+        if not np.may_share_memory(c, block):
+            block[...] = c
+        if not np.all(np.isfinite(U[:m, n:m])):
             raise SolverError("implicit wear step: the contact matrix factorisation failed")
-        self.lu, self.n = lu, m
-        self._last = None       # (b, L⁻¹ b) of the last solve (:meth:`solve`)
-        # the factors' address and leading dimension for BLAS, read once per
-        # growth (ndarray.ctypes is slow for a per-solve call; docs/performance.md)
-        self._address, self._lda = lu.ctypes.data, ctypes.c_int(lu.shape[0])
-        if _DTRSV is None:
-            r, c = np.tril_indices(m)           # ordered by r, then c
-            # column-major packed upper storage of U and of Lᵀ: column j holds rows 0..j
-            self.U = np.ascontiguousarray(lu[c, r])
-            self.Lt = np.ascontiguousarray(lu[r, c])
-            self.Lt[np.cumsum(np.arange(1, m + 1)) - 1] = 1.0
+        self.u, self.n = U, m
+        self._last = None       # (b, U⁻ᵀ b) of the last solve (:meth:`solve`)
+        self._rank_one = None   # (f, g, 1 + cumsum(g f)) of :meth:`rank_one`, this size
+        # the factor's address and leading dimension for BLAS, read once per growth,
+        # and a work vector solved in place at a known address (ndarray.ctypes and
+        # ctypes.byref cost microseconds per call, a share of a small run's solves;
+        # docs/performance.md)
+        self._address, self._lda = U.ctypes.data, ctypes.c_int(U.shape[0])
+        self._work = np.empty(U.shape[0])
+        self._work_address = self._work.ctypes.data
+        self._size = ctypes.c_int(0)
+        self._refs = (ctypes.byref(self._size), ctypes.byref(self._lda), ctypes.byref(_ONE))
 
     def _forward_kept(self, x: np.ndarray) -> int:
         """How many leading entries of the forward solve of ``x`` the last solve
@@ -246,10 +215,43 @@ class NestedLU:
             return 0
         b0, y0 = last
         k = min(len(x), len(b0))
-        if not k or not np.array_equal(x[:k], b0[:k]):
+        if not k or not (x[:k] == b0[:k]).all():
             return 0
         x[:k] = y0[:k]
         return k
+
+    def forward(self, b: np.ndarray) -> np.ndarray:
+        """y = U⁻ᵀ b on the leading len(b) nodes (nested: y[:k] depends on b[:k] alone)."""
+        n = len(b)
+        if _DTRSV is None:
+            return solve_triangular(self.u[:n, :n], b, trans="T", lower=False,
+                                    check_finite=False)
+        y = np.array(b, dtype=float)
+        if n:
+            _DTRSV(b"U", b"T", b"N", ctypes.byref(ctypes.c_int(n)), self._address,
+                   ctypes.byref(self._lda), y.ctypes.data, ctypes.byref(_ONE))
+        return y
+
+    def rank_one(self, u: np.ndarray, v: np.ndarray) -> None:
+        """Solve M + u vᵀ from now on (u, v: the term on the factored nodes, len :attr:`n`;
+        set again after each :meth:`extend`)."""
+        f, g = self.forward(u), self.forward(v)
+        denominator = 1.0 + np.cumsum(g * f)
+        if not np.all(denominator != 0.0) or not np.all(np.isfinite(denominator)):
+            raise SolverError("implicit wear step: the contact matrix is singular "
+                              "(Sherman–Morrison denominator 0)")
+        self._rank_one = (f, g, denominator)
+
+    def backward(self, y: np.ndarray) -> np.ndarray:
+        """x = U⁻¹ y on the leading len(y) nodes (a fresh array)."""
+        n = len(y)
+        if _DTRSV is None:
+            return solve_triangular(self.u[:n, :n], y, lower=False, check_finite=False)
+        x = np.array(y, dtype=float)
+        if n:
+            _DTRSV(b"U", b"N", b"N", ctypes.byref(ctypes.c_int(n)), self._address,
+                   ctypes.byref(self._lda), x.ctypes.data, ctypes.byref(_ONE))
+        return x
 
     def solve(self, b: np.ndarray, keep: bool = False) -> np.ndarray:
         """Solve the leading len(b)×len(b) block. ``keep``: keep the forward
@@ -259,29 +261,40 @@ class NestedLU:
         preconditioning)."""
         n = len(b)
         if n > self.n:
-            raise ValueError(f"NestedLU.solve: {n} unknowns, factored {self.n}")
-        if _DTRSV is not None:
-            x = np.array(b, dtype=float)     # a fresh contiguous copy, solved in place
-            if n:
-                lda, one = ctypes.byref(self._lda), ctypes.byref(_ONE)
-                a, xp = self._address, x.ctypes.data
-                # the forward solve y = L⁻¹ b is nested too: y[:k] depends on b[:k]
-                # alone, so a right-hand side that shares its leading entries with
-                # the last one's (the contact iteration's next set: the same gap,
-                # a node or two more or fewer) keeps that part of y
-                k = self._forward_kept(x) if keep else 0
-                if k < n:
-                    if k:
-                        x[k:] -= self.lu[k:n, :k] @ x[:k]
-                    _DTRSV(b"L", b"N", b"U", ctypes.byref(ctypes.c_int(n - k)),
-                           a + 8 * k * (self._lda.value + 1), lda, xp + 8 * k, one)
-                if keep:
-                    self._last = (np.array(b, dtype=float), x.copy())
-                _DTRSV(b"U", b"N", b"N", ctypes.byref(ctypes.c_int(n)), a, lda, xp, one)
-            return x
-        k = n * (n + 1) // 2
-        y = dtpsv(n, self.Lt[:k], b, lower=0, trans=1, diag=1)
-        return dtpsv(n, self.U[:k], y, lower=0)
+            raise ValueError(f"NestedCholesky.solve: {n} unknowns, factored {self.n}")
+        if _DTRSV is None:
+            return self.backward(self._with_rank_one(self.forward(b)))
+        if not n:
+            return np.zeros(0)
+        x = self._work[:n]
+        x[...] = b                       # solved in place in the work vector
+        size, lda, one = self._refs
+        a, xp = self._address, self._work_address
+        # the forward solve y = U⁻ᵀ b is nested: y[:k] depends on b[:k] alone,
+        # so a right-hand side that shares its leading entries with the last
+        # one's (the contact iteration's next set: the same gap, a node or two
+        # more or fewer) keeps that part of y
+        k = self._forward_kept(x) if keep else 0
+        if k < n:
+            if k:
+                x[k:] -= x[:k] @ self.u[:k, k:n]
+            self._size.value = n - k
+            _DTRSV(b"U", b"T", b"N", size, a + 8 * k * (self._lda.value + 1), lda,
+                   xp + 8 * k, one)
+        if keep:
+            self._last = (np.array(b, dtype=float), x.copy())
+        self._with_rank_one(x)
+        self._size.value = n
+        _DTRSV(b"U", b"N", b"N", size, a, lda, xp, one)
+        return x.copy()
+
+    def _with_rank_one(self, y: np.ndarray) -> np.ndarray:
+        """y - f (g·y)/(1 + g·f) on y's nodes, in place (y itself without a rank-one term)."""
+        if self._rank_one is not None and len(y):
+            f, g, denominator = self._rank_one
+            n = len(y)
+            y -= f[:n] * (float(g[:n] @ y) / denominator[n - 1])
+        return y
 
 
 #: an inner (low-precision) solve of :func:`gmres` is asked for at most this

@@ -8,9 +8,11 @@ RESOURCE_KEY = "mdr.elements"
 _DENSE_MAX = 2048
 
 
-#: dense N x N matrices a run keeps at once, by time scheme (nested LU factors
-#: of the implicit step; adaptive stepping keeps several step sizes' factors)
-DENSE_MATRICES = {"adaptive": 8.0, "implicit": 8.0, "bdf2": 8.0, "explicit": 1.0}
+#: dense N x N matrices a run keeps at once, by time scheme (nested Cholesky factors
+#: of the implicit step; adaptive stepping keeps several step sizes' factors):
+#: above the peaks measured (docs/performance.md, "Measurements behind the code",
+#: ``mdr/resources.py`` ``memory_bytes``)
+DENSE_MATRICES = {"adaptive": 8.0, "implicit": 4.0, "bdf2": 4.0, "explicit": 1.0}
 
 
 #: doubles per node and stored stage at the run's end: its grid, profile and pressure

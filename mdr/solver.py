@@ -234,7 +234,7 @@ class Wear(stepping.Problem):
     """The MDR's implicit wear step on its grid, as :mod:`numerics.stepping` steps it.
 
     What the stepper cannot know and this keeps between its calls: one
-    implicit system per wear compliance (direct solves: a nested LU per step
+    implicit system per wear compliance (direct solves: a nested factorisation per step
     size of the ladder, the regular step's for fixed steps, the nearest one
     preconditioning a stage landing; GMRES grids: the coarse-grid
     preconditioner, the same at any step), the guesses of the contact edge
@@ -262,6 +262,10 @@ class Wear(stepping.Problem):
         self.steps = 0
         self.edges = _EdgeGuess()
         self.systems: dict = {}
+        # the regular steps' solves are direct (exact, started from no guess of p):
+        # their pressure guesses are not formed
+        self.direct = wear.solves_directly(model) and model.exponent == 1.0 \
+            and model.tangential == 0.0
         # the 1D profile beyond the contact from a reference (fine grids: there the
         # full transform of each contact iteration cost as much as a GMRES pass)
         self.far_gap = wear.FarGap() if self.N > FAR_GAP_FROM else None
@@ -333,12 +337,13 @@ class Wear(stepping.Problem):
             return new
         # a doubled step: the guesses of its three solves (_EdgeGuess)
         start, hn, edges = sub.start, sub.length, self.edges
+        iterative = not (self.direct and sub.regular)
         if sub.kind == "full":
             self._edge = self._edge_guess(hn)
             # the pressure extrapolated linearly in s starts the iterative
             # solves of fine grids (GMRES iterations of the full step's first
             # pass at N = 25600: 8-10 from the step's start pressure, 5-7 from this)
-            p_guess = None if self.p_prev is None or not self.h_last else \
+            p_guess = None if self.p_prev is None or not self.h_last or not iterative else \
                 start.p + (start.p - self.p_prev) * (hn / self.h_last)
             return self._solve(origin, base, h, c, sub.regular,
                                edges.full(start.m, self._edge, hn, self.h_last), p_guess)
@@ -346,7 +351,7 @@ class Wear(stepping.Problem):
         full = sub.full
         if sub.kind == "half":
             return self._solve(origin, base, h, c, sub.regular, edges.half(start.m, full.m),
-                               0.5 * (start.p + full.p))
+                               0.5 * (start.p + full.p) if iterative else None)
         two = self._solve(origin, base, h, c, sub.regular,
                           edges.two(start.m, sub.half.m, full.m), full.p)
         edges.update(start.m, self._edge, hn, self.h_last, full.m, sub.half.m, two.m)

@@ -426,12 +426,36 @@ def to_1d(f: np.ndarray) -> np.ndarray:
     g = np.empty(n)
     g[0] = f[0]
     if n > 1:
-        # (the differences by slicing: np.diff's checks cost as much as the
-        # subtraction on a grid of 800)
-        s = lower(_kernel(abel_kernel, n - 1), f[1:] - f[:-1], key="c")
-        np.multiply(_two_sqrt(n), s, out=g[1:])
+        plan = _TO_1D.get(n) if _POCKETFFT is not None else None
+        if plan is not None and (FFT == "pocketfft" or plan[1] < FFTW_FROM):
+            # the same product as lower()'s, its lookups done once per size: the
+            # implicit step checks its contact by a to_1d of the whole grid per
+            # contact iteration, where those lookups were a visible share
+            spec, nfft, two_sqrt = plan
+            r2c, c2r = _POCKETFFT
+            padded = np.empty(nfft)
+            np.subtract(f[1:], f[:-1], out=padded[:n - 1])
+            padded[n - 1:] = 0.0
+            X = r2c(padded, (0,), True, 0, None, 1)
+            X *= spec
+            np.multiply(two_sqrt, c2r(X, (0,), nfft, False, 2, None, 1)[:n - 1], out=g[1:])
+        else:
+            # (the differences by slicing: np.diff's checks cost as much as the
+            # subtraction on a grid of 800)
+            kernel = _kernel(abel_kernel, n - 1)
+            s = lower(kernel, f[1:] - f[:-1], key="c")
+            np.multiply(_two_sqrt(n), s, out=g[1:])
+            if n - 1 > 64:
+                if len(_TO_1D) > 64:
+                    _TO_1D.clear()
+                nfft = _fft_length(n - 1)
+                _TO_1D[n] = (_spectrum(kernel, nfft, ("c", len(kernel))), nfft, _two_sqrt(n))
         g[1:] += f[0]
     return g
+
+
+#: per grid size: to_1d's kernel spectrum, FFT length and node factors 2 sqrt(i)
+_TO_1D: dict = {}
 
 
 def from_1d_exact(g: np.ndarray) -> np.ndarray:
@@ -510,6 +534,28 @@ def line_load(p: np.ndarray, dt: float) -> np.ndarray:
     return upper(_kernel(abel_kernel_inverse_sum, len(p)), p, key="B") * (0.5 * math.pi * math.sqrt(dt))
 
 
+#: :func:`last_loaded` sums this many nodes in from the edge before it transforms
+LAST_LOADED_SCAN = 32
+
+
+def last_loaded(p: np.ndarray) -> int:
+    """The last node i with line load q_i > 0 of the pressure p (``line_load(p, dt)``;
+    0 if none), found from the edge inwards.
+
+    q_i is (π/2) sqrt(Δt) Σ_{k>=0} B[k] p[i+k]: a node at the edge needs a
+    sum of a few terms, where the whole line load is a transform of the grid.
+    The contact iteration asks it of a set too large by a node or two.
+    """
+    n = len(p)
+    p = np.asarray(p, dtype=float)
+    B = _kernel(abel_kernel_inverse_sum, n)
+    for i in range(n - 1, max(n - 1 - LAST_LOADED_SCAN, -1), -1):
+        if float(B[:n - i] @ p[i:]) > 0.0:
+            return i
+    pos = np.flatnonzero(line_load(p, 1.0) > 0.0)
+    return int(pos[-1]) if pos.size else 0
+
+
 def force(q: np.ndarray, dt: float) -> float:
     """Paper Eq. 12: F = 2 ∫_0^∞ q dx = ∫ q / sqrt(t) dt, exact for q linear in t."""
     q = np.asarray(q, dtype=float)
@@ -577,3 +623,48 @@ def compliance_matrix(n: int, dt: float, E_star: float, method: str | None = Non
         Ld = np.convolve(B[:m], d)[:m]
         out[1:] = LDQ + (1.0 - Ld)[:, None] * Q[0][None, :]
     return out / E_star
+
+
+#: the tip node's weight in the symmetric part of :func:`compliance_split`: any
+#: positive value splits the matrix exactly; this one, the next node's 1/(2 sqrt 1),
+#: keeps the symmetric part as well conditioned as the whole matrix and the
+#: rank-one term's Sherman–Morrison denominator near 1 (1.1-1.9 on the paper case)
+SPLIT_TIP_WEIGHT = 0.5
+
+
+def compliance_split(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The unit compliance matrix (dt = E* = 1) of n nodes as S + u vᵀ, S symmetric
+    positive definite: (S_upper, u, v).
+
+    :func:`compliance_matrix` is T⁻¹ P⁻¹ with P⁻¹ = (π/2) Lᵀ and
+    T⁻¹ = L D + a e₀ᵀ
+    (L lower Toeplitz of kernel B, D = diag(δ, 1/(2 sqrt i)) with δ =
+    SPLIT_TIP_WEIGHT, a its first column less δ B), so it is (π/2)(L D Lᵀ + a Bᵀ):
+    S = (π/2) W Wᵀ with W = L D^½ lower triangular, u = (π/2) a, v = B. Its leading
+    blocks are the same split of the leading blocks. Only S's upper triangle is
+    formed (``S_upper``, a reversed view of a Fortran-ordered array; below the
+    diagonal it holds other values), by LAPACK's ``lauum`` (n³/3 operations against the n³ of the
+    product of the two triangular factors) on the index-reversed W, which is
+    upper triangular.
+    """
+    from scipy.linalg import toeplitz
+    from scipy.linalg.lapack import dlauum
+
+    B = np.cumsum(_kernel(abel_kernel_inverse, n)[:n])
+    d = np.r_[SPLIT_TIP_WEIGHT, 1.0 / (2.0 * np.sqrt(np.arange(1, n)))]
+    # V = J W J (J the reversal): V[i, j] = B[j - i] sqrt(d[n-1-j]) for j >= i
+    V = toeplitz(np.r_[B[0], np.zeros(n - 1)], B)
+    V *= np.sqrt(d[::-1])[None, :]
+    # V.T (lower, Fortran-ordered: no copy): lauum's (V.T)ᵀ V.T = V Vᵀ = J S J
+    # in its lower triangle, which reversed is S's upper triangle
+    VVt, info = dlauum(V.T, lower=1, overwrite_c=1)
+    if info != 0:
+        raise ArithmeticError(f"LAPACK dlauum failed (info {info})")
+    VVt *= 0.5 * math.pi
+    S = VVt[::-1, ::-1]             # (a view: no copy of n² numbers)
+    # a = T⁻¹'s first column less δ B: 1 - Σ_{1<=j<=i} B[i-j] d_j - δ B_i
+    first = np.ones(n)
+    if n > 1:
+        first[1:] -= np.convolve(B, d[1:])[:n - 1]
+    u = (0.5 * math.pi) * (first - d[0] * B)
+    return S, u, B

@@ -17,13 +17,14 @@ by a f_n + b f_{n-1} and h by c h (:func:`numerics.stepping.bdf2_coefficients`).
 
 T⁻¹ and P⁻¹ are triangular, so on the contact set only their leading blocks
 enter: solved directly (mdr.linear_solver; "auto": up to DENSE_MAX nodes) one
-LU factorisation without pivoting serves every contact set (its factors'
-leading blocks), started at the present contact and grown by bordering as the
-contact grows; solved iteratively (finer grids) each operator is applied as
-one FFT convolution and the step solved by GMRES with a
-coarse-grid preconditioner (a handful of iterations whatever the grid: the
-operator's condition number is about 1 + 2.4/Δŝ), each contact iteration
-starting from the last one's pressure.
+Cholesky factorisation of the matrix's symmetric part (its rank-one rest by
+Sherman–Morrison) serves every contact set (its factor's leading blocks),
+started at the present contact and grown by bordering as the contact grows;
+solved iteratively (finer grids) each operator is applied as one FFT
+convolution and the step solved by GMRES with a coarse-grid preconditioner
+(a handful of iterations whatever the grid: the operator's condition number
+is about 1 + 2.4/Δŝ), each contact iteration starting from the last one's
+pressure.
 """
 
 from __future__ import annotations
@@ -113,7 +114,7 @@ def explicit_step(model: Model, state: State, h: float) -> State:
     return contact_state(model, f)
 
 
-#: largest grid factorised densely (nested LU, exact) with mdr.linear_solver =
+#: largest grid factorised densely (nested Cholesky, exact) with mdr.linear_solver =
 #: "auto"; finer grids use GMRES
 DENSE_MAX = 2048
 #: relative tolerance of the contact conditions (gap and line load, times d)
@@ -125,7 +126,7 @@ EDGE_TOL = 1e-9
 #: and, deciding the marginal edge node differently, costs extra passes
 #: (docs/performance.md, "Measurements behind the code")
 ACCURATE_RTOL = 1e-9
-#: a nested LU too small for a contact set grows to at least this factor
+#: a nested factorisation too small for a contact set grows to at least this factor
 NESTED_GROWTH = 1.1
 #: nodes of the coarse grid that preconditions GMRES on finer grids, at most
 #: a quarter of the grid's (the contact holds 40-80 % of the nodes, so the
@@ -172,6 +173,33 @@ def compliance_block(model: Model, n: int, rows: slice = slice(None),
     return np.multiply(unit[:n, :n][rows, cols], math.sqrt(model.dt) / model.E_star, order="F")
 
 
+def _unit_split(model: Model, n: int):
+    """The cached :func:`transforms.compliance_split` of at least n nodes (grown
+    as :func:`compliance_block`'s matrix is: twice as large as asked, at most the grid)."""
+    split = _UNIT_COMPLIANCE.get("split")
+    if split is None or len(split[1]) < n:
+        have = len(split[1]) if split is not None else 0
+        size = max(n, min(2 * max(n, have), len(model.x)))
+        split = _UNIT_COMPLIANCE["split"] = transforms.compliance_split(size)
+    return split
+
+
+def symmetric_block(model: Model, n: int, rows: slice = slice(None),
+                    cols: slice = slice(None)) -> np.ndarray:
+    """A fresh Fortran-ordered copy of the leading n×n block of the symmetric part
+    S of the model's compliance matrix C = S + u vᵀ (:func:`transforms.compliance_split`,
+    scaled by sqrt(Δt)/E*), or of its part ``[rows, cols]``; only its upper triangle
+    holds S."""
+    S = _unit_split(model, n)[0]
+    return np.multiply(S[:n, :n][rows, cols], math.sqrt(model.dt) / model.E_star, order="F")
+
+
+def rank_one(model: Model, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """u, v of the compliance matrix C = S + u vᵀ on its leading n nodes (fresh arrays)."""
+    _, u, v = _unit_split(model, n)
+    return u[:n] * (math.sqrt(model.dt) / model.E_star), v[:n].copy()
+
+
 def coarse_eigen(nc: int):
     """Eigenvalues and eigenvectors (λ, V, V⁻¹) of the unit compliance matrix of nc nodes.
 
@@ -194,9 +222,10 @@ def coarse_eigen(nc: int):
 class ImplicitSystem:
     """(T⁻¹ P⁻¹/E* + σ) p = r on the contact nodes, σ = h K S, for any contact set.
 
-    Direct (:func:`solves_directly`): the nested LU of the whole grid's matrix
-    for the run's regular step, exact for every contact set. Iterative: GMRES,
-    preconditioned by the same operator on a coarse t-uniform grid whose
+    Direct (:func:`solves_directly`): the nested Cholesky factorisation of the
+    whole grid's matrix (:class:`linalg.NestedCholesky`) for the run's regular
+    step, exact for every contact set. Iterative: GMRES, preconditioned by the
+    same operator on a coarse t-uniform grid whose
     contact edge coincides with the fine one (linear interpolation in t
     between the grids) plus 1/σ on what the coarse grid cannot represent
     (grid-scale modes, where the wear compliance σ dominates the elastic one).
@@ -222,30 +251,27 @@ class ImplicitSystem:
             self._eigen = coarse_eigen(self.nc)
 
     def _factor(self, n: int) -> None:
+        # C + σI = (S + σI) + u vᵀ: the symmetric positive definite S + σI by
+        # Cholesky, the rank-one term by Sherman–Morrison inside its solves
+        # (linalg.NestedCholesky), half the operations of an LU of the whole
         n = min(n, self.N + 1)
         model = self.model
         if self.lu is None:
-            def block():
-                A = compliance_block(model, n)
-                A[np.diag_indices(n)] += self.sigma
-                return A
-            try:
-                # factorised in A's own storage (A is a fresh copy): one n×n copy
-                # fewer per system
-                self.lu = linalg.NestedLU(block(), limit=self.N + 1, overwrite=True)
-            except linalg.Pivoted:
-                self.lu = linalg.NestedLU(block(), limit=self.N + 1)
+            A = symmetric_block(model, n)
+            A[np.diag_indices(n)] += self.sigma
+            # factorised in A's own storage (A is a fresh copy)
+            self.lu = linalg.NestedCholesky(A, limit=self.N + 1, overwrite=True)
         else:
-            # bordering: the factors of the smaller block stay (the paper case
+            # bordering: the factor of the smaller block stays (the paper case
             # at N = 800 factored 1.52e9 n³-units sized ahead and refactoring,
             # against 0.63e9 for the blocks its solves needed); only the new
-            # rows and columns of the matrix are formed
+            # columns of the matrix are formed
             k = self.lu.n
             old, new = slice(0, k), slice(k, n)
-            A22 = compliance_block(model, n, new, new)
+            A22 = symmetric_block(model, n, new, new)
             A22[np.diag_indices(n - k)] += self.sigma
-            self.lu.extend(compliance_block(model, n, old, new),
-                           compliance_block(model, n, new, old), A22)
+            self.lu.extend(symmetric_block(model, n, old, new), A22)
+        self.lu.rank_one(*rank_one(model, self.lu.n))
 
     def _nested_solve(self, r: np.ndarray, keep: bool = False) -> np.ndarray:
         if len(r) > self.lu.n:
@@ -628,7 +654,8 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
                                          "during wear")
         n = m + 1
         sigma = hc * K * (S[:n] if isinstance(S, np.ndarray) else S)
-        if len(x0) != n:
+        direct = system.exact(sigma)      # (a direct solve ignores the start x0)
+        if not direct and len(x0) != n:
             # the last iterate's pressure, cut or extended by its edge value: the
             # sets of successive iterations differ by a node or two at the edge
             # (from the step's start pressure instead, each GMRES pass took
@@ -642,7 +669,8 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
         else:
             # p = d p1 + p2 is linear in the unknown depth; the force fixes d
             p1, F1 = system.unit_response(n, sigma, stats, rtol)
-            p2 = system.solve(-base[:n], sigma, x0 - d_last * p1, stats, rtol)
+            p2 = system.solve(-base[:n], sigma, None if direct else x0 - d_last * p1, stats,
+                              rtol)
             w = transforms.force_weights(N, model.dt)[:n]
             F2 = w @ transforms.line_load(p2, model.dt)
             d = (model.force - F2) / F1
@@ -672,9 +700,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
         if len(below):
             m_new = n + int(below[-1])
         elif tension:
-            q = transforms.line_load(p, model.dt)
-            pos = np.flatnonzero(q > 0.0)
-            m_new = int(pos[-1]) if pos.size else 0
+            m_new = transforms.last_loaded(p)
         else:
             break
         if marginal == m and m_new == m - 1 and \
@@ -706,7 +732,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
                                   f"(nodes {m} <-> {m_new}); reduce sliding.step_hat")
         m = m_new
     qq = np.zeros(N + 1)
-    if system.exact(sigma):
+    if direct:
         # a direct solve: the springs' line load is q = E*(d - g) in contact
         # (the solve's equation under T: g = T f = d - q/E* there), from the 1D
         # profile at hand, equal to P⁻¹ p to round-off (docs/performance.md,

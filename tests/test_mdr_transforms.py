@@ -122,6 +122,41 @@ def test_compliance_matrix_matches_operators(method):
                                rtol=1e-12, atol=1e-12 * np.max(np.abs(u)))
 
 
+@pytest.mark.parametrize("n", [1, 2, 65, 300])
+def test_compliance_split_is_the_matrix_as_symmetric_plus_rank_one(n):
+    # S + u vᵀ must be the compliance matrix built as the triangular factors'
+    # product (independently: trmm) to round-off (1e-14 of its largest entry:
+    # both sum O(n) terms of size 1 in float64), with S symmetric positive
+    # definite (what the Cholesky factorisation of the implicit step needs), and
+    # a leading block's split the leading block of the split (nested contact sets)
+    C = transforms.compliance_matrix(n, 1.0, 1.0, method="product")
+    S, u, v = transforms.compliance_split(n)
+    full = np.triu(S) + np.triu(S, 1).T
+    np.testing.assert_allclose(full + np.outer(u, v), C, rtol=0, atol=1e-14 * np.max(np.abs(C)))
+    assert np.linalg.eigvalsh(full).min() > 0.0
+    m = (n + 1) // 2
+    Sm, um, vm = transforms.compliance_split(m)
+    np.testing.assert_allclose(np.triu(Sm), np.triu(S[:m, :m]), rtol=0,
+                               atol=1e-14 * np.max(np.abs(C)))
+    np.testing.assert_allclose(um, u[:m], rtol=0, atol=1e-14)
+    np.testing.assert_allclose(vm, v[:m], rtol=1e-14, atol=0)   # (kernels of two lengths)
+
+
+@pytest.mark.parametrize("negative", [0, 1, 3, 40, 300])
+def test_last_loaded_node_by_sums_from_the_edge(negative):
+    # the contact iteration's shrink: the last node with line load q > 0, from
+    # sums at the edge (and past LAST_LOADED_SCAN nodes by the transform), must
+    # be the last positive node of the whole line load (the FFT product), for a
+    # pressure whose last ``negative`` nodes pull (0 when every node pulls)
+    rng = np.random.default_rng(11)
+    p = 1.0 + rng.random(300)
+    if negative:
+        p[-negative:] = -5.0 * (1.0 + rng.random(negative))
+    q = transforms.line_load(p, 1e-10)
+    pos = np.flatnonzero(q > 0.0)
+    assert transforms.last_loaded(p) == (int(pos[-1]) if pos.size else 0)
+
+
 @pytest.mark.parametrize("backend", ["fftw", "pocketfft", "scipy.fft"])
 def test_toeplitz_products_against_the_direct_sum(backend, monkeypatch):
     # the FFT convolutions (FFTW through pyFFTW from FFTW_FROM points on;

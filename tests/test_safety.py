@@ -435,9 +435,10 @@ def test_runs_beyond_the_memory_are_refused_before_solving(tmp_path, capsys, no_
 
 @pytest.mark.parametrize("scheme", ["adaptive", "implicit"])
 def test_the_mdr_memory_estimate_bounds_the_measured_peak(scheme):
-    """The peak of a dense-LU MDR run (N = 1500, paper case; numpy's allocations
-    as tracemalloc sees them, in a fresh process's first run: adaptive 70 MB,
-    implicit 127 MB on 2026-11-22)
+    """The peak of a dense-factorisation MDR run (N = 1500, paper case; numpy's
+    allocations as tracemalloc sees them, in a fresh process's first run: adaptive
+    70 MB, implicit 127 MB on 2026-11-22 with an LU; 62 and 29 MB on 2026-11-27
+    with the Cholesky factor)
     against mdr.resources: the estimate must not be below it (else a run that
     does not fit passes), nor far above (within 4x plus the 40 MB fixed
     allowance, else useful runs are refused)."""
