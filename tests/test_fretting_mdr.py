@@ -125,13 +125,15 @@ def test_normal_problem_unchanged_and_no_wear_in_the_stick_zone():
 
 
 def _limit_run(N, control):
-    # k = 0.1 (1000 times the paper's) reaches the limiting state within 10^3 cycles.
+    # k = 0.2 (2000 times the paper's) reaches the limiting state within 400 cycles
+    # (k n = 80; k only scales time: k = 0.1 over 800 cycles gave the same force and
+    # profile errors below to 4 digits, at twice the cost).
     # Every cycle simulated: the annulus pressure checked below (1e-5 p0) is a
     # profile accuracy of ~1e-6 of the wear, beyond what cycle jumping at 0.02
     # (an error bound of 2e-2 of the wear) holds: 3.4e-5 to 6.7e-5 p0 there, 1e-5
     # at 0.001 (docs/fretting.md §4)
-    case, a, u_star = make(N=N, amplitude=0.5, cycles=800, k=0.1, jump_tolerance=0.0,
-                           stage_cycles=[0, 800], control=control, increments=20)
+    case, a, u_star = make(N=N, amplitude=0.5, cycles=400, k=0.2, jump_tolerance=0.0,
+                           stage_cycles=[0, 400], control=control, increments=20)
     res = mdr.solve(case)
     c0 = rf.stick_radius(a, R, case.E_star, case.G_star, MU, 0.5 * u_star)
     return case, res, c0
@@ -150,7 +152,7 @@ def test_depth_control_converges_to_popovs_limiting_profile():
         np.testing.assert_allclose(h["stick_radius"], c0, rtol=1e-4)
         b = math.sqrt(R * d)
         annulus = (res.r > 1.02 * c0) & (res.r < b)
-        # measured 6e-7 to 9e-7 p0 after 800 cycles (N = 50 to 200): the annulus is unloaded
+        # measured 6e-7 to 1.3e-6 p0 at k n = 80 (N = 50 to 200): the annulus is unloaded
         assert np.max(res.p[-1][annulus]) < 1e-5 * np.max(res.p[0])
         F_inf = 2 * case.E_star * c0 * (d - c0**2 / (3 * R))
         force_err.append(abs(h["force"][-1] / F_inf - 1))
@@ -242,7 +244,7 @@ def test_force_control_reaches_a_limiting_profile_with_its_stick_radius():
     d_inf = rf.limiting_depth(FORCE, case.E_star, c, R)
     b = math.sqrt(R * d_inf)
     annulus = (res.r > 1.02 * c) & (res.r < b)
-    # measured 1.3e-4 p0 after 800 cycles at N = 100: unloading
+    # measured 9.4e-5 p0 at k n = 80 (N = 200): unloading
     assert np.max(res.p[-1][annulus]) < 1e-3 * np.max(res.p[0])
     # the depth to 0.3 % (the grid's error of the stick edge, as at fixed depth;
     # rate 1 in N: 0.989, 0.994, 0.997, 0.999 at N = 50 to 400)
