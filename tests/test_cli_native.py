@@ -132,3 +132,20 @@ def test_compare_json_is_the_verdict_and_agrees_with_the_exit_code(tmp_path, cap
         assert json.loads(open(verdict["metrics"]).read())["passed"] is verdict["passed"]
         assert (verdict["diagnosis"] is None) is (code == 0)
 
+
+
+def test_run_json_of_a_jumped_fretting_run_gives_its_error_estimate(tmp_path):
+    # review finding: --json left out the error estimate that meta.json and report.md
+    # give; it is the same number, and within the tolerance the run promises
+    out = tmp_path / "fretting"
+    done = subprocess.run([sys.executable, "-m", "wearcheck", "run", "fretting", "--solver", "mdr",
+                           "--set", "fretting.cycles=300", "--set", "mdr.elements=200",
+                           "--quiet", "--json", "--out", str(out)],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    summary = json.loads(done.stdout)
+    meta = json.loads((out / "meta.json").read_text(encoding="utf-8"))["info"]["cycle_jumping"]
+    assert summary["cycle_jumping"] == {k: meta[k] for k in
+                                        ("error_estimate", "tolerance", "simulated_cycles")}
+    assert 0.0 < summary["cycle_jumping"]["error_estimate"] <= summary["cycle_jumping"]["tolerance"]
+    assert summary["cycle_jumping"]["simulated_cycles"] < 300

@@ -80,11 +80,15 @@ def main(args) -> int:
 
 def summary(case, result, solver: str, out: Path) -> dict:
     """What ``--json`` prints: the run's counts, the last history row (units
-    from the run's data dictionary) and the scales."""
+    from the run's data dictionary), the scales and, for a run with cycle
+    jumping, its error estimate against every cycle simulated."""
 
     entry = registry.get(solver) if solver in registry.names() else None
     units = layout.run_dictionary(entry, list(result.history))["history_csv"]
-    return dict(solver=solver, out=out,
+    jumping = result.info.get("cycle_jumping") or {}
+    extra = {"cycle_jumping": {k: jumping[k] for k in (
+        "error_estimate", "tolerance", "simulated_cycles") if k in jumping}} if jumping else {}
+    return dict(solver=solver, out=out, **extra,
                 steps=len(result.history["s"]) - 1, stages_reached=len(result.stage_s),
                 solve_seconds=result.solve_seconds,
                 last={k: float(v[-1]) for k, v in result.history.items() if len(v)},
