@@ -165,23 +165,25 @@ def compliance_block(model: Model, n: int, rows: slice = slice(None),
     it several times (docs/performance.md, "Measurements behind the code").
     A factorisation grown by bordering asks for the new rows and columns only.
     """
-    unit = _UNIT_COMPLIANCE.get("C")
-    if unit is None or len(unit) < n:
-        want = 2 * max(n, len(unit) if unit is not None else 0)
-        size = max(n, min(want, len(model.x)))
-        unit = _UNIT_COMPLIANCE["C"] = transforms.compliance_matrix(size, 1.0, 1.0)
+    unit = _grown("C", n, model, lambda size: transforms.compliance_matrix(size, 1.0, 1.0), len)
     return np.multiply(unit[:n, :n][rows, cols], math.sqrt(model.dt) / model.E_star, order="F")
+
+
+def _grown(key: str, n: int, model: Model, build, size_of):
+    """The cached unit matrix ``key`` of at least n nodes, built by ``build(size)``
+    twice as large as asked (at most the grid) when it is missing or too small;
+    ``size_of`` reads the size of what is cached."""
+    have = _UNIT_COMPLIANCE.get(key)
+    if have is None or size_of(have) < n:
+        size = max(n, min(2 * max(n, size_of(have) if have is not None else 0), len(model.x)))
+        have = _UNIT_COMPLIANCE[key] = build(size)
+    return have
 
 
 def _unit_split(model: Model, n: int):
     """The cached :func:`transforms.compliance_split` of at least n nodes (grown
     as :func:`compliance_block`'s matrix is: twice as large as asked, at most the grid)."""
-    split = _UNIT_COMPLIANCE.get("split")
-    if split is None or len(split[1]) < n:
-        have = len(split[1]) if split is not None else 0
-        size = max(n, min(2 * max(n, have), len(model.x)))
-        split = _UNIT_COMPLIANCE["split"] = transforms.compliance_split(size)
-    return split
+    return _grown("split", n, model, transforms.compliance_split, lambda split: len(split[1]))
 
 
 def symmetric_block(model: Model, n: int, rows: slice = slice(None),

@@ -57,8 +57,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import math
-
 import numpy as np
 
 from wearcheck.cases.errors import SolverError
