@@ -33,7 +33,7 @@ from wearcheck.comparisons.present.fit_report import text
 from wearcheck.outputs import check_output
 from wearcheck.rundir import jsonable
 from wearcheck.studies.fit import WARNING_STARTS, fit, write
-from ._common import add_case_arguments, load_case
+from ._common import add_case_arguments, case_notes, load_case
 from .refine import add_cluster_arguments
 
 
@@ -83,6 +83,7 @@ def main(args) -> int:
                  scheduler=args.scheduler, workers=args.workers, quiet=args.quiet or args.json)
     if args.out is not None:
         write(result, args.out, data_path=args.measurements)
+    case_notes(args, case)
     for remark in result.warnings:
         warned = remark.startswith(WARNING_STARTS)
         print(f"warning: {remark}" if warned else f"note: {remark}",

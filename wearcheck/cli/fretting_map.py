@@ -14,8 +14,8 @@ from pathlib import Path
 from wearcheck.studies.distributed import fmt
 from wearcheck.studies.fretting_map import fretting_map
 
-from ._common import (add_case_arguments, add_json_argument, load_case, print_json, study_exit,
-                      varied)
+from ._common import (add_case_arguments, add_json_argument, case_notes, load_case,
+                      print_json, study_exit, varied)
 from .refine import add_cluster_arguments
 
 
@@ -43,6 +43,7 @@ def main(args) -> int:
         print(f"wearcheck fretting-map: interrupted; the runs finished are in {out}",
               file=sys.stderr)
         return 130
+    case_notes(args, case)
     if args.json:
         print_json(rows)
     else:

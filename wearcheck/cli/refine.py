@@ -18,7 +18,8 @@ from pathlib import Path
 from wearcheck import registry
 from wearcheck.studies.refine import refine, table
 
-from ._common import add_case_arguments, add_json_argument, load_case, print_json
+from ._common import (add_case_arguments, add_json_argument, case_notes, load_case,
+                      print_json)
 from . import Terminated
 
 
@@ -90,6 +91,7 @@ def main(args) -> int:
               + ("the summary was written, the figures may be missing" if written
                  else "no summary was written"), file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
+    case_notes(args, case)
     if args.json:
         print_json(summary)
     else:

@@ -16,8 +16,8 @@ from wearcheck import registry
 
 from wearcheck.studies.sweep import sweep
 
-from ._common import (add_case_arguments, add_json_argument, load_case, print_json, study_exit,
-                      varied)
+from ._common import (add_case_arguments, add_json_argument, case_notes, load_case,
+                      print_json, study_exit, varied)
 from .refine import add_cluster_arguments
 from . import Terminated
 
@@ -48,6 +48,7 @@ def main(args) -> int:
         print(f"wearcheck sweep: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}"
               f"; the runs finished are in {out}, no sweep.csv was written", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
+    case_notes(args, case)
     if args.json:
         print_json(rows)
     else:
