@@ -1,6 +1,6 @@
 """Start-up of the command line against the import of numpy and scipy (issue 26 §3).
 
-    python benchmarks/bench_startup.py [--rounds 9]
+    python benchmarks/bench_startup.py [--rounds 9] [--other PYTHON]
 
 Times, in fresh processes alternated round by round, the floor
 ``python -c "import numpy, scipy.sparse, scipy.linalg"`` (what any wearcheck
@@ -11,6 +11,9 @@ rest is start-up and writing the run directory), and prints their wall and
 CPU seconds and their ratios to the floor. Targets: each ``--help`` within 1×
 and ``run hertz`` within 2× of the floor. Every process is this interpreter (the
 console script ``wearcheck`` beside it when installed).
+
+``--other PYTHON``: also time the ``--help`` commands of another environment's
+wearcheck (e.g. one with the main branch installed) in the same rounds.
 """
 
 from __future__ import annotations
@@ -30,6 +33,8 @@ DASK_COMMANDS = ("sweep", "refine", "fit", "fretting-map")
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=9)
+    ap.add_argument("--other", metavar="PYTHON",
+                    help="also time the --help commands of this interpreter's environment")
     args = ap.parse_args()
     py, wc = sys.executable, harness.wearcheck_command()
     out = Path(tempfile.mkdtemp(prefix="bench-startup-"))
@@ -44,6 +49,11 @@ def main():
         ("wearcheck run hertz --solver mdr", [*wc, "run", "hertz", "--solver", "mdr",
                                               "--quiet", "--out", str(out / "hertz")], None),
     ]
+    if args.other:
+        other = harness.wearcheck_command(args.other)
+        commands += [(f"{args.other}: wearcheck{' ' + name if name else ''} --help",
+                      [*other, *([name] if name else []), "--help"], None)
+                     for name in ("", *DASK_COMMANDS)]
     print(f"# bench_startup: {harness.load()} (before)\n")
     try:
         timed = harness.alternate(commands, args.rounds)

@@ -43,6 +43,15 @@ def case_notes(args, case) -> None:
             print(f"note: {text}", file=sys.stderr)
 
 
+def add_cluster_arguments(p) -> None:
+    """--scheduler and --workers of the studies on Dask (sweep, refine, fit, fretting-map)."""
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on an existing Dask scheduler, e.g. tcp://host:8786 "
+                        "(default: an embedded local cluster)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="worker processes of the embedded cluster (default: one per core)")
+
+
 def output(args, default: Path) -> Path:
     """The command's output directory: ``--out``, else ``default``; kept in
     ``args.out`` so that an interrupt after it was written names it."""

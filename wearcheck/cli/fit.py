@@ -29,12 +29,9 @@ import sys
 from pathlib import Path
 
 from wearcheck.cases import CaseError
-from wearcheck.comparisons.present.fit_report import text
 from wearcheck.outputs import check_output
 from wearcheck.rundir import jsonable
-from wearcheck.studies.fit import WARNING_STARTS, fit, write
-from ._common import add_case_arguments, case_notes, load_case
-from .refine import add_cluster_arguments
+from ._common import add_case_arguments, add_cluster_arguments, case_notes, load_case
 
 
 def add_parser(sub):
@@ -74,6 +71,11 @@ def _exponents(text):
 
 
 def main(args) -> int:
+    # imported when the command runs, not to build its parser: the study loads
+    # scipy.optimize and asyncio, 1.6-1.7x numpy and scipy's own start-up
+    # for --help (docs/performance.md, "Start-up")
+    from wearcheck.comparisons.present.fit_report import text
+    from wearcheck.studies.fit import WARNING_STARTS, fit, write
     case = load_case(args)
     if args.out is not None:
         check_output(args.out, "fit")   # before the runs: a path we may not write fails at once

@@ -11,12 +11,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from wearcheck.studies.distributed import fmt
-from wearcheck.studies.fretting_map import fretting_map
-
-from ._common import (add_case_arguments, add_json_argument, case_notes, load_case,
-                      print_json, study_exit, varied)
-from .refine import add_cluster_arguments
+from ._common import (add_case_arguments, add_cluster_arguments, add_json_argument,
+                      case_notes, load_case, print_json, study_exit, varied)
 
 
 def add_parser(sub):
@@ -33,6 +29,11 @@ def add_parser(sub):
 
 
 def main(args) -> int:
+    # imported when the command runs, not to build its parser: the study loads
+    # scipy.optimize and asyncio, 1.6-1.7x numpy and scipy's own start-up
+    # for --help (docs/performance.md, "Start-up")
+    from wearcheck.studies.distributed import fmt
+    from wearcheck.studies.fretting_map import fretting_map
     case = load_case(args)
     vary = varied(args)
     out = args.out or Path("runs") / f"{args.case.stem}-fretting-map"
