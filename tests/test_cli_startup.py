@@ -63,9 +63,8 @@ def test_a_subcommand_loads_only_its_own_module():
 
 @pytest.mark.parametrize("name", ["sweep", "refine", "fit", "fretting-map"])
 def test_a_dask_study_builds_its_parser_without_the_study(name):
-    # their --help took 1.6-1.7x the import of numpy and scipy (the studies load
-    # scipy.optimize and asyncio), the bare --help 0.5x: the study is imported when
-    # the command runs (benchmarks/bench_startup.py)
+    # the study (scipy.optimize, asyncio) is imported when the command runs: its
+    # --help costs what the bare --help does (docs/performance.md, "Start-up")
     code = ("from wearcheck.cli import main\n"
             f"try:\n    main([{name!r}, '--help'])\nexcept SystemExit as e:\n"
             "    assert e.code == 0\n")

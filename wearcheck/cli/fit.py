@@ -71,9 +71,8 @@ def _exponents(text):
 
 
 def main(args) -> int:
-    # imported when the command runs, not to build its parser: the study loads
-    # scipy.optimize and asyncio, 1.6-1.7x numpy and scipy's own start-up
-    # for --help (docs/performance.md, "Start-up")
+    # the study (scipy.optimize, asyncio) is imported here, not for --help
+    # (docs/performance.md, "Start-up")
     from wearcheck.comparisons.present.fit_report import text
     from wearcheck.studies.fit import WARNING_STARTS, fit, write
     case = load_case(args)

@@ -68,9 +68,8 @@ _float_list.__name__ = "comma-separated positive number"
 
 
 def main(args) -> int:
-    # imported when the command runs, not to build its parser: the study loads
-    # scipy.optimize and asyncio, 1.6-1.7x numpy and scipy's own start-up
-    # for --help (docs/performance.md, "Start-up")
+    # the study (scipy.optimize, asyncio) is imported here, not for --help
+    # (docs/performance.md, "Start-up")
     from wearcheck.studies.refine import refine, table
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-refine"

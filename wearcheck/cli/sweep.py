@@ -34,9 +34,8 @@ def add_parser(sub):
 
 
 def main(args) -> int:
-    # imported when the command runs, not to build its parser: the study loads
-    # scipy.optimize and asyncio, 1.6-1.7x numpy and scipy's own start-up
-    # for --help (docs/performance.md, "Start-up")
+    # the study (scipy.optimize, asyncio) is imported here, not for --help
+    # (docs/performance.md, "Start-up")
     from wearcheck.studies.distributed import fmt
     from wearcheck.studies.sweep import sweep
     case = load_case(args)
