@@ -29,12 +29,9 @@ import sys
 from pathlib import Path
 
 from wearcheck.cases import CaseError
-from wearcheck.comparisons.present.fit_report import text
 from wearcheck.outputs import check_output
 from wearcheck.rundir import jsonable
-from wearcheck.studies.fit import WARNING_STARTS, fit, write
-from ._common import add_case_arguments, load_case
-from .refine import add_cluster_arguments
+from ._common import add_case_arguments, add_cluster_arguments, case_notes, load_case
 
 
 def add_parser(sub):
@@ -74,6 +71,10 @@ def _exponents(text):
 
 
 def main(args) -> int:
+    # the study (scipy.optimize, asyncio) is imported here, not for --help
+    # (docs/performance.md, "Start-up")
+    from wearcheck.comparisons.present.fit_report import text
+    from wearcheck.studies.fit import WARNING_STARTS, fit, write
     case = load_case(args)
     if args.out is not None:
         check_output(args.out, "fit")   # before the runs: a path we may not write fails at once
@@ -83,6 +84,7 @@ def main(args) -> int:
                  scheduler=args.scheduler, workers=args.workers, quiet=args.quiet or args.json)
     if args.out is not None:
         write(result, args.out, data_path=args.measurements)
+    case_notes(args, case)
     for remark in result.warnings:
         warned = remark.startswith(WARNING_STARTS)
         print(f"warning: {remark}" if warned else f"note: {remark}",
