@@ -32,6 +32,19 @@ def test_help_has_no_markup_and_no_internal_module_names(name):
     assert not re.search(r"\b[a-z_]+\.py\b", text), text
 
 
+@pytest.mark.parametrize("name", sorted(_subparsers()[1]))
+def test_help_examples_are_one_command_a_line(name):
+    # an example in a description is reflowed by argparse into one paragraph
+    # (fit's help once ran four commands together); examples belong in the
+    # "examples:" epilog, which keeps its lines
+    text = _subparsers()[1][name].format_help()
+    for line in text.splitlines():
+        assert line.count("wearcheck ") <= 1, line
+    examples = text.split("examples:\n", 1)[1] if "examples:\n" in text else ""
+    for line in examples.splitlines():
+        assert not line.strip().startswith("wearcheck ") or line.startswith("  wearcheck "), line
+
+
 def test_plain_removes_roles_and_literals():
     assert plain("``wearcheck run``: see :func:`~x.y` and :mod:`z`") == "wearcheck run: see x.y and z"
     assert plain(None) is None

@@ -10,15 +10,6 @@ both bodies wearing. With 95 % intervals, each measurement's residual, the
 lab formula's K beside it and a warning when the residuals say the model does
 not fit (exit code 1, as a failed comparison). The CSV names its columns with
 units, e.g. ``cycles, D [um], ± D [um], track depth [um]`` (docs/fitting.md).
-
-Examples:
-
-    wearcheck fit my_ball.toml sheet.csv --fit wear.specific_rate
-    wearcheck fit ball_on_flat sheet.csv --fit wear.specific_rate --json
-    wearcheck fit my_ball.toml sheet.csv --fit wear.specific_rate \\
-        --fit wear.pressure_exponent --out runs/my-fit
-    wearcheck fit ball_on_flat_steel g133.csv --fit wear.specific_rate \\
-        --fit counterface.specific_rate --set bem.grid=64
 """
 
 from __future__ import annotations
