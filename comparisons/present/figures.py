@@ -90,7 +90,11 @@ def stage_figure(stem, stages, *, ylabel, title="", reference=(), vlines=(), xli
     if ylim is not None:
         ax.set_ylim(*ylim)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=6.5, ncol=2, loc="best")
+    # beside the axes, not on them: a stage and solver per entry (21 for the paper
+    # case's three solvers) covered the curves wherever "best" put them
+    entries = len(ax.get_legend_handles_labels()[1])
+    ax.legend(fontsize=6.5, ncol=1 if entries <= 24 else 2, loc="upper left",
+              bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     out = _save(fig, stem, formats)
     plt.close(fig)
     return out
