@@ -598,3 +598,28 @@ def test_a_history_wrong_between_the_stages_fails(no_figures, tmp_path, paper_ru
     done = cli("verify", "paper", tmp_path / "wrong", "--out", tmp_path / "v-wrong-cli")
     assert done.returncode == 1, done.stderr
     assert "history row(s) between the stages beyond a tolerance" in done.stderr
+
+
+def test_a_mapping_judges_the_mapped_column(no_figures, tmp_path, paper_run):
+    """A file with 'force [N]' (a friction force, 0.3 of the normal force) and 'Fn [N]'
+    (the normal force, right): --map force=Fnn (a typo) judged the friction column
+    and failed it; --map force=Fn failed with "column 'force' appears twice". Now
+    the typo is one line naming the columns there are (exit 2), and the mapped column
+    is judged (it passes; the friction column would fail by 70 %), the report saying
+    which column was read and which was not."""
+    h = paper_run.history
+    d = tmp_path / "r"
+    d.mkdir()
+    rows = [f"{s:.17g},{0.3 * F:.17g},{F:.17g}" for s, F in zip(h["s"], h["force"])]
+    (d / "history.csv").write_text("s [m],force [N],Fn [N]\n" + "\n".join(rows) + "\n")
+    done = cli("verify", "paper", d, "--out", tmp_path / "v1", "--map", "force=Fnn")
+    lines = [x for x in done.stderr.splitlines() if x.strip() and not x.startswith("note")]
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert "no column 'Fnn' in file" in lines[0] and "'Fn [N]'" in lines[0], lines[0]
+    m = run_verify("paper", d, tmp_path / "v2", ["force=Fn"])
+    assert m["passed"], json.dumps(failed_stages(m))
+    assert ("history.csv: force read from column 'Fn [N]' (--map force=Fn); column "
+            "'force [N]' not read") in m["results"]["notes"]
+    # a stage column mapped without a stages.csv is not silently unused
+    with pytest.raises(CaseError, match=r"--map p=CPRESS: .*stages\.csv does not exist"):
+        run_verify("paper", d, tmp_path / "v3", ["force=Fn", "p=CPRESS"])
