@@ -143,6 +143,12 @@ def test_other_physics_has_no_certified_reference(no_figures, tmp_path, paper_ru
     res = fmt.csv_dir(tmp_path / "r", paper_run)
     with pytest.raises(CaseError, match="no certified reference.*--reference-solver"):
         run_verify(wearcheck.load_case("paper", {"wear.k": 2e-4}), res, tmp_path / "v")
+    # it names the solvers that can run the case (the pin on a disc: the BEM alone)
+    with pytest.raises(CaseError) as err:
+        run_verify("pin_on_disc", res, tmp_path / "v")
+    assert str(err.value).endswith("verify against a fresh run instead: --reference-solver "
+                                   "bem (the only solver that runs this case)"), str(err.value)
+    assert wearcheck.registry.supporting(wearcheck.load_case("pin_on_disc")) == ("bem",)
     # a resolution or a tolerance is not physics: the reference applies
     m = run_verify(wearcheck.load_case("paper", {"mdr.elements": 100,
                                                  "compare.force_tolerance": 0.05}),
@@ -397,6 +403,23 @@ def test_ball_on_flat_in_cycles(no_figures, tmp_path):
     # under a held force the worn volume is K F s: 5 % more distance, 5 % more volume
     assert all("wear_volume" in bad for k, bad in failed_stages(m).items() if k > 0)
     assert m["diagnosis"]["factor"] == pytest.approx(1 / 1.05, rel=2e-3)
+
+
+def test_a_case_staged_in_cycles_against_a_fresh_run(no_figures, tmp_path):
+    """--reference-solver failed on every case whose stages are in cycles ("key
+    'stages.cycles' = None: must be a non-empty list of numbers"). The fresh run's
+    stages are now the user's (as ŝ): the same solver at the same resolution passes,
+    its results at 1.05 times the distance fail, at the case's seven stages."""
+    case = wearcheck.load_case("ball_on_flat", {"mdr.elements": 200})
+    run = wearcheck.solve(case, "mdr")
+    m = run_verify(case, fmt.csv_dir(tmp_path / "r", run, time="cycles"), tmp_path / "v",
+                   reference_solver="mdr")
+    assert m["reference"] == "mdr" and m["passed"], json.dumps(failed_stages(m))
+    got = [st["s_hat_reference"] for st in m["pairs"]["results"]["stages"]]
+    assert got == pytest.approx(run.stages["s_hat"], rel=1e-9)
+    m = run_verify(case, fmt.csv_dir(tmp_path / "b", run, time="cycles", scale=1.05),
+                   tmp_path / "v2", reference_solver="mdr")
+    assert not m["passed"]
 
 
 def test_fretting_in_cycles(no_figures, tmp_path):

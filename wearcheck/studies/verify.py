@@ -113,9 +113,8 @@ def fresh_reference(case, name, ext, *, quiet=True, solve=None):
         s_list = [st["s"] for st in stages] or [
             sel["s"] for sel in verification.select_stages(hist, [],
                                                            case_stage_distances(case))]
+        # stages.s_hat replaces stages.cycles (Case.derive drops a key's partner)
         changes = {"stages.s_hat": [s * sc["s_hat_per_m"] for s in sorted(set(s_list))]}
-        if case.stages.cycles is not None:
-            changes["stages.cycles"] = None
     run_case = case.derive(changes)
     registry.get(name)
     reason = registry.get(name).supports(run_case)
@@ -150,7 +149,7 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
             raise CaseError("no certified reference solves this case's problem (shipped: "
                             + ", ".join(certified.names()) + "; the physics must match: "
                             "indenter, counterface, loading, wear, fretting); verify against "
-                            "a fresh run instead: --reference-solver mdr")
+                            "a fresh run instead: " + _fresh_run_hint(case))
         ext = external.read(results, mapping)
         hist, stages = read_results(case, ext, ref.cycles_to_s)
         ref_name, ref_title = "reference", f"certified reference '{ref.name}'"
@@ -196,6 +195,16 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
     _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0,
            reference_solver is None)
     return m
+
+
+def _fresh_run_hint(case) -> str:
+    """The --reference-solver options that can run ``case`` (as the registry says)."""
+    able = registry.supporting(case)
+    if not able:
+        return ("no registered solver can run this case either (" + "; ".join(
+            f"{n}: {registry.get(n).supports(case)}" for n in registry.names()) + ")")
+    return " or ".join(f"--reference-solver {n}" for n in able) + \
+        (" (the only solver that runs this case)" if len(able) == 1 else "")
 
 
 def _largest_band_share(pair) -> dict | None:
