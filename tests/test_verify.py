@@ -646,3 +646,26 @@ def test_a_mapping_judges_the_mapped_column(no_figures, tmp_path, paper_run):
     # a stage column mapped without a stages.csv is not silently unused
     with pytest.raises(CaseError, match=r"--map p=CPRESS: .*stages\.csv does not exist"):
         run_verify("paper", d, tmp_path / "v3", ["force=Fn", "p=CPRESS"])
+
+
+def test_a_row_between_the_stages_is_named_by_its_line(no_figures, tmp_path, paper_run):
+    """The worst row between the stages was named by its index from 0 ("row 167" was
+    the file's line 169). One row made 1.5× off in a file with a comment line above
+    the header: its line number is known by construction (comment 1, header 2, data
+    row k on line k + 3) and is the one named."""
+    h = paper_run.history
+    per_m = paper_run.scales["s_hat_per_m"]
+    s_hat = np.asarray(h["s"]) * per_m
+    k = int(np.argmin(np.abs(s_hat - 4.0)))       # between the stages at ŝ = 3 and 5
+    force = np.asarray(h["force"], float).copy()
+    force[k] *= 1.5
+    d = tmp_path / "r"
+    d.mkdir()
+    rows = [f"{s:.17g},{F:.17g}" for s, F in zip(h["s"], force)]
+    (d / "history.csv").write_text("# one row wrong\ns,force\n" + "\n".join(rows) + "\n")
+    m = run_verify("paper", d, tmp_path / "v")
+    worst = m["pairs"]["results"]["rows"]["worst"]["force"]
+    assert not m["passed"] and worst["index"] == k
+    assert worst["origin"] == f"history.csv row {k + 3}"
+    report = (tmp_path / "v" / "report.md").read_text()
+    assert f"at ŝ = {s_hat[k]:.4g} (history.csv row {k + 3})" in report

@@ -297,10 +297,13 @@ def judge_rows(reference, history: dict, given, *, scales: dict, units: dict, to
     Returns
     -------
     dict: ``judged`` (rows), ``failed`` (rows with a failed check), ``worst``
-    {quantity: {value, tolerance, s, row}} (value relative to the tolerance's scale,
-    at the row where it uses the largest share of the tolerance) and ``passed``.
+    {quantity: {value, tolerance, s, index, origin}} (value relative to the tolerance's
+    scale, at the row where it uses the largest share of the tolerance; ``index`` from
+    0 in ``history``, ``origin`` where it was read, e.g. "history.csv row 169" as a
+    spreadsheet counts rows) and ``passed``.
     """
     s = np.asarray(history["s"], float)
+    origin = history.get("origin")
     ref = reference.history_at(s)
     checks = [metrics.CHECK_BY_COLUMN[HISTORY_CHECKS[q]] for q in given]
     judged, failed, worst = 0, 0, {}
@@ -329,7 +332,10 @@ def judge_rows(reference, history: dict, given, *, scales: dict, units: dict, to
             used = c["value"] / c["tolerance"]
             if name not in worst or used > worst[name]["used"]:
                 worst[name] = dict(value=c["value"], tolerance=c["tolerance"], used=used,
-                                   scale=c["scale"], s=float(s[i]), row=i, passed=c["passed"])
+                                   scale=c["scale"], s=float(s[i]), index=i,
+                                   origin=(str(origin[i]) if origin is not None
+                                           else f"history row {i + 1}"),
+                                   passed=c["passed"])
         judged += 1
         failed += int(row_failed)
     return dict(judged=judged, failed=failed, worst=worst, passed=failed == 0)
