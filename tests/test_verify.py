@@ -669,3 +669,62 @@ def test_a_row_between_the_stages_is_named_by_its_line(no_figures, tmp_path, pap
     assert worst["origin"] == f"history.csv row {k + 3}"
     report = (tmp_path / "v" / "report.md").read_text()
     assert f"at ŝ = {s_hat[k]:.4g} (history.csv row {k + 3})" in report
+
+
+def _history_and_stages(d, run, *, s_factor=1.0, p_factor=1.0, f_as_wear=False):
+    """The run's history (s, force, central wear) and stages (s_hat, r, f, p) in SI
+    headers, with the slips asked for: distances times s_factor (1e3: mm under 's'),
+    the pressure times p_factor (1e-6: MPa under 'p'), the wear depth under 'f'."""
+    from wearcheck.references.certified import unworn_profile
+    d.mkdir()
+    h, st = run.history, run.stages
+    rows = [f"{s * s_factor:.17g},{F:.17g},{w:.17g}"
+            for s, F, w in zip(h["s"], h["force"], h["wear_center"])]
+    (d / "history.csv").write_text("s,force,wear_center\n" + "\n".join(rows) + "\n")
+    f0 = unworn_profile(run.case, st["r"]) if f_as_wear else np.zeros(len(st["r"]))
+    rows = [f"{x:.17g},{r:.17g},{st['f'][k, j] - f0[j]:.17g},{st['p'][k, j] * p_factor:.17g}"
+            for k, x in enumerate(st["s_hat"]) for j, r in enumerate(st["r"])]
+    (d / "stages.csv").write_text("s_hat,r,f,p\n" + "\n".join(rows) + "\n")
+    return d
+
+
+def test_the_diagnosis_says_agree_only_where_it_agrees(no_figures, tmp_path, paper_run):
+    """With s in mm under an 's' header the diagnosis said "your results agree with
+    the reference at 0.5 × your sliding distances (misfit 2.6 there, 15 as given)":
+    0.5 is the end of the range searched and a misfit of 2.6 (260 %) is no agreement.
+    "Agree" now needs λ strictly inside the range and the misfit within the
+    verdict's tolerance (the largest of the quantities' tolerances, here 3 %);
+    distances in mm under a header in metres are named as such (the reference fits
+    at 1e-3 of them: exactly, by construction); otherwise the units are pointed at."""
+    from wearcheck.studies.verify import _diagnosis
+    cmp = wearcheck.load_case("paper").compare
+    for lam in (0.5, 0.8):                          # the reviewer's numbers
+        factor = dict(factor=lam, misfit=2.6, misfit_at_one=15.0, quantities=["force"],
+                      bounds=[0.5, 2.0], unit_misfits=[])
+        said = _diagnosis({"passed": False}, factor, cmp, "s", [])["reason"]
+        assert "agree with the reference at" not in said, said
+        assert "check the units of your columns" in said, said
+        assert ("the end of that range" in said) == (lam == 0.5), said
+    m = run_verify("paper", _history_and_stages(tmp_path / "mm", paper_run, s_factor=1e3),
+                   tmp_path / "v")
+    assert not m["passed"]
+    assert "mm written under a header in metres (write 's [mm]')" in m["diagnosis"]["reason"]
+    assert m["diagnosis"]["factor"] == 1e-3
+
+
+@pytest.mark.parametrize("slip,said", [
+    (dict(p_factor=1e-6), "your pressure is 1e-06 times the reference's: MPa written under "
+                          "a header in Pa"),
+    (dict(f_as_wear=True), "your profile 'f' matches the reference's wear depth f − f0"),
+])
+def test_unit_slips_in_the_stages_are_hinted(no_figures, tmp_path, paper_run, slip, said):
+    """MPa written under 'p' (Pa) failed "pressure 1 > 0.03" at every stage, and a wear
+    depth written as the profile 'f' failed at ~100 %, without a word on why. The
+    hint names the slip; the verdict stays FAIL. The same tables without the slip
+    pass (the MDR at N = 400 passes with the shipped tolerances)."""
+    m = run_verify("paper", _history_and_stages(tmp_path / "ok", paper_run), tmp_path / "v0")
+    assert m["passed"], json.dumps(failed_stages(m))
+    m = run_verify("paper", _history_and_stages(tmp_path / "r", paper_run, **slip),
+                   tmp_path / "v")
+    assert not m["passed"]
+    assert said in m["diagnosis"]["reason"], m["diagnosis"]
