@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -439,8 +440,12 @@ def coupling_change(case: Case) -> dict | None:
 def coupling_matters(case: Case) -> bool:
     """Whether neglecting the normal-tangential coupling (β ≠ 0) reaches
     :data:`COUPLING_NOTE_FRACTION` of the case's compare tolerances; always, when
-    β ≠ 0 in a regime no measurement covers (:func:`coupling_change` is None)."""
+    β ≠ 0 in a regime no measurement covers (:func:`coupling_change` is None).
+    Never when nothing slides (``hertz``, ``truncated``: an indentation has no
+    friction traction to couple)."""
     if abs(dundurs_beta(case.indenter, case.counterface)) <= 1e-9:
+        return False
+    if case.fretting is None and case.end_distance == 0.0:
         return False
     change = coupling_change(case)
     if change is None:
@@ -528,6 +533,29 @@ def _warnings(case: Case) -> tuple[str, ...]:
         out.append(note)
         warn_once(kind, note + " (said once per process; each case's own is in case.warnings)")
     return tuple(out)
+
+
+def shared_remarks(case: Case, variants) -> list[str]:
+    """The remarks to say of a study of ``case`` whose runs are ``case.derive(changes)``
+    for each of ``variants``: the case's own remarks that every run makes too (word
+    for word), and, when a run makes another (the similarity note of a μ sweep states
+    each μ's βμ), one line saying that the runs' remarks differ and where each run's
+    are. A variant the case rejects is left out (its run is a row with its error)."""
+    own, differ = list(case.warnings), []
+    for changes in variants:
+        try:
+            theirs = case.derive(changes).warnings
+        except CaseError:
+            continue
+        own = [w for w in own if w in theirs]
+        # a remark's kind: its words before the first colon, without a value or a (...)
+        differ += [re.sub(r" = .*| \(.*", "", w.split(":")[0]) for w in theirs
+                   if w not in own]
+    if differ:
+        kinds = ", ".join(dict.fromkeys(differ))
+        own.append(f"the runs' remarks differ with the varied values ({kinds}): each run's "
+                   "own are in its meta.json ('warnings')")
+    return own
 
 
 # --------------------------------------------------------------------------

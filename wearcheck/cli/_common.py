@@ -21,18 +21,25 @@ def add_case_arguments(parser) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar, no remarks")
 
 
-def load_case(args) -> cases.Case:
-    """Load the case named on the command line; print its remarks unless quiet.
+def load_case(args, remarks: bool = True) -> cases.Case:
+    """Load the case named on the command line; print its remarks unless quiet (or
+    ``remarks`` is False: a study says its runs' remarks, :func:`print_notes`).
 
     ``args.case`` becomes the case file's path (a shipped case's name resolved),
     which is what the studies hand on to their workers.
     """
     args.case = cases.resolve(args.case)
     case = cases.load(args.case, args.overrides)
-    if not getattr(args, "quiet", False):
-        for text in case.warnings:
-            print(f"note: {text}", file=sys.stderr)
+    if remarks:
+        print_notes(args, case.warnings)
     return case
+
+
+def print_notes(args, texts) -> None:
+    """Remarks as "note:" lines on stderr, unless quiet."""
+    if not getattr(args, "quiet", False):
+        for text in texts:
+            print(f"note: {text}", file=sys.stderr)
 
 
 def output(args, default: Path) -> Path:

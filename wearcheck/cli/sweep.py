@@ -16,8 +16,8 @@ from wearcheck import registry
 
 from wearcheck.studies.sweep import sweep
 
-from ._common import (add_case_arguments, add_json_argument, load_case, print_json, study_exit,
-                      varied)
+from ._common import (add_case_arguments, add_json_argument, load_case, print_json, print_notes,
+                      study_exit, varied)
 from .refine import add_cluster_arguments
 from . import Terminated
 
@@ -38,8 +38,14 @@ def add_parser(sub):
 
 
 def main(args) -> int:
-    case = load_case(args)
+    import itertools
+    from wearcheck.cases.case import shared_remarks
+    case = load_case(args, remarks=False)
     vary = varied(args)
+    # the base case's remarks only where every run makes them (a μ sweep's runs each
+    # have their own βμ): the base case itself is not run
+    print_notes(args, shared_remarks(case, [dict(zip(vary, combo))
+                                            for combo in itertools.product(*vary.values())]))
     out = args.out or Path("runs") / f"{args.case.stem}-sweep"
     try:
         rows = sweep(case, vary, args.solver, out, scheduler=args.scheduler,
