@@ -710,6 +710,8 @@ def test_the_diagnosis_says_agree_only_where_it_agrees(no_figures, tmp_path, pap
     assert not m["passed"]
     assert "mm written under a header in metres (write 's [mm]')" in m["diagnosis"]["reason"]
     assert m["diagnosis"]["factor"] == 1e-3
+    # 1e3 × the distances leaves the reference: no misfit there, and valid JSON
+    assert "Infinity" not in (tmp_path / "v" / "metrics.json").read_text()
 
 
 @pytest.mark.parametrize("slip,said", [

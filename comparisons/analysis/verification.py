@@ -436,7 +436,8 @@ def distance_factor(reference, history: dict, scales: dict, depth: float) -> dic
     distance the model slides); None when no quantity that changes with sliding
     is given. Also the misfit at the unit factors :data:`UNIT_FACTORS` (distances
     written in mm or µm under a header in metres), where the reference covers at
-    least half of the rows (``unit_misfits``: [{factor, misfit}]), and ``bounds``."""
+    least half of the rows (``unit_misfits``: [{factor, misfit}], misfit None where
+    it covers fewer), and ``bounds``."""
     import scipy.optimize
     units = unit_scales(scales, depth)
     s = np.asarray(history["s"], float)
@@ -466,8 +467,13 @@ def distance_factor(reference, history: dict, scales: dict, depth: float) -> dic
         return None
     return dict(factor=float(best.x), misfit=float(best.fun), misfit_at_one=at_one,
                 quantities=cols, bounds=list(FACTOR_BOUNDS),
-                unit_misfits=[dict(factor=f, misfit=misfit(f, coverage=0.5))
+                unit_misfits=[dict(factor=f, misfit=_finite(misfit(f, coverage=0.5)))
                               for f in UNIT_FACTORS])
+
+
+def _finite(value: float) -> float | None:
+    """None for a misfit that could not be computed (metrics.json holds no Infinity)."""
+    return value if math.isfinite(value) else None
 
 
 #: the range of factors on the user's distances searched by :func:`distance_factor`

@@ -240,7 +240,8 @@ def _diagnosis(pair, factor, cmp, kind, slips) -> dict | None:
         tol = max(cmp.force_tolerance if q == "force" else cmp.profile_tolerance
                   for q in factor["quantities"])
         inside = lo * (1 + 1e-3) < lam < hi * (1 - 1e-3)
-        units = [u for u in factor.get("unit_misfits", []) if u["misfit"] <= tol]
+        units = [u for u in factor.get("unit_misfits", [])
+                 if u["misfit"] is not None and u["misfit"] <= tol]
         if inside and abs(lam - 1.0) >= 1e-3 and misfit <= tol and misfit < 0.25 * at_one:
             reasons.append(
                 f"your results agree with the reference at {lam:.4g} × your sliding "
