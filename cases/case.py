@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
@@ -439,8 +440,12 @@ def coupling_change(case: Case) -> dict | None:
 def coupling_matters(case: Case) -> bool:
     """Whether neglecting the normal-tangential coupling (β ≠ 0) reaches
     :data:`COUPLING_NOTE_FRACTION` of the case's compare tolerances; always, when
-    β ≠ 0 in a regime no measurement covers (:func:`coupling_change` is None)."""
+    β ≠ 0 in a regime no measurement covers (:func:`coupling_change` is None).
+    Never when nothing slides (``hertz``, ``truncated``: an indentation has no
+    friction traction to couple)."""
     if abs(dundurs_beta(case.indenter, case.counterface)) <= 1e-9:
+        return False
+    if case.fretting is None and case.end_distance == 0.0:
         return False
     change = coupling_change(case)
     if change is None:
@@ -515,19 +520,80 @@ def _table_note(case: Case) -> str | None:
             f"{TABLE_RADII_IN_CONTACT} rows in 0 < r <= a0 (docs/case-files.md)")
 
 
+#: the plausible range of the keys a unit slip puts far out, in the file's SI units:
+#: a modulus or a hardness below 1 MPa (soft rubber's modulus is ~1 MPa; E = 210 or
+#: hardness = 6 are GPa numbers in Pa), a radius of curvature above 1 m (10 is
+#: a radius in mm written in metres). (section, key): (lowest, highest, the value
+#: written in that unit as an example)
+PLAUSIBLE = {("indenter", "youngs_modulus"): (1e6, math.inf, "1 MPa", "210 GPa is 210e9"),
+             ("counterface", "youngs_modulus"): (1e6, math.inf, "1 MPa", "210 GPa is 210e9"),
+             ("wear", "hardness"): (1e6, math.inf, "1 MPa", "6 GPa is 6e9"),
+             ("counterface", "hardness"): (1e6, math.inf, "1 MPa", "6 GPa is 6e9"),
+             ("indenter", "radius"): (0.0, 1.0, "1 m", "10 mm is 0.01"),
+             ("indenter", "radius_y"): (0.0, 1.0, "1 m", "10 mm is 0.01")}
+
+
+def implausible_values(case: Case) -> list[tuple[str, str]]:
+    """(key, remark) of each key outside :data:`PLAUSIBLE`: its value, the unit the
+    file expects and what that unit makes of it (a unit slip, most likely)."""
+    out = []
+    for (section, name), (low, high, limit, example) in PLAUSIBLE.items():
+        obj = getattr(case, section, None)
+        value = getattr(obj, name, None) if obj is not None else None
+        if value is None or low <= value <= high:
+            continue
+        if name == "youngs_modulus" and getattr(obj, "rigid", False):
+            continue
+        unit = dict(section_fields(section))[name].metadata["unit"]
+        side = f"below {limit}" if value < low else f"above {limit}"
+        out.append((f"{section}.{name}", f"key '{section}.{name}' = {value!r}: the case file "
+                    f"gives it in {unit}, so this is {value:g} {unit}, {side} ({example}); "
+                    "check its unit"))
+    return out
+
+
+def _units_note(case: Case) -> str | None:
+    found = implausible_values(case)
+    return "; ".join(text for _, text in found) if found else None
+
+
 def _warnings(case: Case) -> tuple[str, ...]:
     """The case's remarks (recorded in every output): the elastic-similarity note only
     where the coupling matters (:func:`coupling_matters`), the friction note above
     :data:`FRICTION_REMARK_MU`; each kind issued through :mod:`warnings` once per
     process (a μ sweep would repeat it for every run)."""
     out = []
-    for kind, note in (("similarity", coupling_matters(case) and _similarity_note(case)),
+    for kind, note in (("units", _units_note(case)),
+                       ("similarity", coupling_matters(case) and _similarity_note(case)),
                        ("friction", _friction_note(case)), ("table", _table_note(case))):
         if not note:
             continue
         out.append(note)
         warn_once(kind, note + " (said once per process; each case's own is in case.warnings)")
     return tuple(out)
+
+
+def shared_remarks(case: Case, variants) -> list[str]:
+    """The remarks to say of a study of ``case`` whose runs are ``case.derive(changes)``
+    for each of ``variants``: the case's own remarks that every run makes too (word
+    for word), and, when a run makes another (the similarity note of a μ sweep states
+    each μ's βμ), one line saying that the runs' remarks differ and where each run's
+    are. A variant the case rejects is left out (its run is a row with its error)."""
+    own, differ = list(case.warnings), []
+    for changes in variants:
+        try:
+            theirs = case.derive(changes).warnings
+        except CaseError:
+            continue
+        own = [w for w in own if w in theirs]
+        # a remark's kind: its words before the first colon, without a value or a (...)
+        differ += [re.sub(r" = .*| \(.*", "", w.split(":")[0]) for w in theirs
+                   if w not in own]
+    if differ:
+        kinds = ", ".join(dict.fromkeys(differ))
+        own.append(f"the runs' remarks differ with the varied values ({kinds}): each run's "
+                   "own are in its meta.json ('warnings')")
+    return own
 
 
 # --------------------------------------------------------------------------

@@ -180,6 +180,7 @@ class Table:
     units : {name: the unit as written in the header, or None}.
     ignored : header cells that are not columns asked for (kept aside, unread).
     path : the file.
+    headers : {name: the header cell it was read from, as written}.
     """
 
     columns: dict
@@ -187,6 +188,7 @@ class Table:
     units: dict
     ignored: list = field(default_factory=list)
     path: Path | None = None
+    headers: dict = field(default_factory=dict)
 
     def __contains__(self, name) -> bool:
         return name in self.columns
@@ -202,7 +204,8 @@ class Table:
 def read_table(path: str | Path, columns: Mapping[str, str], *,
                required: Iterable[str | tuple[str, ...]] = (),
                aliases: Mapping[str, str] | None = None,
-               units: Mapping[str, str] | None = None) -> Table:
+               units: Mapping[str, str] | None = None,
+               groups: Iterable[Iterable[str]] = ()) -> Table:
     """Read a CSV table with a header row; units in the header are converted to SI.
 
     Parameters
@@ -213,11 +216,16 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
         :data:`UNITS`. Names are matched case-insensitively; a column without
         a unit is taken in SI.
     required : names that must be present; a tuple of names means one of them.
-    aliases : {other spelling: name}, e.g. {"ŝ": "s_hat"}, {"force reaction (z)":
-        "force"}: a header cell is matched by its name without the unit, or whole.
+    aliases : {the user's column: name}, e.g. {"Fz": "force"}, {"force reaction (z)":
+        "force"} (``--map``): a header cell is matched by its name without the unit,
+        or whole. An alias of a name in ``columns`` must match a header cell (else an
+        error naming the columns there are), and it wins: a cell named ``name``
+        itself (or another name of its group) is then not read (in ``ignored``).
     units : {name: unit} overriding (or supplying) a column's unit, e.g. {"s": "mm"}
         for a column "Time [s]" that holds the sliding distance in mm, or a force
         column of an Abaqus export (no units) in N.
+    groups : names that give one quantity (the distance as s, s_hat or cycles; the
+        profile as f or wear): an alias of one displaces the others' columns.
 
     Returns
     -------
@@ -231,7 +239,8 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
         finite number, a row with fewer cells than the header.
     """
     where_file = f"file '{path}'"
-    aliases = {k.strip().lower(): v for k, v in (aliases or {}).items()}
+    given_aliases = {k.strip(): v for k, v in (aliases or {}).items()}
+    aliases = {k.lower(): v for k, v in given_aliases.items()}
     given_units = dict(units or {})
     numbered = data_lines(read_lines(path, where_file))
     if not numbered:
@@ -240,12 +249,22 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
     header_at, header_text = numbered[0]
     delim = sniff_delimiter(header_text)
     header = split_cells([numbered[0]], delim, where_file)[0][1]
+    _check_aliases(given_aliases, header, columns, where_file)
+    # a name mapped by an alias (and the rest of its group) is read from the alias's
+    # column only: "--map force=Fn" beside a column "force [N]" (a friction force)
+    displaced = set()
+    for name in {v for v in aliases.values() if v in columns}:
+        displaced |= {name}.union(*(set(g) for g in groups if name in g))
     where: dict[str, int] = {}
     units: dict[str, str | None] = {}
     ignored = []
     for j, cell in enumerate(header):
         name, unit = split_header(cell)
         whole = cell.strip().lower()
+        if name in displaced and name not in aliases and whole not in aliases:
+            if cell.strip():
+                ignored.append(cell.strip())
+            continue
         if name in aliases:
             name = aliases[name]
         elif whole in aliases:
@@ -307,7 +326,18 @@ def read_table(path: str | Path, columns: Mapping[str, str], *,
         factor = 1.0 if unit is None else unit_factor(unit, columns[name])
         out[name] = np.asarray(vals, float) * factor
     return Table(columns=out, rows=np.asarray(rows), units=units, ignored=ignored,
-                 path=Path(path))
+                 path=Path(path), headers={name: header[j].strip() for name, j in where.items()})
+
+
+def _check_aliases(aliases: Mapping[str, str], header, columns, where_file) -> None:
+    """Each alias of a name this table reads names one of the header's cells (by its
+    name without the unit, or whole, in any case)."""
+    names = {split_header(c)[0] for c in header} | {c.strip().lower() for c in header}
+    for column, name in aliases.items():
+        if name in columns and column.lower() not in names:
+            found = ", ".join(f"'{c.strip()}'" for c in header if c.strip()) or "none"
+            raise CaseError(f"no column '{column}' in {where_file} (--map {name}={column}); "
+                            f"its columns are {found}")
 
 
 def _is_required(name: str, required) -> bool:

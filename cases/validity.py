@@ -145,6 +145,12 @@ def check_planned(case, fem_sphere: bool = False) -> None:
             f"key 'loading.depth' = {case.loading.depth!r}: the run would wear the sphere past "
             f"its equator: the completely worn contact reaches √2·a0 = {predicted:.4g} m, "
             f"beyond {end.where}; lower loading.depth (half-space theory wants a0/R <= 0.1)")
+    from .case import implausible_values
+    slips = implausible_values(case)
+    if slips:   # the key the user most likely got wrong names it, not the run's length
+        raise CaseError(
+            f"{slips[0][1]}. With it the run would wear the sphere past its equator (the scar "
+            f"radius predicted at its end, {predicted:.4g} m, is beyond {end.where})")
     key, value = run_length_key(case)
     a0 = reference.scales(case)["a0"]
     n = case.wear.pressure_exponent

@@ -415,3 +415,37 @@ def test_the_end_condition_says_how_each_kind_of_run_ends():
     assert cyc.end_condition == "it stops after 50 cycles (s = 0.1 m)"
     fretting = base.derive({"fretting.amplitude": 1e-8, "fretting.cycles": 7})
     assert fretting.end_condition == "it stops after 7 fretting cycles"
+
+
+@pytest.mark.parametrize("changes,key,said", [
+    ({"indenter.youngs_modulus": 210}, "indenter.youngs_modulus",
+     "gives it in Pa, so this is 210 Pa, below 1 MPa"),
+    ({"wear.hardness": 6}, "wear.hardness", "gives it in Pa, so this is 6 Pa, below 1 MPa"),
+    ({"indenter.radius": 10}, "indenter.radius", "gives it in m, so this is 10 m, above 1 m"),
+])
+def test_a_value_in_the_wrong_unit_gets_a_note(changes, key, said):
+    """youngs_modulus = 210 (GPa written for Pa) and radius = 10 (mm written for m) ran
+    on the paper case without a word. A note (not a refusal) names the key, the
+    value and the unit the file expects; the shipped cases, in their right units,
+    have none."""
+    case = cases.load(cases.shipped("paper"), [f"{k}={v}" for k, v in changes.items()])
+    notes = [w for w in case.warnings if w.startswith(f"key '{key}' = ")]
+    assert len(notes) == 1 and said in notes[0] and "check its unit" in notes[0], case.warnings
+    for name in cases.shipped_cases():
+        shipped = cases.load(cases.shipped(name))
+        assert not any("check its unit" in w for w in shipped.warnings), name
+
+
+def test_a_hardness_in_the_wrong_unit_is_named_where_the_run_is_refused():
+    """hardness = 6 on ball_on_flat (6 GPa written for Pa: K 1e9 times the case's)
+    was refused naming sliding.cycles ("the run would wear the sphere past its
+    equator ... sliding.cycles <= 22.67"): the key most likely wrong is the hardness."""
+    from wearcheck.cases import validity
+    with pytest.raises(CaseError) as err:      # every solver checks this before its run
+        validity.check_planned(cases.load(cases.shipped("ball_on_flat"), ["wear.hardness=6"]))
+    text = str(err.value)
+    assert text.startswith("key 'wear.hardness' = 6.0: the case file gives it in Pa"), text
+    assert "past its equator" in text and "sliding.cycles" not in text
+    # a right hardness with too long a run still names the run's length
+    with pytest.raises(CaseError, match=r"^key 'sliding.cycles' = .*past its equator"):
+        validity.check_planned(cases.load(cases.shipped("ball_on_flat"), ["wear.k=0.9"]))

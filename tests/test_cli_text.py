@@ -54,19 +54,26 @@ def _note_count(text):
     return text.count("elastic similarity (paper Eq. 7) does not hold")
 
 
-def test_hertz_case_has_the_note():
+def test_hertz_case_has_the_note_only_when_it_slides():
     # the shipped hertz case (elastic sphere on a rigid plane) is not elastically
-    # similar: Dundurs' beta = (1 - 2ν) / (2 (1 - ν)) = 0.2857 for ν = 0.3
+    # similar: Dundurs' beta = (1 - 2ν) / (2 (1 - ν)) = 0.2857 for ν = 0.3; it does
+    # not slide (no friction traction: no note), the same case sliding does
     case = cases.load(cases.shipped("hertz"))
     assert cases.dundurs_beta(case.indenter, case.counterface) == pytest.approx(0.4 / 1.4)
+    assert sum(_note_count(w) for w in case.warnings) == 0
+    case = cases.load(cases.shipped("hertz"), ["sliding.distance=1e-4"])
     assert sum(_note_count(w) for w in case.warnings) == 1
 
 
+# hertz made to slide a little (1e-4 m): the note applies, the runs stay short
+SLIDING = ["--set", "sliding.distance=1e-4"]
+
+
 @pytest.mark.parametrize("argv", [
-    ["run", "hertz", "--set", "mdr.elements=50"],
-    ["run", "hertz", "--solver", "fem", "--set", "fem.contact_nodes=30"],
+    ["run", "hertz", "--set", "mdr.elements=50", *SLIDING],
+    ["run", "hertz", "--solver", "fem", "--set", "fem.contact_nodes=30", *SLIDING],
     ["compare", "hertz", "--no-render", "--set", "mdr.elements=100",
-     "--set", "fem.contact_nodes=30"],
+     "--set", "fem.contact_nodes=30", *SLIDING],
 ])
 def test_the_similarity_note_is_printed_once_per_command(argv, tmp_path, capsys):
     code = cli_main(argv + ["--out", str(tmp_path / "out")])

@@ -77,3 +77,42 @@ def test_the_note_comes_only_where_the_coupling_reaches_a_tenth_of_a_tolerance(f
     # partial slip: no measurement covers it, the note whenever β ≠ 0
     fretting, _ = _load("fretting")
     assert len(_noted(fretting)) == 1 and "partial-slip" in _noted(fretting)[0]
+
+
+@pytest.mark.parametrize("name", ["hertz", "truncated"])
+def test_no_note_where_nothing_slides(fresh, name):
+    """The note ("the wear is asymmetric (up to 9 %...)") was said on hertz and
+    truncated, which do not slide (sliding.distance = 0): no friction traction, no
+    coupling to neglect. The same bodies sliding get it (β = 0.2857, βμ = 0.086)."""
+    case, said = _load(name)
+    assert dundurs_beta(case.indenter, case.counterface) == pytest.approx(0.4 / 1.4)
+    assert said == [] and _noted(case) == []
+    sliding, _ = _load(name, {"sliding.distance": 1e-3})
+    assert len(_noted(sliding)) == 1 and "beta·mu = 0.086" in _noted(sliding)[0]
+
+
+def test_a_mu_sweep_does_not_state_the_base_cases_beta_mu(fresh, tmp_path, capsys):
+    """A μ sweep printed the base case's note (βμ = 0.086 at μ = 0.3), which no run
+    has. The sweep now says the base case's remarks only where every run makes them
+    word for word, else that the runs' differ and where each run's are; each run
+    records its own (μ = 0.5: βμ = 0.2857 · 0.5 = 0.143; μ = 0.1: βμ = 0.029, below
+    a tenth of the tolerances, no note)."""
+    from wearcheck.cases.case import shared_remarks
+    from wearcheck.cli import main as cli_main
+    paper, _ = _load("paper")
+    same = shared_remarks(paper, [{"wear.k": 1e-4}, {"wear.k": 2e-4}])   # βμ unchanged
+    assert same == list(paper.warnings) and len(_noted(paper)) == 1
+    said = shared_remarks(paper, [{"wear.mu": 0.1}, {"wear.mu": 0.5}])
+    assert said == ["the runs' remarks differ with the varied values (elastic similarity): "
+                    "each run's own are in its meta.json ('warnings')"]
+    out = tmp_path / "sweep"
+    code = cli_main(["sweep", "paper", "--vary", "wear.mu=0.1,0.5", "--set",
+                     "mdr.elements=50", "--workers", "1", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "beta·mu = 0.086" not in err and "the runs' remarks differ" in err
+    import json
+    meta = json.loads((out / "mdr-wear.mu-0.5" / "meta.json").read_text())
+    assert any("beta·mu = 0.143" in w for w in meta["warnings"])
+    meta = json.loads((out / "mdr-wear.mu-0.1" / "meta.json").read_text())
+    assert not any("elastic similarity" in w for w in meta["warnings"])

@@ -126,3 +126,26 @@ def test_missing_file_and_directory(tmp_path):
         read_table(tmp_path / "no.csv", COLUMNS)
     with pytest.raises(CaseError, match="is a directory"):
         read_table(tmp_path, COLUMNS)
+
+
+def test_a_mapped_column_must_exist_and_wins_over_a_column_of_that_name(tmp_path):
+    """A mapping to a column not in the header was ignored, and a column literally
+    named 'force' (here a friction force) read instead; the right mapping then failed
+    with "column 'force' appears twice". The values are known by construction: the
+    mapped column's are read, the other is listed as not read."""
+    path = write(tmp_path, "s [m],force [N],Fn [N]\n0,0.3,1.0\n1,0.6,2.0\n")
+    with pytest.raises(CaseError, match=r"^no column 'Fnn' in file '.*t\.csv' "
+                                        r"\(--map force=Fnn\); its columns are 's \[m\]', "
+                                        r"'force \[N\]', 'Fn \[N\]'$"):
+        read_table(path, COLUMNS, required=["s", "force"], aliases={"Fnn": "force"})
+    t = read_table(path, COLUMNS, required=["s", "force"], aliases={"Fn": "force"})
+    assert t["force"].tolist() == [1.0, 2.0]
+    assert t.ignored == ["force [N]"] and t.headers["force"] == "Fn [N]"
+    # a group: the distance mapped as cycles displaces the column 's'
+    path = write(tmp_path, "s [m],N,force\n0,10,1\n1,20,2\n", "g.csv")
+    t = read_table(path, COLUMNS, required=[("s", "cycles"), "force"],
+                   aliases={"N": "cycles"}, groups=[("s", "cycles")])
+    assert "s" not in t and t["cycles"].tolist() == [10.0, 20.0]
+    # an alias of a name this table does not read is not looked for here
+    t = read_table(path, COLUMNS, required=["s"], aliases={"X": "r"})
+    assert "r" not in t.columns

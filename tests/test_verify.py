@@ -143,6 +143,12 @@ def test_other_physics_has_no_certified_reference(no_figures, tmp_path, paper_ru
     res = fmt.csv_dir(tmp_path / "r", paper_run)
     with pytest.raises(CaseError, match="no certified reference.*--reference-solver"):
         run_verify(wearcheck.load_case("paper", {"wear.k": 2e-4}), res, tmp_path / "v")
+    # it names the solvers that can run the case (the pin on a disc: the BEM alone)
+    with pytest.raises(CaseError) as err:
+        run_verify("pin_on_disc", res, tmp_path / "v")
+    assert str(err.value).endswith("verify against a fresh run instead: --reference-solver "
+                                   "bem (the only solver that runs this case)"), str(err.value)
+    assert wearcheck.registry.supporting(wearcheck.load_case("pin_on_disc")) == ("bem",)
     # a resolution or a tolerance is not physics: the reference applies
     m = run_verify(wearcheck.load_case("paper", {"mdr.elements": 100,
                                                  "compare.force_tolerance": 0.05}),
@@ -399,6 +405,23 @@ def test_ball_on_flat_in_cycles(no_figures, tmp_path):
     assert m["diagnosis"]["factor"] == pytest.approx(1 / 1.05, rel=2e-3)
 
 
+def test_a_case_staged_in_cycles_against_a_fresh_run(no_figures, tmp_path):
+    """--reference-solver failed on every case whose stages are in cycles ("key
+    'stages.cycles' = None: must be a non-empty list of numbers"). The fresh run's
+    stages are now the user's (as ŝ): the same solver at the same resolution passes,
+    its results at 1.05 times the distance fail, at the case's seven stages."""
+    case = wearcheck.load_case("ball_on_flat", {"mdr.elements": 200})
+    run = wearcheck.solve(case, "mdr")
+    m = run_verify(case, fmt.csv_dir(tmp_path / "r", run, time="cycles"), tmp_path / "v",
+                   reference_solver="mdr")
+    assert m["reference"] == "mdr" and m["passed"], json.dumps(failed_stages(m))
+    got = [st["s_hat_reference"] for st in m["pairs"]["results"]["stages"]]
+    assert got == pytest.approx(run.stages["s_hat"], rel=1e-9)
+    m = run_verify(case, fmt.csv_dir(tmp_path / "b", run, time="cycles", scale=1.05),
+                   tmp_path / "v2", reference_solver="mdr")
+    assert not m["passed"]
+
+
 def test_fretting_in_cycles(no_figures, tmp_path):
     # the fretting benchmark over half its cycles (the run's length is free; 2 s of MDR).
     # Not fewer: the worn volume is judged against the larger of its own value and 1 %
@@ -598,3 +621,112 @@ def test_a_history_wrong_between_the_stages_fails(no_figures, tmp_path, paper_ru
     done = cli("verify", "paper", tmp_path / "wrong", "--out", tmp_path / "v-wrong-cli")
     assert done.returncode == 1, done.stderr
     assert "history row(s) between the stages beyond a tolerance" in done.stderr
+
+
+def test_a_mapping_judges_the_mapped_column(no_figures, tmp_path, paper_run):
+    """A file with 'force [N]' (a friction force, 0.3 of the normal force) and 'Fn [N]'
+    (the normal force, right): --map force=Fnn (a typo) judged the friction column
+    and failed it; --map force=Fn failed with "column 'force' appears twice". Now
+    the typo is one line naming the columns there are (exit 2), and the mapped column
+    is judged (it passes; the friction column would fail by 70 %), the report saying
+    which column was read and which was not."""
+    h = paper_run.history
+    d = tmp_path / "r"
+    d.mkdir()
+    rows = [f"{s:.17g},{0.3 * F:.17g},{F:.17g}" for s, F in zip(h["s"], h["force"])]
+    (d / "history.csv").write_text("s [m],force [N],Fn [N]\n" + "\n".join(rows) + "\n")
+    done = cli("verify", "paper", d, "--out", tmp_path / "v1", "--map", "force=Fnn")
+    lines = [x for x in done.stderr.splitlines() if x.strip() and not x.startswith("note")]
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert "no column 'Fnn' in file" in lines[0] and "'Fn [N]'" in lines[0], lines[0]
+    m = run_verify("paper", d, tmp_path / "v2", ["force=Fn"])
+    assert m["passed"], json.dumps(failed_stages(m))
+    assert ("history.csv: force read from column 'Fn [N]' (--map force=Fn); column "
+            "'force [N]' not read") in m["results"]["notes"]
+    # a stage column mapped without a stages.csv is not silently unused
+    with pytest.raises(CaseError, match=r"--map p=CPRESS: .*stages\.csv does not exist"):
+        run_verify("paper", d, tmp_path / "v3", ["force=Fn", "p=CPRESS"])
+
+
+def test_a_row_between_the_stages_is_named_by_its_line(no_figures, tmp_path, paper_run):
+    """The worst row between the stages was named by its index from 0 ("row 167" was
+    the file's line 169). One row made 1.5× off in a file with a comment line above
+    the header: its line number is known by construction (comment 1, header 2, data
+    row k on line k + 3) and is the one named."""
+    h = paper_run.history
+    per_m = paper_run.scales["s_hat_per_m"]
+    s_hat = np.asarray(h["s"]) * per_m
+    k = int(np.argmin(np.abs(s_hat - 4.0)))       # between the stages at ŝ = 3 and 5
+    force = np.asarray(h["force"], float).copy()
+    force[k] *= 1.5
+    d = tmp_path / "r"
+    d.mkdir()
+    rows = [f"{s:.17g},{F:.17g}" for s, F in zip(h["s"], force)]
+    (d / "history.csv").write_text("# one row wrong\ns,force\n" + "\n".join(rows) + "\n")
+    m = run_verify("paper", d, tmp_path / "v")
+    worst = m["pairs"]["results"]["rows"]["worst"]["force"]
+    assert not m["passed"] and worst["index"] == k
+    assert worst["origin"] == f"history.csv row {k + 3}"
+    report = (tmp_path / "v" / "report.md").read_text()
+    assert f"at ŝ = {s_hat[k]:.4g} (history.csv row {k + 3})" in report
+
+
+def _history_and_stages(d, run, *, s_factor=1.0, p_factor=1.0, f_as_wear=False):
+    """The run's history (s, force, central wear) and stages (s_hat, r, f, p) in SI
+    headers, with the slips asked for: distances times s_factor (1e3: mm under 's'),
+    the pressure times p_factor (1e-6: MPa under 'p'), the wear depth under 'f'."""
+    from wearcheck.references.certified import unworn_profile
+    d.mkdir()
+    h, st = run.history, run.stages
+    rows = [f"{s * s_factor:.17g},{F:.17g},{w:.17g}"
+            for s, F, w in zip(h["s"], h["force"], h["wear_center"])]
+    (d / "history.csv").write_text("s,force,wear_center\n" + "\n".join(rows) + "\n")
+    f0 = unworn_profile(run.case, st["r"]) if f_as_wear else np.zeros(len(st["r"]))
+    rows = [f"{x:.17g},{r:.17g},{st['f'][k, j] - f0[j]:.17g},{st['p'][k, j] * p_factor:.17g}"
+            for k, x in enumerate(st["s_hat"]) for j, r in enumerate(st["r"])]
+    (d / "stages.csv").write_text("s_hat,r,f,p\n" + "\n".join(rows) + "\n")
+    return d
+
+
+def test_the_diagnosis_says_agree_only_where_it_agrees(no_figures, tmp_path, paper_run):
+    """With s in mm under an 's' header the diagnosis said "your results agree with
+    the reference at 0.5 × your sliding distances (misfit 2.6 there, 15 as given)":
+    0.5 is the end of the range searched and a misfit of 2.6 (260 %) is no agreement.
+    "Agree" now needs λ strictly inside the range and the misfit within the
+    verdict's tolerance (the largest of the quantities' tolerances, here 3 %);
+    distances in mm under a header in metres are named as such (the reference fits
+    at 1e-3 of them: exactly, by construction); otherwise the units are pointed at."""
+    from wearcheck.studies.verify import _diagnosis
+    cmp = wearcheck.load_case("paper").compare
+    for lam in (0.5, 0.8):                          # the reviewer's numbers
+        factor = dict(factor=lam, misfit=2.6, misfit_at_one=15.0, quantities=["force"],
+                      bounds=[0.5, 2.0], unit_misfits=[])
+        said = _diagnosis({"passed": False}, factor, cmp, "s", [])["reason"]
+        assert "agree with the reference at" not in said, said
+        assert "check the units of your columns" in said, said
+        assert ("the end of that range" in said) == (lam == 0.5), said
+    m = run_verify("paper", _history_and_stages(tmp_path / "mm", paper_run, s_factor=1e3),
+                   tmp_path / "v")
+    assert not m["passed"]
+    assert "mm written under a header in metres (write 's [mm]')" in m["diagnosis"]["reason"]
+    assert m["diagnosis"]["factor"] == 1e-3
+    # 1e3 × the distances leaves the reference: no misfit there, and valid JSON
+    assert "Infinity" not in (tmp_path / "v" / "metrics.json").read_text()
+
+
+@pytest.mark.parametrize("slip,said", [
+    (dict(p_factor=1e-6), "your pressure is 1e-06 times the reference's: MPa written under "
+                          "a header in Pa"),
+    (dict(f_as_wear=True), "your profile 'f' matches the reference's wear depth f − f0"),
+])
+def test_unit_slips_in_the_stages_are_hinted(no_figures, tmp_path, paper_run, slip, said):
+    """MPa written under 'p' (Pa) failed "pressure 1 > 0.03" at every stage, and a wear
+    depth written as the profile 'f' failed at ~100 %, without a word on why. The
+    hint names the slip; the verdict stays FAIL. The same tables without the slip
+    pass (the MDR at N = 400 passes with the shipped tolerances)."""
+    m = run_verify("paper", _history_and_stages(tmp_path / "ok", paper_run), tmp_path / "v0")
+    assert m["passed"], json.dumps(failed_stages(m))
+    m = run_verify("paper", _history_and_stages(tmp_path / "r", paper_run, **slip),
+                   tmp_path / "v")
+    assert not m["passed"]
+    assert said in m["diagnosis"]["reason"], m["diagnosis"]

@@ -227,9 +227,13 @@ VERIFICATION_METRICS = (
     Item("results", "", "source, format, distance (s, s_hat or cycles), given, not_given, "
                         "history_rows, stages, mapping, notes (what the reader decided)"),
     Item("distance_factor", "", "factor (the λ on the user's distances that fits the "
-                                "reference best), misfit, misfit_at_one, quantities"),
-    Item("diagnosis", "", "null, or on a FAIL explained by the distance factor: factor, "
-                          "reason"),
+                                "reference best, within bounds), misfit, misfit_at_one, "
+                                "quantities, bounds, unit_misfits (the misfit at 1e-3, "
+                                "1e-6 and 1e3 × the distances: a unit slip)"),
+    Item("diagnosis", "", "null, or on a FAIL the most likely cause: factor (the "
+                          "distance factor that fits, or null), reason (unit slips of "
+                          "the pressure or the profile, the distance factor, or the "
+                          "units to check)"),
     Item("scales", "", "as in meta.json"),
     Item("profile_scale_depth", "m", "the depth d profiles are measured in"),
     Item("tolerances", "", "the [compare] keys"),

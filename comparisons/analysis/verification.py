@@ -297,10 +297,13 @@ def judge_rows(reference, history: dict, given, *, scales: dict, units: dict, to
     Returns
     -------
     dict: ``judged`` (rows), ``failed`` (rows with a failed check), ``worst``
-    {quantity: {value, tolerance, s, row}} (value relative to the tolerance's scale,
-    at the row where it uses the largest share of the tolerance) and ``passed``.
+    {quantity: {value, tolerance, s, index, origin}} (value relative to the tolerance's
+    scale, at the row where it uses the largest share of the tolerance; ``index`` from
+    0 in ``history``, ``origin`` where it was read, e.g. "history.csv row 169" as a
+    spreadsheet counts rows) and ``passed``.
     """
     s = np.asarray(history["s"], float)
+    origin = history.get("origin")
     ref = reference.history_at(s)
     checks = [metrics.CHECK_BY_COLUMN[HISTORY_CHECKS[q]] for q in given]
     judged, failed, worst = 0, 0, {}
@@ -329,7 +332,10 @@ def judge_rows(reference, history: dict, given, *, scales: dict, units: dict, to
             used = c["value"] / c["tolerance"]
             if name not in worst or used > worst[name]["used"]:
                 worst[name] = dict(value=c["value"], tolerance=c["tolerance"], used=used,
-                                   scale=c["scale"], s=float(s[i]), row=i, passed=c["passed"])
+                                   scale=c["scale"], s=float(s[i]), index=i,
+                                   origin=(str(origin[i]) if origin is not None
+                                           else f"history row {i + 1}"),
+                                   passed=c["passed"])
         judged += 1
         failed += int(row_failed)
     return dict(judged=judged, failed=failed, worst=worst, passed=failed == 0)
@@ -428,7 +434,10 @@ def distance_factor(reference, history: dict, scales: dict, depth: float) -> dic
     relative to its own value, floored), by bounded minimisation over λ in
     [0.5, 2]. A λ away from 1 points at the wear coefficient K = kμ/σ0 (or at the
     distance the model slides); None when no quantity that changes with sliding
-    is given."""
+    is given. Also the misfit at the unit factors :data:`UNIT_FACTORS` (distances
+    written in mm or µm under a header in metres), where the reference covers at
+    least half of the rows (``unit_misfits``: [{factor, misfit}], misfit None where
+    it covers fewer), and ``bounds``."""
     import scipy.optimize
     units = unit_scales(scales, depth)
     s = np.asarray(history["s"], float)
@@ -438,8 +447,10 @@ def distance_factor(reference, history: dict, scales: dict, depth: float) -> dic
     if not cols or np.count_nonzero(moving) < 2:
         return None
 
-    def misfit(lam):
+    def misfit(lam, coverage=0.0):
         ref = reference.history_at(lam * s[moving])
+        if np.count_nonzero(np.isfinite(ref["force"])) < coverage * np.count_nonzero(moving):
+            return math.inf
         total, n = 0.0, 0
         for q in cols:
             u = np.asarray(history[q], float)[moving]
@@ -450,9 +461,68 @@ def distance_factor(reference, history: dict, scales: dict, depth: float) -> dic
         return math.sqrt(total / n) if n else math.inf
 
     at_one = misfit(1.0)
-    best = scipy.optimize.minimize_scalar(misfit, bounds=(0.5, 2.0), method="bounded",
+    best = scipy.optimize.minimize_scalar(misfit, bounds=FACTOR_BOUNDS, method="bounded",
                                           options=dict(xatol=1e-5))
     if not np.isfinite(best.fun) or not np.isfinite(at_one):
         return None
     return dict(factor=float(best.x), misfit=float(best.fun), misfit_at_one=at_one,
-                quantities=cols)
+                quantities=cols, bounds=list(FACTOR_BOUNDS),
+                unit_misfits=[dict(factor=f, misfit=_finite(misfit(f, coverage=0.5)))
+                              for f in UNIT_FACTORS])
+
+
+def _finite(value: float) -> float | None:
+    """None for a misfit that could not be computed (metrics.json holds no Infinity)."""
+    return value if math.isfinite(value) else None
+
+
+#: the range of factors on the user's distances searched by :func:`distance_factor`
+FACTOR_BOUNDS = (0.5, 2.0)
+#: factors a unit slip puts on the distances: mm or µm written under a header in
+#: metres (the reference matches at 1e-3 or 1e-6 of the values), metres under "mm"
+UNIT_FACTORS = (1e-3, 1e-6, 1e3)
+
+
+def stage_unit_slips(reference, stages: list, unworn, depth: float, p0: float) -> list[str]:
+    """Unit slips that explain the user's stages, in words (empty when none does).
+
+    * the pressure ~10⁶ times too small (MPa written under a header in Pa) or too
+      large (Pa under "MPa"): the median ratio of the user's pressure to the
+      reference's, where the reference's exceeds a tenth of p0, within a factor 2
+      of 10⁻⁶ or 10⁶;
+    * the wear depth written as the profile ``f``: the user's f matches the
+      reference's wear f − f0 (``unworn(r)`` is f0) at least four times better
+      than its f, at every stage with a profile, where it does not match f
+      (max difference beyond 1 % of ``depth``).
+    """
+    ratios, as_wear, as_f = [], [], []
+    for st in stages:
+        if st.get("p") is None and st.get("f") is None:
+            continue
+        if not reference.covers(st["s"]):
+            continue
+        r = np.asarray(st["r"], float)
+        f_ref, p_ref = reference.stage_at(st["s"], r)
+        if st.get("p") is not None:
+            p = np.asarray(st["p"], float)
+            on = (p_ref > 0.1 * p0) & np.isfinite(p) & (p != 0)
+            if np.any(on):
+                ratios.append(float(np.median(p[on] / p_ref[on])))
+        if st.get("f") is not None:
+            f = np.asarray(st["f"], float)
+            as_f.append(float(np.nanmax(np.abs(f - f_ref))))
+            as_wear.append(float(np.nanmax(np.abs(f - (f_ref - unworn(r))))))
+    out = []
+    if ratios:
+        ratio = float(np.median(ratios))
+        for factor, what in ((1e-6, "MPa written under a header in Pa ('p' is in Pa: "
+                                     "write 'p [MPa]')"),
+                             (1e6, "Pa written under a header in MPa")):
+            if 0.5 * factor < ratio < 2.0 * factor:
+                out.append(f"your pressure is {ratio:.3g} times the reference's: {what}")
+    if as_f and all(w < 0.25 * d and d > 0.01 * depth for w, d in zip(as_wear, as_f)):
+        out.append("your profile 'f' matches the reference's wear depth f − f0 (within "
+                   f"{max(as_wear) / depth:.2g} of the depth d, against {max(as_f) / depth:.2g} "
+                   "as a profile): a wear depth given as the profile; name that column "
+                   "'wear' (or --map wear=COLUMN)")
+    return out

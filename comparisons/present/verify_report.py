@@ -59,7 +59,7 @@ def failures(m) -> list[str]:
         out.append(f"{rows['failed']} of {rows['judged']} history row(s) between the stages "
                    "beyond a tolerance: " + ", ".join(
                        f"{_label(name)} {report.fmt(w['value'])} > {w['tolerance']:g} of "
-                       f"{report.fmt(w['scale'], 4)} at ŝ = {w['s'] * per_m:.4g} (row {w['row']})"
+                       f"{report.fmt(w['scale'], 4)} at ŝ = {w['s'] * per_m:.4g} ({w['origin']})"
                        for name, w in rows["worst"].items() if not w["passed"]))
     if not pair["stages"]:
         out.append("no stage could be judged" + (": " + "; ".join(pair["not_judged"])

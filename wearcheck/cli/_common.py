@@ -38,9 +38,7 @@ def case_notes(args, case) -> None:
     (exit 2), whether from the command's own checks or from inside a solver, is
     then the one line it prints, never preceded by a remark on a case it did not run.
     """
-    if not getattr(args, "quiet", False):
-        for text in case.warnings:
-            print(f"note: {text}", file=sys.stderr)
+    print_notes(args, case.warnings)
 
 
 def add_cluster_arguments(p) -> None:
@@ -50,6 +48,13 @@ def add_cluster_arguments(p) -> None:
                         "(default: an embedded local cluster)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="worker processes of the embedded cluster (default: one per core)")
+
+
+def print_notes(args, texts) -> None:
+    """Remarks as "note:" lines on stderr, unless quiet."""
+    if not getattr(args, "quiet", False):
+        for text in texts:
+            print(f"note: {text}", file=sys.stderr)
 
 
 def output(args, default: Path) -> Path:

@@ -14,7 +14,7 @@ from pathlib import Path
 from wearcheck import registry
 
 from ._common import (add_case_arguments, add_cluster_arguments, add_json_argument,
-                      case_notes, load_case, print_json, study_exit, varied)
+                      load_case, print_json, print_notes, study_exit, varied)
 from . import Terminated
 
 
@@ -36,6 +36,8 @@ def add_parser(sub):
 def main(args) -> int:
     # the study (scipy.optimize, asyncio) is imported here, not for --help
     # (docs/performance.md, "Start-up")
+    import itertools
+    from wearcheck.cases.case import shared_remarks
     from wearcheck.studies.distributed import fmt
     from wearcheck.studies.sweep import sweep
     case = load_case(args)
@@ -48,7 +50,10 @@ def main(args) -> int:
         print(f"wearcheck sweep: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}"
               f"; the runs finished are in {out}, no sweep.csv was written", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
-    case_notes(args, case)
+    # the base case's remarks only where every run makes them (a μ sweep's runs each
+    # have their own βμ): the base case itself is not run
+    print_notes(args, shared_remarks(case, [dict(zip(vary, combo))
+                                            for combo in itertools.product(*vary.values())]))
     if args.json:
         print_json(rows)
     else:

@@ -29,6 +29,8 @@ from wearcheck.cases.tables import parse_quantity, read_table, split_header
 from . import DISTANCES, HISTORY_QUANTITIES, External, Stage, check_unused, time_columns
 
 STAGE_COLUMNS = {"r": "length", "f": "length", "wear": "length", "p": "pressure"}
+#: names that give one quantity: a --map of one of them displaces the others' columns
+GROUPS = (tuple(DISTANCES), ("f", "wear"))
 
 
 def _aliases(mapping: dict, known: dict) -> tuple[dict, dict, list]:
@@ -38,7 +40,7 @@ def _aliases(mapping: dict, known: dict) -> tuple[dict, dict, list]:
     aliases, units, notes = {}, {}, []
     for key, column in mapping.items():
         name, unit = split_header(key)
-        aliases[column.strip().lower()] = name
+        aliases[column.strip()] = name
         if unit is not None:
             parse_quantity(key, known[name], f"--map '{key}={column}'")
             units[name] = unit
@@ -57,12 +59,13 @@ def read(directory: Path, mapping: dict) -> External:
                         "with s, s_hat or cycles and force, and optionally stages.csv)")
     columns = dict(DISTANCES, **HISTORY_QUANTITIES)
     table = read_table(hist_path, columns, required=[tuple(DISTANCES), "force"],
-                       aliases=aliases, units=units)
+                       aliases=aliases, units=units, groups=GROUPS)
     times = time_columns(table.columns)
     kind = times[0]
     if len(times) > 1:
         notes.append(f"{hist_path.name}: the distance is read from '{kind}'; "
                      + ", ".join(f"'{t}'" for t in times[1:]) + " not used")
+    notes += mapped_notes(table, aliases)
     if table.ignored:
         notes.append(f"{hist_path.name}: columns not read: " + ", ".join(table.ignored))
     t = table[kind]
@@ -77,8 +80,27 @@ def read(directory: Path, mapping: dict) -> External:
     if stages_path.is_file():
         stages, stage_kind, more = read_stages(stages_path, aliases, units)
         notes += more
+    else:
+        for column, name in aliases.items():
+            if name not in columns:
+                raise CaseError(f"--map {name}={column}: {stages_path} does not exist (the "
+                                f"stages' {name} is read from stages.csv)")
     return External(kind=kind, history=history, history_origin=origin, stages=stages,
                     source=str(directory), format="csv", stage_kind=stage_kind, notes=notes)
+
+
+def mapped_notes(table, aliases: dict) -> list[str]:
+    """What --map decided in ``table``: which column each mapped name was read from,
+    and the columns of that name it displaced."""
+    out = []
+    for column, name in aliases.items():
+        if name not in table.headers:
+            continue
+        passed_over = [c for c in table.ignored if split_header(c)[0] == name]
+        out.append(f"{table.path.name}: {name} read from column '{table.headers[name]}' "
+                   f"(--map {name}={column})"
+                   + "".join(f"; column '{c}' not read" for c in passed_over))
+    return out
 
 
 def _magnitude(table, name, notes) -> np.ndarray:
@@ -116,11 +138,12 @@ def read_stages(path: Path, aliases: dict, units: dict | None = None
     """The long-form stages table: ([Stage], distance kind, notes)."""
     columns = dict(DISTANCES, **STAGE_COLUMNS)
     table = read_table(path, columns, required=[tuple(DISTANCES), "r"], aliases=aliases,
-                       units=units)
+                       units=units, groups=GROUPS)
     times = time_columns(table.columns)
     kind = times[0]
-    notes = [f"{path.name}: columns not read: " + ", ".join(table.ignored)] \
-        if table.ignored else []
+    notes = mapped_notes(table, aliases)
+    if table.ignored:
+        notes.append(f"{path.name}: columns not read: " + ", ".join(table.ignored))
     if "f" in table and "wear" in table:
         notes.append(f"{path.name}: the profile is read from 'f'; 'wear' not used")
     has_f, has_w, has_p = "f" in table, "wear" in table and "f" not in table, "p" in table

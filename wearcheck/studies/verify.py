@@ -113,9 +113,8 @@ def fresh_reference(case, name, ext, *, quiet=True, solve=None):
         s_list = [st["s"] for st in stages] or [
             sel["s"] for sel in verification.select_stages(hist, [],
                                                            case_stage_distances(case))]
+        # stages.s_hat replaces stages.cycles (Case.derive drops a key's partner)
         changes = {"stages.s_hat": [s * sc["s_hat_per_m"] for s in sorted(set(s_list))]}
-        if case.stages.cycles is not None:
-            changes["stages.cycles"] = None
     run_case = case.derive(changes)
     registry.get(name)
     reason = registry.get(name).supports(run_case)
@@ -150,7 +149,7 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
             raise CaseError("no certified reference solves this case's problem (shipped: "
                             + ", ".join(certified.names()) + "; the physics must match: "
                             "indenter, counterface, loading, wear, fretting); verify against "
-                            "a fresh run instead: --reference-solver mdr")
+                            "a fresh run instead: " + _fresh_run_hint(case))
         ext = external.read(results, mapping)
         hist, stages = read_results(case, ext, ref.cycles_to_s)
         ref_name, ref_title = "reference", f"certified reference '{ref.name}'"
@@ -181,7 +180,9 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
                                  if q not in pair["not_given"]],
                           not_given=pair["not_given"], history_rows=len(hist["s"]),
                           stages=len(stages), mapping=dict(mapping or {})),
-             distance_factor=factor, diagnosis=_diagnosis(pair, factor, cmp))
+             distance_factor=factor,
+             diagnosis=_diagnosis(pair, factor, cmp, ext.kind, verification.stage_unit_slips(
+                 ref, stages, lambda r: unworn_profile(case, r), depth, sc["p0"])))
     if reference_solver is None:
         m["reference_band"] = dict(name=ref.name, method=ref.meta.get("method"),
                                    orders=ref.meta.get("orders"),
@@ -198,6 +199,16 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
     return m
 
 
+def _fresh_run_hint(case) -> str:
+    """The --reference-solver options that can run ``case`` (as the registry says)."""
+    able = registry.supporting(case)
+    if not able:
+        return ("no registered solver can run this case either (" + "; ".join(
+            f"{n}: {registry.get(n).supports(case)}" for n in registry.names()) + ")")
+    return " or ".join(f"--reference-solver {n}" for n in able) + \
+        (" (the only solver that runs this case)" if len(able) == 1 else "")
+
+
 def _largest_band_share(pair) -> dict | None:
     """The reference band's largest share of a tolerance over the stages judged."""
     best = None
@@ -212,20 +223,54 @@ def _largest_band_share(pair) -> dict | None:
     return best
 
 
-def _diagnosis(pair, factor, cmp) -> dict | None:
-    """On a FAIL: the distance factor that best fits, when it explains the failure."""
-    if pair["passed"] or factor is None:
+def _diagnosis(pair, factor, cmp, kind, slips) -> dict | None:
+    """On a FAIL, the most likely cause: unit slips in the stages (``slips``, from
+    :func:`verification.stage_unit_slips`), then the distance factor λ: "agree" only
+    when λ lies strictly inside the searched range and the misfit there is within
+    the verdict's tolerance; else a unit factor (mm or µm under a header in metres)
+    that fits, else a pointer at the units when the history fits at no factor."""
+    if pair["passed"]:
         return None
-    lam = factor["factor"]
-    if abs(lam - 1.0) < 1e-3 or not factor["misfit"] < 0.25 * factor["misfit_at_one"]:
+    reasons, lam = list(slips), None
+    if factor is not None:
+        lo, hi = factor["bounds"]
+        lam, misfit, at_one = factor["factor"], factor["misfit"], factor["misfit_at_one"]
+        # the misfit is an RMS relative difference of force, central wear and volume:
+        # within the largest of their tolerances it is agreement
+        tol = max(cmp.force_tolerance if q == "force" else cmp.profile_tolerance
+                  for q in factor["quantities"])
+        inside = lo * (1 + 1e-3) < lam < hi * (1 - 1e-3)
+        units = [u for u in factor.get("unit_misfits", [])
+                 if u["misfit"] is not None and u["misfit"] <= tol]
+        if inside and abs(lam - 1.0) >= 1e-3 and misfit <= tol and misfit < 0.25 * at_one:
+            reasons.append(
+                f"your results agree with the reference at {lam:.4g} × your sliding "
+                f"distances (misfit {misfit:.2g} there, {at_one:.2g} as given, over "
+                # (your state at s is the reference's at λs: your K s = K_case λ s)
+                f"{', '.join(factor['quantities'])}): your model wears {lam:.4g} times as "
+                "fast as the case says; check the wear coefficient K = kμ/σ0 (k, μ, σ0) "
+                "and the distance slid per step or cycle")
+        elif units and kind == "s":
+            u = min(units, key=lambda u: u["misfit"])
+            said = {1e-3: "mm written under a header in metres (write 's [mm]')",
+                    1e-6: "µm written under a header in metres (write 's [um]')",
+                    1e3: "metres written under a header in mm"}[u["factor"]]
+            reasons.append(f"your history agrees with the reference at {u['factor']:g} × "
+                           f"your sliding distances (misfit {u['misfit']:.2g} there, "
+                           f"{at_one:.2g} as given): {said}")
+            lam = u["factor"]
+        elif at_one > tol and not slips:
+            at = f"{lam:.4g} ×" + ("" if inside else ", the end of that range")
+            lam = None
+            reasons.append(
+                f"no factor on your sliding distances from {lo:g} to {hi:g} makes your "
+                f"history agree with the reference (best misfit {misfit:.2g}, at {at}; "
+                f"{at_one:.2g} as given): check the units of your columns: a header "
+                "without a unit is SI (m, N, Pa, m³), distances in mm need 's [mm]' (a "
+                "factor 1000), a force in kN 'force [kN]'")
+    if not reasons:
         return None
-    return dict(factor=lam, reason=(
-        f"your results agree with the reference at {lam:.4g} × your sliding distances "
-        f"(misfit {factor['misfit']:.2g} there, {factor['misfit_at_one']:.2g} as given, over "
-        # (your state at s is the reference's at λs: your K s = K_case λ s)
-        f"{', '.join(factor['quantities'])}): your model wears {lam:.4g} times as fast "
-        "as the case says; check the wear coefficient K = kμ/σ0 (k, μ, σ0) and the "
-        "distance slid per step or cycle"))
+    return dict(factor=lam, reason="; ".join(reasons))
 
 
 def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, certified_ref):
