@@ -464,7 +464,7 @@ def _direct_rows(L: int):
 
     Returns V with V[L - i, j] = c[i-1-j] for j < i and 0 for j >= i (a
     sliding-window view: no L×L matrix is stored), 2 sqrt(i) for i = 0..L,
-    and the kernel's differences reversed, Dr[L-1-m] = c[m-1] - c[m] (m >= 1).
+    the kernel's differences reversed, Dr[L-1-m] = c[m-1] - c[m] (m >= 1), and c.
     """
     c = abel_kernel(L)
     e = np.zeros(2 * L)
@@ -505,22 +505,19 @@ def far_bound(delta: np.ndarray) -> float:
 
     Summation by parts of to_1d's sum: for i >= M,
     to_1d(Δ)_i = -Δ_0 (w_0 - 1) - Σ_{1<=k<M} a_k Δ_k with w_0 = 2 sqrt(i) c[i-1]
-    (w_0 - 1 = c[i-1]²) and a_k = 2 sqrt(i) (c[i-1-k] - c[i-k]) >= 0, and
-    every one of these weights decreases with i (c is the second difference
-    of sqrt; docs/performance.md, "The paper case as users run it"), so their
-    values at i = M weighting |Δ| bound every node beyond.
+    (w_0 - 1 = c[i-1]²) and a_k = 2 sqrt(i) (c[i-1-k] - c[i-k]) >= 0. Every
+    one of these weights decreases with i (c is the second difference of
+    sqrt; docs/performance.md, "The paper case as users run it"), so their
+    values at i = M weighting |Δ| bound every node beyond; Δ_0's is taken as
+    a_0 = 2 sqrt(M) (c[M-1] - c[M]) >= c[M-1]² (about twice it), which makes
+    the bound one dot product.
     """
     M = len(delta)
     if M == 0:
         return 0.0
     L = 1 << max(int(M).bit_length(), 6)
-    _, _, Dr, c = _direct_rows(L)
-    a = np.abs(delta)
-    c0 = float(c[M - 1])
-    b = float(a[0]) * c0 * c0
-    if M > 1:
-        b += 2.0 * math.sqrt(M) * float(Dr[L - M:L - 1] @ a[1:])
-    return b
+    _, _, Dr, _ = _direct_rows(L)
+    return 2.0 * math.sqrt(M) * float(np.dot(Dr[L - M - 1:L - 1], np.abs(delta)))
 
 
 def from_1d_exact(g: np.ndarray) -> np.ndarray:

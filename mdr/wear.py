@@ -512,24 +512,24 @@ class FarGap:
             return False
         f_ref, g_ref, g_min = reference
         if g_min is None:
-            g_min = np.minimum.accumulate(g_ref[::-1])[::-1]
+            # (a list: one value is read per check)
+            g_min = np.minimum.accumulate(g_ref[::-1])[::-1].tolist()
             self.reference = (f_ref, g_ref, g_min)
         delta = f - f_ref
-        if delta[M:].any():
+        if np.count_nonzero(delta[M:]):
             return False
-        return d - float(g_min[M]) + transforms.far_bound(delta[:M]) <= 0.5 * tol * abs(d)
+        return d - g_min[M] + transforms.far_bound(delta[:M]) <= 0.5 * tol * abs(d)
 
     def check(self, f: np.ndarray, n: int, d: float, tol: float):
-        """The nodes i >= n that penetrate (d - g_i > tol·d; as i - n) and g at nodes
-        n-1 and n."""
+        """The nodes i >= n that penetrate (d - g_i > tol·d; as i - n), and g from
+        node n-1 on (at least to node n)."""
         N1 = len(f)
         M = min(n + EDGE_WINDOW, N1)
         if M == N1 or self.clears(f, M, d, tol):
             g = transforms.to_1d_rows(f, n - 1, M)
         else:
             g = self.full(f)[n - 1:]
-        penetrates = d - g[1:] > tol * d
-        return (np.flatnonzero(penetrates) if penetrates.any() else ()), g[0], g[1]
+        return (d - g[1:] > tol * d).nonzero()[0], g
 
 
 def implicit_step(model: Model, state: State, h: float, c: float = 1.0,
@@ -729,7 +729,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
         else:
             f = base.copy()
             f[:n] += sigma * p
-            below, g_last, g_next = far_gap.check(f, n, d, tol)
+            below, g = far_gap.check(f, n, d, tol)
         if len(below):
             m_new = n + int(below[-1])
         elif tension:
@@ -780,8 +780,8 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
         qq[:n] = np.maximum(transforms.line_load(p, model.dt), 0.0)
         force = transforms.force(qq, model.dt)
     return State(f=f, depth=float(d), q=qq, p=pp, force=force,
-                 contact_radius=contact.radius_between(g_last, g_next, d, model.t[m],
-                                                       model.t[m + 1]),
+                 contact_radius=contact.radius_between(float(g[0]), float(g[1]), d,
+                                                       model.t[m], model.t[m + 1]),
                  m=m, stats=stats, dt=model.dt)
 
 

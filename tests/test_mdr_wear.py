@@ -424,9 +424,10 @@ def test_far_bound_holds_against_the_transform():
             for i in {M, min(M + 1, N1 - 1), (M + N1) // 2, N1 - 1}:
                 if i >= M:
                     assert abs(eq2_at(delta, i)) <= bound * (1 + 1e-12) + 1e-300, (M, i)
-        # one-signed: the bound is the transform at node M itself (to round-off)
+        # one-signed: the bound is the transform at node M itself but for Δ_0's
+        # weight (taken about twice its own: a share ~1/M of the bound)
         if M < N1:
-            assert bound == pytest.approx(abs(transforms.to_1d(bumps[3])[M]), rel=1e-12)
+            assert bound == pytest.approx(abs(transforms.to_1d(bumps[3])[M]), rel=1e-3)
 
 
 def test_far_bound_weights_decrease_away_from_the_change():
@@ -488,7 +489,7 @@ def test_far_gap_sees_a_penetration_beyond_its_window():
     assert not far.clears(f, 800, d, 1e-9)
     assert np.any(d - transforms.to_1d(f)[800:] > 1e-9 * d)
     # the check falls back to the whole transform and finds the last such node
-    below, _, _ = far.check(f, 601, d, 1e-9)
+    below, _ = far.check(f, 601, d, 1e-9)
     g = transforms.to_1d(f)
     assert 601 + below[-1] == np.flatnonzero(d - g > 1e-9 * d)[-1]
     assert np.array_equal(far.reference[0], f)      # (its reference now)
