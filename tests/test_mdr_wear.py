@@ -432,14 +432,17 @@ def test_far_bound_holds_against_the_transform():
 
 def test_far_bound_weights_decrease_away_from_the_change():
     # the bound rests on every weight of the summation by parts decreasing with
-    # the node i: w_0(i) - 1 = c[i-1]² and a_k(i) = 2 sqrt(i) (c[i-1-k] - c[i-k]).
-    # Checked by exact rationals' float image on a grid of i and k (c from its
-    # definition sqrt(k+1) - sqrt(k) in long double where available)
+    # the node i: w_0(i) - 1 = c[i-1]² and a_k(i) = 2 sqrt(i) (c[i-1-k] - c[i-k])
+    # (docs/performance.md proves it; here on i up to 20000 and a few k, c from
+    # its definition sqrt(k+1) - sqrt(k) in long double where available)
     i = np.arange(1, 20001, dtype=np.longdouble)
     c = np.sqrt(np.arange(20002, dtype=np.longdouble) + 1) - np.sqrt(np.arange(20002,
                                                                           dtype=np.longdouble))
     w0 = 2 * np.sqrt(i) * c[:20000] - 1
     assert np.all(np.diff(w0) < 0) and np.all(w0 > 0)
+    # and Δ_0's weight in the bound, a_0(M) = 2 sqrt(M) (c[M-1] - c[M]), covers c[M-1]²
+    a0 = 2 * np.sqrt(i) * (c[:20000] - c[1:20001])
+    assert np.all(a0 >= c[:20000] ** 2)
     for k in (0, 1, 2, 5, 100, 5000):
         ii = np.arange(k + 1, 20001)
         a = 2 * np.sqrt(ii.astype(np.longdouble)) * (c[ii - 1 - k] - c[ii - k])
