@@ -636,7 +636,8 @@ def pressure_force_weights(n: int) -> np.ndarray:
     a pressure p on the nodes 0..k-1 (k <= N): Eq. 12 of :func:`line_load`
     without forming the line load (the line load is positive where p >= 0 on
     nodes i..k-1: :func:`line_load`'s kernel B is positive)."""
-    # F = sqrt(Δt) w·q with q_i = (π/2) sqrt(Δt) Σ_{k>=i} B[k-i] p_k: v_k = (π/2) Σ_{i<=k} w_i B[k-i]
+    # F = sqrt(Δt) w·q with q_i = (π/2) sqrt(Δt) Σ_{k>=i} B[k-i] p_k:
+    # v_k = (π/2) Σ_{i<=k} w_i B[k-i]
     v = (0.5 * math.pi) * lower(_kernel(abel_kernel_inverse_sum, n + 1), _force_weights(n),
                                 key="B")
     v.flags.writeable = False

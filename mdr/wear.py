@@ -678,7 +678,7 @@ def _force_of(p: np.ndarray, N: int, dt: float, direct: bool) -> float:
     return float(transforms.force_weights(N, dt)[:len(p)] @ transforms.line_load(p, dt))
 
 
-def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None) -> State:
+def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap) -> State:
     """The linear complementarity problem of one implicit step, contact set included."""
     N = len(model.x) - 1
     E, K = model.E_star, model.wear_rate

@@ -456,7 +456,8 @@ def test_to_1d_rows_are_the_transform_on_those_nodes():
     for N1 in (2, 3, 65, 801, 3001):
         f = np.cumsum(rng.standard_normal(N1))
         g = transforms.to_1d(f)
-        for first, stop in ((0, N1), (max(N1 - 9, 0), N1), (0, 1), (N1 // 2, min(N1, N1 // 2 + 9))):
+        for first, stop in ((0, N1), (max(N1 - 9, 0), N1), (0, 1),
+                            (N1 // 2, min(N1, N1 // 2 + 9))):
             # (the FFT's round-off, 1e-15 of the largest value, and the sums')
             np.testing.assert_allclose(transforms.to_1d_rows(f, first, stop), g[first:stop],
                                        rtol=0, atol=1e-14 * np.max(np.abs(g)))
