@@ -507,6 +507,10 @@ class FarGap:
 
     def clears(self, f: np.ndarray, M: int, d: float, tol: float) -> bool:
         """Whether the bound shows every node i >= M out of contact (d - g_i <= tol·d/2)."""
+        return self._clears(f, None, M, d, tol)
+
+    def _clears(self, f, delta, M, d, tol) -> bool:
+        # (delta: f - f_ref of this reference, or None)
         reference = self.reference
         if reference is None:
             return False
@@ -515,21 +519,31 @@ class FarGap:
             # (a list: one value is read per check)
             g_min = np.minimum.accumulate(g_ref[::-1])[::-1].tolist()
             self.reference = (f_ref, g_ref, g_min)
-        delta = f - f_ref
+        if delta is None:
+            delta = f - f_ref
         if np.count_nonzero(delta[M:]):
             return False
         return d - g_min[M] + transforms.far_bound(delta[:M]) <= 0.5 * tol * abs(d)
 
     def check(self, f: np.ndarray, n: int, d: float, tol: float):
         """The nodes i >= n that penetrate (d - g_i > tol·d; as i - n), and g from
-        node n-1 on (at least to node n)."""
+        node n-1 on (at least to node n), or None where the bound alone shows every
+        node from n on out of contact (the contact set found: the window's sums
+        are spared)."""
         N1 = len(f)
+        reference = self.reference
+        delta = None if reference is None else f - reference[0]
+        if self._clears(f, delta, n, d, tol):
+            return _NO_NODES, None
         M = min(n + EDGE_WINDOW, N1)
-        if M == N1 or self.clears(f, M, d, tol):
+        if M == N1 or self._clears(f, delta, M, d, tol):
             g = transforms.to_1d_rows(f, n - 1, M)
         else:
             g = self.full(f)[n - 1:]
         return (d - g[1:] > tol * d).nonzero()[0], g
+
+
+_NO_NODES = np.zeros(0, dtype=np.intp)
 
 
 def implicit_step(model: Model, state: State, h: float, c: float = 1.0,
@@ -779,6 +793,8 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap) -> S
         qq = np.zeros(N + 1)
         qq[:n] = np.maximum(transforms.line_load(p, model.dt), 0.0)
         force = transforms.force(qq, model.dt)
+    if g is None:       # (the check's bound alone found the set: g at the edge now)
+        g = transforms.to_1d_rows(f, m, m + 2)
     return State(f=f, depth=float(d), q=qq, p=pp, force=force,
                  contact_radius=contact.radius_between(float(g[0]), float(g[1]), d,
                                                        model.t[m], model.t[m + 1]),
