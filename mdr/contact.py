@@ -41,10 +41,14 @@ def contact_radius(g: np.ndarray, depth: float, t: np.ndarray, m: int) -> float:
     """Paper Eq. 11, g(a) = d, between node m (g < d) and m+1 (g >= d), linear in t."""
     if m < 0:
         return 0.0
-    g0, g1 = g[m], g[m + 1]
+    return radius_between(g[m], g[m + 1], depth, t[m], t[m + 1])
+
+
+def radius_between(g0: float, g1: float, depth: float, t0: float, t1: float) -> float:
+    """:func:`contact_radius` from g and t at the last loaded node (g0, t0) and the next."""
     frac = (depth - g0) / (g1 - g0) if g1 > g0 else 1.0
     frac = min(max(frac, 0.0), 1.0)
-    return math.sqrt(t[m] + frac * (t[m + 1] - t[m]))
+    return math.sqrt(t0 + frac * (t1 - t0))
 
 
 def depth_for_force(g: np.ndarray, force: float, E_star: float, weights: np.ndarray) -> float:

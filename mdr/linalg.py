@@ -89,10 +89,11 @@ def _cython_blas(name: str, signature):
 
 
 def _dtrsv():
-    p_int = ctypes.POINTER(ctypes.c_int)
-    return _cython_blas("dtrsv", ctypes.CFUNCTYPE(
-        None, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, p_int,
-        ctypes.c_void_p, p_int, ctypes.c_void_p, p_int))
+    # dtrsv(uplo, trans, diag, n*, a*, lda*, x*, incx*), called with bytes, byref()s
+    # and c_void_p pointers only: declared without argument types, ctypes passes
+    # these as they are instead of converting each through its argtype's
+    # from_param (half the cost of a call; a solve makes two)
+    return _cython_blas("dtrsv", ctypes.CFUNCTYPE(None))
 
 
 _DTRSV = _dtrsv()
@@ -207,15 +208,20 @@ class NestedCholesky:
         self._size = ctypes.c_int(0)
         self._refs = (ctypes.byref(self._size), ctypes.byref(self._lda), ctypes.byref(_ONE))
 
+    #: (the references of the last growth, the factor's and the work vector's
+    #: addresses as ctypes pointers) for :meth:`solve`
+    _pointers = None
+
     def _forward_kept(self, x: np.ndarray) -> int:
         """How many leading entries of the forward solve of ``x`` the last solve
         had (its right-hand side agreed there); they are written into ``x``."""
         last = self._last
         if last is None:
             return 0
-        b0, y0 = last
-        k = min(len(x), len(b0))
-        if not k or not (x[:k] == b0[:k]).all():
+        b0, y0 = last           # (b0: the bytes of the last right-hand side)
+        k = min(len(x), len(y0))
+        # compared as bytes: no array temporaries (a -0.0 for a 0.0 only recomputes)
+        if not k or x[:k].tobytes() != b0[:8 * k]:
             return 0
         x[:k] = y0[:k]
         return k
@@ -228,8 +234,8 @@ class NestedCholesky:
                                     check_finite=False)
         y = np.array(b, dtype=float)
         if n:
-            _DTRSV(b"U", b"T", b"N", ctypes.byref(ctypes.c_int(n)), self._address,
-                   ctypes.byref(self._lda), y.ctypes.data, ctypes.byref(_ONE))
+            _DTRSV(b"U", b"T", b"N", ctypes.byref(ctypes.c_int(n)), ctypes.c_void_p(self._address),
+                   ctypes.byref(self._lda), ctypes.c_void_p(y.ctypes.data), ctypes.byref(_ONE))
         return y
 
     def rank_one(self, u: np.ndarray, v: np.ndarray) -> None:
@@ -240,7 +246,8 @@ class NestedCholesky:
         if not np.all(denominator != 0.0) or not np.all(np.isfinite(denominator)):
             raise SolverError("implicit wear step: the contact matrix is singular "
                               "(Sherman–Morrison denominator 0)")
-        self._rank_one = (f, g, denominator)
+        # (the denominators as floats: one is read per solve)
+        self._rank_one = (f, g, denominator.tolist())
 
     def backward(self, y: np.ndarray) -> np.ndarray:
         """x = U⁻¹ y on the leading len(y) nodes (a fresh array)."""
@@ -249,8 +256,8 @@ class NestedCholesky:
             return solve_triangular(self.u[:n, :n], y, lower=False, check_finite=False)
         x = np.array(y, dtype=float)
         if n:
-            _DTRSV(b"U", b"N", b"N", ctypes.byref(ctypes.c_int(n)), self._address,
-                   ctypes.byref(self._lda), x.ctypes.data, ctypes.byref(_ONE))
+            _DTRSV(b"U", b"N", b"N", ctypes.byref(ctypes.c_int(n)), ctypes.c_void_p(self._address),
+                   ctypes.byref(self._lda), ctypes.c_void_p(x.ctypes.data), ctypes.byref(_ONE))
         return x
 
     def solve(self, b: np.ndarray, keep: bool = False) -> np.ndarray:
@@ -269,20 +276,34 @@ class NestedCholesky:
         x = self._work[:n]
         x[...] = b                       # solved in place in the work vector
         size, lda, one = self._refs
-        a, xp = self._address, self._work_address
+        pointers = self._pointers
+        if pointers is None or pointers[0] is not self._refs:
+            # the factor's and the work vector's addresses as ctypes pointers, made
+            # once per growth (extend makes new references)
+            pointers = self._pointers = (self._refs, ctypes.c_void_p(self._address),
+                                         ctypes.c_void_p(self._work_address))
+        _, a, xp = pointers
         # the forward solve y = U⁻ᵀ b is nested: y[:k] depends on b[:k] alone,
         # so a right-hand side that shares its leading entries with the last
         # one's (the contact iteration's next set: the same gap, a node or two
         # more or fewer) keeps that part of y
-        k = self._forward_kept(x) if keep else 0
+        if keep:
+            b_bytes = x.tobytes()
+            k = self._forward_kept(x)
+        else:
+            k = 0
         if k < n:
             if k:
-                x[k:] -= x[:k] @ self.u[:k, k:n]
+                x[k:] -= np.dot(x[:k], self.u[:k, k:n])
             self._size.value = n - k
-            _DTRSV(b"U", b"T", b"N", size, a + 8 * k * (self._lda.value + 1), lda,
-                   xp + 8 * k, one)
+            if k:
+                _DTRSV(b"U", b"T", b"N", size,
+                       ctypes.c_void_p(self._address + 8 * k * (self._lda.value + 1)), lda,
+                       ctypes.c_void_p(self._work_address + 8 * k), one)
+            else:
+                _DTRSV(b"U", b"T", b"N", size, a, lda, xp, one)
         if keep:
-            self._last = (np.array(b, dtype=float), x.copy())
+            self._last = (b_bytes, x.copy())
         self._with_rank_one(x)
         self._size.value = n
         _DTRSV(b"U", b"N", b"N", size, a, lda, xp, one)
@@ -293,7 +314,7 @@ class NestedCholesky:
         if self._rank_one is not None and len(y):
             f, g, denominator = self._rank_one
             n = len(y)
-            y -= f[:n] * (float(g[:n] @ y) / denominator[n - 1])
+            y -= f[:n] * (float(np.dot(g[:n], y)) / denominator[n - 1])
         return y
 
 

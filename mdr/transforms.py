@@ -458,6 +458,68 @@ def to_1d(f: np.ndarray) -> np.ndarray:
 _TO_1D: dict = {}
 
 
+@lru_cache(maxsize=4)
+def _direct_rows(L: int):
+    """Rows of :func:`to_1d`'s sum for nodes up to L, as views of one reversed kernel.
+
+    Returns V with V[L - i, j] = c[i-1-j] for j < i and 0 for j >= i (a
+    sliding-window view: no L×L matrix is stored), 2 sqrt(i) for i = 0..L,
+    the kernel's differences reversed, Dr[L-1-m] = c[m-1] - c[m] (m >= 1), and c.
+    """
+    c = abel_kernel(L)
+    e = np.zeros(2 * L)
+    e[:L] = c[::-1]
+    V = np.lib.stride_tricks.sliding_window_view(e, L)
+    two_sqrt = 2.0 * np.sqrt(np.arange(L + 1, dtype=float))
+    D = np.zeros(L)
+    D[1:] = c[:-1] - c[1:]
+    Dr = D[::-1].copy()
+    for a in (two_sqrt, Dr):
+        a.flags.writeable = False
+    return V, two_sqrt, Dr, c
+
+
+def to_1d_rows(f: np.ndarray, first: int, stop: int) -> np.ndarray:
+    """:func:`to_1d` of f on the nodes first..stop-1 alone, by direct sums.
+
+    O((stop - first) · stop) operations, no transform: the implicit step's
+    contact check needs the 1D profile on a few nodes at the contact edge
+    (``f``: float64, at least ``stop`` nodes).
+    """
+    L = 1 << max(int(stop).bit_length(), 6)
+    V, two_sqrt, _, _ = _direct_rows(L)
+    J = stop - 1
+    if J <= 0:
+        return f[first:stop].copy()
+    df = f[1:stop] - f[:J]
+    # rows of the nodes stop-1 down to first
+    s = np.dot(V[L - J:L - first + 1, :J], df)
+    g = two_sqrt[first:stop] * s[::-1]
+    g += f[0]
+    return g
+
+
+def far_bound(delta: np.ndarray) -> float:
+    """A bound b with |to_1d(Δ)_i| <= b for every node i >= M, where Δ is ``delta``
+    (M = len(delta) nodes) followed by zeros.
+
+    Summation by parts of to_1d's sum: for i >= M,
+    to_1d(Δ)_i = -Δ_0 (w_0 - 1) - Σ_{1<=k<M} a_k Δ_k with w_0 = 2 sqrt(i) c[i-1]
+    (w_0 - 1 = c[i-1]²) and a_k = 2 sqrt(i) (c[i-1-k] - c[i-k]) >= 0. Every
+    one of these weights decreases with i (c is the second difference of
+    sqrt; docs/performance.md, "The paper case as users run it"), so their
+    values at i = M weighting |Δ| bound every node beyond; Δ_0's is taken as
+    a_0 = 2 sqrt(M) (c[M-1] - c[M]) >= c[M-1]² (about twice it), which makes
+    the bound one dot product.
+    """
+    M = len(delta)
+    if M == 0:
+        return 0.0
+    L = 1 << max(int(M).bit_length(), 6)
+    _, _, Dr, _ = _direct_rows(L)
+    return 2.0 * math.sqrt(M) * float(np.dot(Dr[L - M - 1:L - 1], np.abs(delta)))
+
+
 def from_1d_exact(g: np.ndarray) -> np.ndarray:
     """The exact inverse of :func:`to_1d` (a discrete Eq. 3).
 
@@ -566,6 +628,20 @@ def force(q: np.ndarray, dt: float) -> float:
 def force_weights(n: int, dt: float) -> np.ndarray:
     """Nodal weights w (N+1) with F = w · q (paper Eq. 12, exact for q linear in t)."""
     return math.sqrt(dt) * _force_weights(n)
+
+
+@lru_cache(maxsize=8)
+def pressure_force_weights(n: int) -> np.ndarray:
+    """Nodal weights v (N+1 = n+1) with Δt v[:k] · p = force(line_load(p, Δt), Δt) for
+    a pressure p on the nodes 0..k-1 (k <= N): Eq. 12 of :func:`line_load`
+    without forming the line load (the line load is positive where p >= 0 on
+    nodes i..k-1: :func:`line_load`'s kernel B is positive)."""
+    # F = sqrt(Δt) w·q with q_i = (π/2) sqrt(Δt) Σ_{k>=i} B[k-i] p_k:
+    # v_k = (π/2) Σ_{i<=k} w_i B[k-i]
+    v = (0.5 * math.pi) * lower(_kernel(abel_kernel_inverse_sum, n + 1), _force_weights(n),
+                                key="B")
+    v.flags.writeable = False
+    return v
 
 
 def volume(w: np.ndarray, dt: float) -> float:

@@ -64,17 +64,43 @@ class Model:
 
 @dataclass
 class State:
-    """The worn profile and its contact at one sliding distance."""
+    """The worn profile and its contact at one sliding distance.
+
+    ``q`` (the line load, nodes 0..N) may be given as None with ``dt``: it is
+    then formed from p on first use, P⁻¹p clipped at 0 (an implicit step's
+    force comes from p itself; only the tangential correction needs q).
+    """
 
     f: np.ndarray
     depth: float
-    q: np.ndarray
+    q: np.ndarray | None
     p: np.ndarray
     force: float
     contact_radius: float
     m: int
     slip: np.ndarray | None = None     # slip per unit sliding S of this state (None: 1)
     stats: dict = field(default_factory=dict)
+    #: the reference of the contact checks of steps from this state (:class:`FarGap`)
+    gap_reference: "FarGap | None" = field(default=None, repr=False, compare=False)
+    dt: float | None = field(default=None, repr=False)
+
+
+def _line_load_of(state: State) -> np.ndarray:
+    q = state._q
+    if q is None:
+        n = state.m + 1
+        q = np.zeros(len(state.p))
+        q[:n] = np.maximum(transforms.line_load(state.p[:n], state.dt), 0.0)
+        state._q = q
+    return q
+
+
+def _set_line_load(state: State, q) -> None:
+    state._q = q
+
+
+# (a property set after the dataclass is made: its __init__ assigns q through it)
+State.q = property(_line_load_of, _set_line_load, doc="The line load q at the nodes (0..N).")
 
 
 def wear_speed(model: Model, p: np.ndarray) -> np.ndarray:
@@ -92,7 +118,8 @@ def contact_state(model: Model, f: np.ndarray) -> State:
     g = transforms.to_1d(f)
     c = contact.solve_normal(g, model.t, model.dt, model.E_star, model.depth, model.force)
     return State(f=f, depth=c["depth"], q=c["q"], p=c["p"], force=c["force"],
-                 contact_radius=c["contact_radius"], m=c["m"], slip=slip_factor(model, c["q"]))
+                 contact_radius=c["contact_radius"], m=c["m"], slip=slip_factor(model, c["q"]),
+                 gap_reference=FarGap(f, g))
 
 
 def slip_factor(model: Model, q: np.ndarray) -> np.ndarray | None:
@@ -384,8 +411,7 @@ class ImplicitSystem:
         """
         def response():
             p1 = self.solve(np.ones(n), sigma, None, stats, rtol)
-            w = transforms.force_weights(self.N, self.dt)[:n]
-            return p1, float(w @ transforms.line_load(p1, self.dt))
+            return p1, _force_of(p1, self.N, self.dt, self.exact(sigma))
 
         if not self.exact(sigma):
             return response()
@@ -441,67 +467,83 @@ class ImplicitSystem:
         return matvec32, precond32
 
 
-#: the 1D profile is computed exactly on the contact and this many nodes
-#: beyond it (at least), as a share of the contact's nodes
-GAP_WINDOW = 0.125
-
-
-def far_bound(delta: np.ndarray, K: int, M: int) -> np.ndarray:
-    """A bound on |to_1d(delta)_i| for i = M..N, delta zero from node K on (K < M).
-
-    |Δ_0| (w_0 - 1) + max_{1<=j<K} |Δ_j| (w_{K-1} - w_0), w_j = 2 sqrt(i) c[i-1-j]
-    (:class:`FarGap`).
-    """
-    N1 = len(delta)
-    i = np.arange(M, N1, dtype=float)
-    c = transforms.abel_kernel(1 << max(int(N1 - 1).bit_length(), 6))
-    two_sqrt = 2.0 * np.sqrt(i)
-    w0 = two_sqrt * c[M - 1:N1 - 1]
-    bound = abs(delta[0]) * (w0 - 1.0)
-    if K > 1:
-        bound += np.max(np.abs(delta[1:K])) * (two_sqrt * c[M - K:N1 - K] - w0)
-    return bound
+#: the contact check computes the 1D profile exactly, by direct sums, on the
+#: contact's last node and this many beyond it (a growing contact penetrates
+#: there first: the contact iteration's sets grow by a node or two); beyond,
+#: a bound against a reference clears the nodes (:class:`FarGap`)
+EDGE_WINDOW = 8
 
 
 class FarGap:
-    """The contact condition beyond a window, checked against a reference profile.
+    """The contact condition beyond the contact, without the 1D profile of the whole grid.
 
     The contact iteration needs the 1D profile g = to_1d(f) beyond the contact
-    only to see that no node there penetrates (g >= d). g is exact on a window
-    past the contact (to_1d is triangular: g on nodes 0..M-1 needs f there
-    only); beyond it a worn profile differs from the reference f_ref, whose
-    g_ref is known on the whole grid, by Δ = f - f_ref, supported on nodes
-    0..K-1, and for i > K (summation by parts of the to_1d sum; w_j =
-    2 sqrt(i) c[i-1-j] increases with j)
-
-        |to_1d(Δ)_i| <= |Δ_0| (w_0 - 1) + max_{j>=1} |Δ_j| (w_{K-1} - w_0).
-
-    When g_ref less that bound leaves every node beyond the window out of
-    contact, no full transform is needed; otherwise the profile's own g is
-    computed on the whole grid and becomes the reference: a few full
-    transforms a run instead of one per contact iteration (docs/performance.md,
-    "Measurements behind the code").
+    (nodes n..N) only to see which nodes penetrate (d - g_i > tol·d), and at the
+    contact's last node and the next for the contact radius. g is summed
+    directly on the window n-1..M-1, M = n + EDGE_WINDOW
+    (:func:`transforms.to_1d_rows`; to_1d is triangular, so these need f on
+    0..M-1 only). Beyond it f differs from a reference profile f_ref, whose
+    g_ref is known on the whole grid, by Δ = f - f_ref, and where Δ is zero
+    from node M on, |to_1d(Δ)_i| <= b for every i >= M
+    (:func:`transforms.far_bound`). When min_{i>=M} g_ref_i - b >= d (to half
+    the tolerance, room for the round-off of g_ref), no node beyond the window
+    comes within the tolerance; otherwise g is computed on the whole grid and
+    becomes the reference: a few full transforms a run instead of one per
+    contact iteration (docs/performance.md, "The paper case as users run it").
+    One per grid: :func:`contact_state` starts one with its own profile, and
+    the states of implicit steps pass it on.
     """
 
-    def __init__(self):
-        self.reference = None       # (f_ref, g_ref), replaced as one (solves may run in threads)
-
-    def clears(self, f: np.ndarray, M: int, d: float, tol: float) -> bool:
-        """Whether the bound shows every node i >= M out of contact (d - g_i <= tol·d)."""
-        reference = self.reference
-        if reference is None:
-            return False
-        f_ref, g_ref = reference
-        delta = f - f_ref
-        nz = np.flatnonzero(delta)
-        K = int(nz[-1]) + 1 if nz.size else 0
-        return K < M and not np.any(d - g_ref[M:] + far_bound(delta, K, M) > tol * d)
+    def __init__(self, f: np.ndarray | None = None, g: np.ndarray | None = None):
+        # (f_ref, g_ref, min of g_ref over i..N or None), replaced as one (solves
+        # may run in threads)
+        self.reference = None if f is None else (np.array(f, dtype=float), g, None)
 
     def full(self, f: np.ndarray) -> np.ndarray:
         """g = to_1d(f) on the whole grid, kept as the reference."""
         g = transforms.to_1d(f)
-        self.reference = (f.copy(), g)
+        self.reference = (f.copy(), g, None)
         return g
+
+    def clears(self, f: np.ndarray, M: int, d: float, tol: float) -> bool:
+        """Whether the bound shows every node i >= M out of contact (d - g_i <= tol·d/2)."""
+        return self._clears(f, None, M, d, tol)
+
+    def _clears(self, f, delta, M, d, tol) -> bool:
+        # (delta: f - f_ref of this reference, or None)
+        reference = self.reference
+        if reference is None:
+            return False
+        f_ref, g_ref, g_min = reference
+        if g_min is None:
+            # (a list: one value is read per check)
+            g_min = np.minimum.accumulate(g_ref[::-1])[::-1].tolist()
+            self.reference = (f_ref, g_ref, g_min)
+        if delta is None:
+            delta = f - f_ref
+        if np.count_nonzero(delta[M:]):
+            return False
+        return d - g_min[M] + transforms.far_bound(delta[:M]) <= 0.5 * tol * abs(d)
+
+    def check(self, f: np.ndarray, n: int, d: float, tol: float):
+        """The nodes i >= n that penetrate (d - g_i > tol·d; as i - n), and g from
+        node n-1 on (at least to node n), or None where the bound alone shows every
+        node from n on out of contact (the contact set found: the window's sums
+        are spared)."""
+        N1 = len(f)
+        reference = self.reference
+        delta = None if reference is None else f - reference[0]
+        if self._clears(f, delta, n, d, tol):
+            return _NO_NODES, None
+        M = min(n + EDGE_WINDOW, N1)
+        if M == N1 or self._clears(f, delta, M, d, tol):
+            g = transforms.to_1d_rows(f, n - 1, M)
+        else:
+            g = self.full(f)[n - 1:]
+        return (d - g[1:] > tol * d).nonzero()[0], g
+
+
+_NO_NODES = np.zeros(0, dtype=np.intp)
 
 
 def implicit_step(model: Model, state: State, h: float, c: float = 1.0,
@@ -524,8 +566,9 @@ def implicit_step(model: Model, state: State, h: float, c: float = 1.0,
 
     ``p_guess`` (nodes 0..N) starts the iterative solves of finer grids (the
     pressure at the start of the step if None); the result is the same to the
-    solver's tolerance. ``far_gap`` (one per grid, kept across steps) spares
-    the full 1D transform of each contact iteration (:class:`FarGap`).
+    solver's tolerance. ``far_gap`` (one per grid, kept across steps; None:
+    the start state's) spares the full 1D transform of each contact iteration
+    (:class:`FarGap`).
 
     With a pressure exponent n != 1 the wear speed K σ0 (p/σ0)^n is
     linearised about the last iterate (Newton): wear compliance c h K S n
@@ -543,14 +586,16 @@ def implicit_step(model: Model, state: State, h: float, c: float = 1.0,
     hc = c * h
     system = system or ImplicitSystem(model, hc)
     m = max(state.m if m_guess is None else m_guess, 0)
+    far_gap = far_gap or state.gap_reference or FarGap()
     total = {}
     for _ in range(SLIP_ITERATIONS):
         new = _implicit_step_with_slip(model, state, base, hc, S, system, m, p_guess, far_gap)
+        new.gap_reference = far_gap
         for k, v in new.stats.items():
             total[k] = total.get(k, 0) + v
-        new.slip = slip_factor(model, new.q)
-        if new.slip is None:
+        if model.tangential == 0.0:
             break
+        new.slip = slip_factor(model, new.q)
         change = float(np.max(np.abs(new.slip - S)))
         if change <= max(SLIP_TOL, 10.0 * system.rtol):
             break
@@ -638,7 +683,16 @@ NEWTON_STALL = 1e-5
 NEWTON_STALL_AFTER = 4
 
 
-def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None) -> State:
+def _force_of(p: np.ndarray, N: int, dt: float, direct: bool) -> float:
+    """Eq. 12 of the line load P⁻¹ p of a pressure on the leading nodes of a grid of N
+    elements: a dot product with p (direct solves), or of the line load itself
+    (GMRES: see the end of :func:`_implicit_solve`)."""
+    if direct:
+        return dt * float(transforms.pressure_force_weights(N)[:len(p)] @ p)
+    return float(transforms.force_weights(N, dt)[:len(p)] @ transforms.line_load(p, dt))
+
+
+def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap) -> State:
     """The linear complementarity problem of one implicit step, contact set included."""
     N = len(model.x) - 1
     E, K = model.E_star, model.wear_rate
@@ -673,14 +727,12 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
             p1, F1 = system.unit_response(n, sigma, stats, rtol)
             p2 = system.solve(-base[:n], sigma, None if direct else x0 - d_last * p1, stats,
                               rtol)
-            w = transforms.force_weights(N, model.dt)[:n]
-            F2 = w @ transforms.line_load(p2, model.dt)
+            F2 = _force_of(p2, N, model.dt, direct)
             d = (model.force - F2) / F1
             p = d * p1 + p2
             d_last = d
         x0 = p
-        q = None      # the line load, formed only where more than its edge value is needed
-        # its edge value exactly: the triangular P⁻¹ has b[0] = 1 on its diagonal
+        # the line load's edge value exactly: the triangular P⁻¹ has b[0] = 1 on its diagonal
         q_edge = 0.5 * math.pi * math.sqrt(model.dt) * p[m]
         tension = q_edge < -tol * E * d
         if tension and marginal != m:
@@ -691,14 +743,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
         else:
             f = base.copy()
             f[:n] += sigma * p
-            M = min(N + 1, n + 2 + int(GAP_WINDOW * n)) if far_gap is not None else N + 1
-            g = transforms.to_1d(f[:M])
-            penetrates = d - g[n:] > tol * d
-            below = np.flatnonzero(penetrates) if penetrates.any() else ()
-            if not len(below) and M <= N:
-                if not far_gap.clears(f, M, d, tol):
-                    g = far_gap.full(f)
-                    below = np.flatnonzero(d - g[n:] > tol * d)
+            below, g = far_gap.check(f, n, d, tol)
         if len(below):
             m_new = n + int(below[-1])
         elif tension:
@@ -706,7 +751,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
         else:
             break
         if marginal == m and m_new == m - 1 and \
-                -q_edge < 1e-3 * np.max(transforms.line_load(p, model.dt) if q is None else q):
+                -q_edge < 1e-3 * np.max(transforms.line_load(p, model.dt)):
             # the marginal node: slightly tensile in contact, slightly
             # penetrating out of it; keep it in, its line load clipped to 0
             break
@@ -733,22 +778,27 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap=None)
                 raise SolverError(f"implicit wear step: the contact set did not settle "
                                   f"(nodes {m} <-> {m_new}); reduce sliding.step_hat")
         m = m_new
-    qq = np.zeros(N + 1)
-    if direct:
-        # a direct solve: the springs' line load is q = E*(d - g) in contact
-        # (the solve's equation under T: g = T f = d - q/E* there), from the 1D
-        # profile at hand, equal to P⁻¹ p to round-off (docs/performance.md,
-        # "Measurements behind the code"), one transform fewer per step
-        qq[:n] = np.maximum(E * (d - g[:n]), 0.0)
-    else:
-        # iterative: P⁻¹ p, the line load of the pressure found (the 1D gap
-        # differs from it by T of the solve's residual, ~1e-6 of max q late
-        # in a run)
-        qq[:n] = np.maximum(transforms.line_load(p, model.dt), 0.0)
     pp = np.zeros(N + 1)
     pp[:n] = p
-    return State(f=f, depth=float(d), q=qq, p=pp, force=transforms.force(qq, model.dt),
-                 contact_radius=contact.contact_radius(g, d, model.t, m), m=m, stats=stats)
+    # the line load P⁻¹ p of the pressure found, clipped at 0 (the 1D gap differs
+    # from it by T of the solve's residual: round-off for a direct solve, ~1e-6
+    # of max q late in a GMRES run). A direct solve forms it only when asked for
+    # (State): where p >= 0 it is positive and the force is Eq. 12 of it, a dot
+    # product with p. (A GMRES run keeps the force of the line load: one transform
+    # among its solve's many, and its steps, continuous in length, follow the
+    # force's round-off into the solver's tolerance.)
+    if direct and p.min() >= 0.0:
+        qq, force = None, _force_of(p, N, model.dt, True)
+    else:
+        qq = np.zeros(N + 1)
+        qq[:n] = np.maximum(transforms.line_load(p, model.dt), 0.0)
+        force = transforms.force(qq, model.dt)
+    if g is None:       # (the check's bound alone found the set: g at the edge now)
+        g = transforms.to_1d_rows(f, m, m + 2)
+    return State(f=f, depth=float(d), q=qq, p=pp, force=force,
+                 contact_radius=contact.radius_between(float(g[0]), float(g[1]), d,
+                                                       model.t[m], model.t[m + 1]),
+                 m=m, stats=stats, dt=model.dt)
 
 
 # -- explicit Euler: stability ----------------------------------------------

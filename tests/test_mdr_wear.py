@@ -357,8 +357,8 @@ def test_implicit_step_state_satisfies_its_contact_problem(direct):
     # bordered as the contact grows) or by GMRES (the coarse-grid path, forced
     # on this small grid): the state must solve T⁻¹[q/E*] + σ p = d − f_n on
     # the contact (checked with the transforms themselves, not the solver's
-    # matrix), its line load must be P⁻¹ p (the direct step takes it from the
-    # 1D gap instead) and its force Eq. 12 of that line load
+    # matrix), its line load must be P⁻¹ p and its force Eq. 12 of that line
+    # load
     from wearcheck.mdr import transforms
     case = make(N=400, linear_solver="direct" if direct else "iterative")
     model, sc = solver.build_model(case)
@@ -397,26 +397,85 @@ def test_a_run_that_reaches_no_stage_keeps_its_grid():
     assert res.f.shape == res.p.shape == (0, len(res.r)) and len(res.r) == 201
 
 
-def test_far_gap_bound_holds_against_the_transform():
-    # the bound on the 1D transform of a change confined to nodes 0..K-1,
-    # beyond a window M > K, against the transform itself: wear-like bumps,
+def test_far_bound_holds_against_the_transform():
+    # the bound on the 1D transform of a change confined to nodes 0..M-1, at
+    # every node from M on, against the transform itself (FFT) and a direct sum
+    # of the paper's Eq. 2 discretisation written out here: wear-like bumps,
     # signed noise and a step (the worst case of the summation by parts)
     from wearcheck.mdr import transforms
     rng = np.random.default_rng(7)
     N1 = 3001
-    for K, M in ((1, 2), (40, 41), (900, 1000), (2000, 2250), (2999, 3000)):
-        j = np.arange(N1)
-        bumps = [np.where(j < K, np.cos(0.5 * np.pi * j / K), 0.0),
-                 np.where(j < K, rng.standard_normal(N1), 0.0),
-                 np.where(j < K, 1.0, 0.0)]
+    j = np.arange(N1)
+    c = np.sqrt(j + 1.0) - np.sqrt(j)
+
+    def eq2_at(delta, i):       # g_i = Δ_0 + 2 sqrt(i) Σ_{j<i} c[i-1-j] (Δ_{j+1} - Δ_j)
+        return delta[0] + 2 * np.sqrt(i) * (c[i - 1::-1] @ np.diff(delta[:i + 1]))
+
+    for M in (1, 2, 41, 1000, 2250, 3000):
+        bumps = [np.where(j < M, np.cos(0.5 * np.pi * j / M), 0.0),
+                 np.where(j < M, rng.standard_normal(N1), 0.0),
+                 np.where(j < M, 1.0, 0.0),
+                 np.where(j < M, rng.random(N1) * j, 0.0)]
         for delta in bumps:
-            delta[K:] = 0.0
+            bound = transforms.far_bound(delta[:M])
             exact = np.abs(transforms.to_1d(delta)[M:])
-            bound = wear.far_bound(delta, K, M)
-            assert np.all(exact <= bound * (1 + 1e-12) + 1e-13 * np.max(np.abs(delta))), (K, M)
-        # and it is not loose by orders of magnitude for a one-signed change
-        # (the step: within a factor 3 at the window's first node)
-        assert wear.far_bound(bumps[2], K, M)[0] < 3 * abs(transforms.to_1d(bumps[2])[M]) + 1e-15
+            # (the FFT's round-off: 1e-13 of the change)
+            assert np.all(exact <= bound * (1 + 1e-12) + 1e-13 * np.max(np.abs(delta))), M
+            for i in {M, min(M + 1, N1 - 1), (M + N1) // 2, N1 - 1}:
+                if i >= M:
+                    assert abs(eq2_at(delta, i)) <= bound * (1 + 1e-12) + 1e-300, (M, i)
+        # one-signed: the bound is the transform at node M itself but for Δ_0's
+        # weight (taken about twice its own: a share ~1/M of the bound)
+        if M < N1:
+            assert bound == pytest.approx(abs(transforms.to_1d(bumps[3])[M]), rel=1e-3)
+
+
+def test_far_bound_weights_decrease_away_from_the_change():
+    # the bound rests on every weight of the summation by parts decreasing with
+    # the node i: w_0(i) - 1 = c[i-1]² and a_k(i) = 2 sqrt(i) (c[i-1-k] - c[i-k])
+    # (docs/performance.md proves it; here on i up to 20000 and a few k, c from
+    # its definition sqrt(k+1) - sqrt(k) in long double where available)
+    i = np.arange(1, 20001, dtype=np.longdouble)
+    c = np.sqrt(np.arange(20002, dtype=np.longdouble) + 1) - np.sqrt(np.arange(20002,
+                                                                          dtype=np.longdouble))
+    w0 = 2 * np.sqrt(i) * c[:20000] - 1
+    assert np.all(np.diff(w0) < 0) and np.all(w0 > 0)
+    # and Δ_0's weight in the bound, a_0(M) = 2 sqrt(M) (c[M-1] - c[M]), covers c[M-1]²
+    a0 = 2 * np.sqrt(i) * (c[:20000] - c[1:20001])
+    assert np.all(a0 >= c[:20000] ** 2)
+    for k in (0, 1, 2, 5, 100, 5000):
+        ii = np.arange(k + 1, 20001)
+        a = 2 * np.sqrt(ii.astype(np.longdouble)) * (c[ii - 1 - k] - c[ii - k])
+        assert np.all(np.diff(a) < 0) and np.all(a > 0), k
+
+
+def test_to_1d_rows_are_the_transform_on_those_nodes():
+    # direct sums on a few nodes against the FFT transform of the whole profile
+    from wearcheck.mdr import transforms
+    rng = np.random.default_rng(3)
+    for N1 in (2, 3, 65, 801, 3001):
+        f = np.cumsum(rng.standard_normal(N1))
+        g = transforms.to_1d(f)
+        for first, stop in ((0, N1), (max(N1 - 9, 0), N1), (0, 1),
+                            (N1 // 2, min(N1, N1 // 2 + 9))):
+            # (the FFT's round-off, 1e-15 of the largest value, and the sums')
+            np.testing.assert_allclose(transforms.to_1d_rows(f, first, stop), g[first:stop],
+                                       rtol=0, atol=1e-14 * np.max(np.abs(g)))
+
+
+def test_pressure_force_weights_are_eq12_of_the_line_load():
+    # Δt v·p against the force of the line load of p (Eq. 12 of P⁻¹ p), p >= 0
+    from wearcheck.mdr import transforms
+    rng = np.random.default_rng(5)
+    for N in (10, 800, 3000):
+        for k in (1, 2, N // 2, N - 1):
+            p = rng.random(k)
+            q = np.zeros(N + 1)
+            q[:k] = transforms.line_load(p, 0.37)
+            assert q.min() >= 0.0
+            # (two roundings of one sum: 1e-14)
+            assert 0.37 * (transforms.pressure_force_weights(N)[:k] @ p) == \
+                pytest.approx(transforms.force(q, 0.37), rel=1e-14)
 
 
 def test_far_gap_sees_a_penetration_beyond_its_window():
@@ -433,21 +492,35 @@ def test_far_gap_sees_a_penetration_beyond_its_window():
     f[:300] += 10.0                      # a worn cap: pulls g down beyond it
     assert not far.clears(f, 800, d, 1e-9)
     assert np.any(d - transforms.to_1d(f)[800:] > 1e-9 * d)
+    # the check falls back to the whole transform and finds the last such node
+    below, _ = far.check(f, 601, d, 1e-9)
+    g = transforms.to_1d(f)
+    assert 601 + below[-1] == np.flatnonzero(d - g > 1e-9 * d)[-1]
+    assert np.array_equal(far.reference[0], f)      # (its reference now)
     # a small change leaves the nodes beyond the window clear without a transform
+    far.full(f_ref)
     f = f_ref.copy()
     f[:300] += 1e-4 * np.cos(np.linspace(0, 0.5 * np.pi, 300))
     assert far.clears(f, 800, d, 1e-9)
     assert not np.any(d - transforms.to_1d(f)[800:] > 1e-9 * d)
+    # and a change beyond the window is never cleared by the bound
+    f = f_ref.copy()
+    f[900] += 1e-12
+    assert not far.clears(f, 800, d, 1e-9)
 
 
-def test_far_gap_leaves_the_steps_unchanged(monkeypatch):
-    # fine grids (N > solver.FAR_GAP_FROM) check the contact beyond a window
-    # against a reference: the same contact sets as the full transform, so the
-    # same steps to round-off, with the full transform done a few times per
-    # run instead of once per contact iteration. Here 30 backward-Euler steps
-    # of a small GMRES grid, with the check and without, by depth and by force
+@pytest.mark.parametrize("linear_solver", ["direct", "iterative"])
+def test_far_gap_leaves_the_steps_unchanged(monkeypatch, linear_solver):
+    # the contact check sums the 1D profile on a window at the contact edge and
+    # clears the nodes beyond by a bound against a reference: the same contact
+    # sets as the full transform of every contact iteration, so the same steps
+    # to round-off, with the full transform done a few times per run instead of
+    # once per contact iteration. Here 30 backward-Euler steps, with the check
+    # and with the bound made to fail always (the full transform each time), by
+    # depth and by force; every state also checked against the transform itself
+    from wearcheck.mdr import transforms
     full = []
-    original = wear.FarGap.full
+    original, clears = wear.FarGap.full, wear.FarGap.clears
 
     def spy(self, f):
         full.append(1)
@@ -456,22 +529,31 @@ def test_far_gap_leaves_the_steps_unchanged(monkeypatch):
     monkeypatch.setattr(wear.FarGap, "full", spy)
     iterations = 0
     for control in ("depth", "force"):
-        model, sc = solver.build_model(make(N=300, control=control, linear_solver="iterative"))
+        model, sc = solver.build_model(make(N=300, control=control, linear_solver=linear_solver))
         h = 0.1 / sc["s_hat_per_m"]
         system = wear.ImplicitSystem(model, h)
         runs = []
-        for far_gap in (wear.FarGap(), None):
+        for bound in (True, False):
+            monkeypatch.setattr(wear.FarGap, "clears",
+                                clears if bound else (lambda *args: False))
+            del full[:]
             st = wear.contact_state(model, model.f0.copy())
             steps = []
             for _ in range(30):
-                st = wear.implicit_step(model, st, h, system=system, far_gap=far_gap)
-                steps.append((st.m, st.stats["contact_iterations"], st.force, st.depth, st.f[0]))
+                st = wear.implicit_step(model, st, h, system=system)
+                steps.append((st.m, st.stats["contact_iterations"], st.force, st.depth, st.f[0],
+                              st.contact_radius))
+                g = transforms.to_1d(st.f)
+                assert np.all(st.depth - g[st.m + 1:] <= wear.EDGE_TOL * st.depth)
             runs.append(np.array(steps))
+            if bound:
+                iterations += runs[-1][:, 1].sum()
+                assert len(full) < 0.1 * runs[-1][:, 1].sum()
         with_check, without = runs
-        iterations += with_check[:, 1].sum()
         np.testing.assert_array_equal(with_check[:, :2], without[:, :2])
+        # round-off: the window's direct sums against the FFT
         np.testing.assert_allclose(with_check[:, 2:], without[:, 2:], rtol=1e-12, atol=0)
-    assert 0 < len(full) < 0.1 * iterations
+    assert iterations > 60
 
 
 def test_coarse_solve_through_eigenvectors_is_the_shifted_solve():
