@@ -533,6 +533,17 @@ def _warnings(case: Case) -> tuple[str, ...]:
 # --------------------------------------------------------------------------
 # Writing
 
+def _value_text(value, f) -> str:
+    """One value of the key ``f`` as TOML. A key of whole numbers (its ``multiple_of`` an
+    integer: ``fretting.stage_cycles``) held as floats is written as the integers it
+    holds, ``[0, 10, 1000]``, not ``[0.0, 10.0, 1000.0]``; it reads back to the same floats."""
+    step = f.metadata.get("multiple_of")
+    if (isinstance(value, float) and value.is_integer() and step is not None
+            and float(step).is_integer()):
+        return str(int(value))
+    return format_value(value)
+
+
 def to_toml(case: Case) -> str:
     """The resolved case, every default filled in, as TOML text."""
     # the source in TOML string form: a newline in a file name must not end the comment
@@ -551,9 +562,9 @@ def to_toml(case: Case) -> str:
             if section == "stages" and name == "s_hat" and "stages.s_hat" in case.derived:
                 continue  # derived from stages.s or stages.cycles (giving both is an error)
             if isinstance(value, tuple):
-                text = "[" + ", ".join(repr(v) for v in value) + "]"
+                text = "[" + ", ".join(_value_text(v, f) for v in value) + "]"
             else:
-                text = format_value(value)
+                text = _value_text(value, f)
             unit = f.metadata["unit"]
             line = f"{name} = {text}" + (f"  # {unit}" if unit and unit != "1" else "")
             if f"{section}.{name}" in case.derived:

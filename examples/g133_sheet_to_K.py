@@ -105,9 +105,11 @@ print(f"model: {len(result.model['runs'])} MDR run(s); "
 # %%
 # Measurement by measurement
 # --------------------------
-# The residual is (measured − model)/±. The lab's K of the first measurements,
-# where the scar is not yet twice the Hertz contact (2 a_H = 184 µm), lies well
-# above the fit; later ones scatter around it with the measurement noise.
+# The residual is (measured − model)/±. The lab formula leaves the elastic
+# contact out, so its K overestimates most while the scar is not yet twice the
+# Hertz contact (2 a_H = 184 µm); in this sheet that shows as the first
+# measurements' lab K above the fit, by about as much as their noise, and the
+# later ones scattering around it.
 print(f"{'cycles':>7} {'D µm':>7} {'model µm':>9} {'residual':>9} {'lab K':>10}")
 for m in result.measurements:
     print(f"{m['cycles']:>7.0f} {m['measured'] * 1e6:>7.1f} {m['model'] * 1e6:>9.1f} "

@@ -251,7 +251,7 @@ class Outcome:
     cycles: int = 0
     rows: int = 0                  # simulated cycles kept (observed)
     simulated: int = 0             # all simulated cycles
-    stage_cycles: int = 0          # of them: ROS2 stages
+    second_stage_cycles: int = 0   # of them: for ROS2's second stage, F(y + h k1)
     steps: int = 0
     rejected_steps: int = 0
     inadmissible_steps: int = 0    # of them: rejected by Problem.admissible
@@ -279,7 +279,7 @@ class Outcome:
                     final_map_drift_estimate=self.propagated_drift / Y if Y > 0 else 0.0,
                     scheme="ROS2 (L-stable Rosenbrock W-method, order 2)",
                     simulated_cycles=self.simulated, recorded_cycles=self.rows,
-                    stage_cycles=self.stage_cycles, steps=self.steps,
+                    second_stage_cycles=self.second_stage_cycles, steps=self.steps,
                     rejected_steps=self.rejected_steps,
                     inadmissible_steps=self.inadmissible_steps, largest_step=self.largest_step)
 
@@ -344,7 +344,7 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
         """The step of h cycles from ``origin``: (increment, state after it, the
         cycle from there, local error estimate), Nones where not finite."""
         def stage_rate(dy):
-            out.stage_cycles += 1
+            out.second_stage_cycles += 1
             return simulate(problem.advance(origin, dy, 0, None), n_origin + 1, probe=True).rate
 
         F0 = cyc.rate

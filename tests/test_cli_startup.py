@@ -61,6 +61,21 @@ def test_a_subcommand_loads_only_its_own_module():
     assert _heavy(modules) == []
 
 
+@pytest.mark.parametrize("name", ["sweep", "refine", "fit", "fretting-map"])
+def test_a_dask_study_builds_its_parser_without_the_study(name):
+    # the study (scipy.optimize, asyncio) is imported when the command runs: its
+    # --help costs what the bare --help does (docs/performance.md, "Start-up")
+    code = ("from wearcheck.cli import main\n"
+            f"try:\n    main([{name!r}, '--help'])\nexcept SystemExit as e:\n"
+            "    assert e.code == 0\n")
+    modules = _loaded_after(code)
+    assert {m for m in modules if m.startswith("wearcheck.cli.")
+            and not m.endswith("._common")} == {cli.module_name(name)}
+    assert [m for m in modules if m.startswith("wearcheck.studies")] == []
+    assert not {"scipy.optimize", "asyncio"} & modules
+    assert _heavy(modules) == []
+
+
 def test_an_mdr_run_loads_only_what_it_uses(tmp_path):
     # the whole command, run directory written: none of the heavy packages,
     # no other solver, and no psutil (the memory check reads /proc/meminfo

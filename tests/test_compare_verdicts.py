@@ -171,3 +171,21 @@ def test_a_history_that_does_not_hold_the_stages_fails(paper):
                                    "copy": dataclasses.replace(mdr, history=hist)})
     c = m["pairs"]["copy"]["checks"]["sliding_distance"]
     assert not m["passed"] and not c["passed"] and c["reason"] == "history"
+
+
+def test_every_figure_in_the_report_has_a_caption():
+    # the figures draw_figures names and the scar figure compare appends (layout's
+    # list of a comparison's files holds each): the report captions each with what
+    # it shows, not its file name (scar.png was captioned "scar.png")
+    import inspect
+    import re
+    from wearcheck import layout
+    from wearcheck.comparisons.present import compare_figures
+    drawn = set(re.findall(r'names\.append\("([a-z0-9_]+\.png)"\)',
+                           inspect.getsource(compare_figures.draw_figures)))
+    drawn.add("scar.png")
+    assert {"fig2_profiles.png", "fig2_pressure.png", "force_vs_sliding.png"} <= drawn
+    listed = {i.name.split("/")[0].replace(".png/.pdf", ".png") for i in layout.COMPARISON_FILES}
+    assert drawn <= listed
+    for name in drawn:
+        assert name in compare_report.CAPTIONS and len(compare_report.CAPTIONS[name]) > 30, name

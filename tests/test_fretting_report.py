@@ -29,6 +29,9 @@ def test_fretting_run_directory_has_its_report(run):
     stored = text.split("History at the stored cycles")[1].split("![")[0]
     assert [row.split("|")[1].strip() for row in stored.splitlines() if row.startswith("| ")
             and row[2].isdigit()] == ["0", "1", "10", "30"]
+    # its 0-cycle row holds the first quarter cycle's wear (not an unworn state), and says so
+    assert result.history["wear_volume"][0] > 0.0
+    assert "first quarter cycle" in stored
     # every file is described in the run's data dictionary
     d = json.loads((path / "meta.json").read_text())["data_dictionary"]["files"]
     assert {p.name for p in path.iterdir()} <= set(d)

@@ -22,6 +22,17 @@ def title(name: str) -> str:
         return name.upper()
 
 
+#: the caption of each figure a comparison may draw ({styles}: each solver's line or marker)
+CAPTIONS = {
+    "fig2_profiles.png": "Worn profiles f/d against r/a0 (paper Fig. 2a): {styles}.",
+    "fig2_pressure.png": "Contact pressure p/p0 against r/a0 (paper Fig. 2b): {styles}.",
+    "force_vs_sliding.png": "Normal force F/F0 and contact radius a/a0 against ŝ.",
+    "scar.png": "Scar diameter and worn volume against cycles (log axes), each solver's, "
+                "with the volume a laboratory computes from the diameter (π D⁴/64R) and "
+                "the constant-force asymptotes.",
+}
+
+
 def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
     """The report's blocks (see ``present.report``)."""
     R = report
@@ -92,10 +103,7 @@ def build_report(case, m, figure_names, renders, render_notes, prov) -> list:
     blocks.append(R.heading("Figures"))
     styles = ", ".join(f"{title(n)} {'markers' if registry.get(n).style.get('marker') else 'lines'}"
                        for n in m["solvers"])
-    captions = {"fig2_profiles.png": f"Worn profiles f/d against r/a0 (paper Fig. 2a): {styles}.",
-                "fig2_pressure.png": f"Contact pressure p/p0 against r/a0 (paper Fig. 2b): "
-                                     f"{styles}.",
-                "force_vs_sliding.png": "Normal force F/F0 and contact radius a/a0 against ŝ."}
+    captions = {name: text.format(styles=styles) for name, text in CAPTIONS.items()}
     for name in figure_names:
         blocks.append(R.image(name, captions.get(name, name)))
     tr = m.get("truncated_reference")

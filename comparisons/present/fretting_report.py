@@ -196,8 +196,12 @@ def write(directory, case, result) -> list[Path]:
     h = result.history
     stage = [i for i, n in enumerate(h["cycles"]) if n in set(result.info["stage_cycles"])
              or i == len(h["cycles"]) - 1]
-    blocks += [R.heading("History at the stored cycles", 3),
-               R.table(["cycles", "F [N]", "Q* [N]", "c [m]", "W per cycle [J]",
+    blocks += [R.heading("History at the stored cycles", 3)]
+    if len(h["cycles"]) and h["cycles"][0] == 0:
+        blocks.append(R.para("The row at 0 cycles is the state after the first quarter "
+                             "cycle (the virgin loading from 0 to +U): its wear is that "
+                             "quarter cycle's."))
+    blocks += [R.table(["cycles", "F [N]", "Q* [N]", "c [m]", "W per cycle [J]",
                         "wear volume [m³]", "central wear [m]"],
                        [[fmt(h["cycles"][i], 6), fmt(h["force"][i], 5),
                          fmt(h["tangential_force_amplitude"][i], 5),

@@ -87,7 +87,12 @@ EXAMPLES = {
     "fit": [("wearcheck fit ball_on_flat scars.csv --fit wear.specific_rate",
              "K with its 95 % interval from a sheet of cycles and scar diameters"),
             ("wearcheck fit ball_on_flat scars.csv --fit wear.specific_rate --out runs/fit "
-             "--json", "the same as JSON, and a fit directory with the figure")],
+             "--json", "the same as JSON, and a fit directory with the figure"),
+            ("wearcheck fit my_ball.toml sheet.csv --fit wear.specific_rate "
+             "--fit wear.pressure_exponent", "K and the wear law's exponent n (a scan over n)"),
+            ("wearcheck fit ball_on_flat_steel g133.csv --fit wear.specific_rate "
+             "--fit counterface.specific_rate --set bem.grid=64",
+             "the ball's K and the counterface's, both bodies wearing (BEM)")],
     "fretting-map": [("wearcheck fretting-map fretting --vary fretting.amplitude=0.1e-6,0.3e-6,"
                       "1e-6 --set fretting.cycles=1000", "partial or gross slip, and the wear "
                       "per cycle, at three amplitudes")],

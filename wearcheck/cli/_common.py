@@ -22,17 +22,34 @@ def add_case_arguments(parser) -> None:
 
 
 def load_case(args) -> cases.Case:
-    """Load the case named on the command line; print its remarks unless quiet.
+    """Load the case named on the command line (its remarks: :func:`case_notes`).
 
     ``args.case`` becomes the case file's path (a shipped case's name resolved),
     which is what the studies hand on to their workers.
     """
     args.case = cases.resolve(args.case)
-    case = cases.load(args.case, args.overrides)
+    return cases.load(args.case, args.overrides)
+
+
+def case_notes(args, case) -> None:
+    """Print the case's remarks (``note:`` lines on stderr) unless quiet.
+
+    A command calls this once its result is in, before it reports it: a refusal
+    (exit 2), whether from the command's own checks or from inside a solver, is
+    then the one line it prints, never preceded by a remark on a case it did not run.
+    """
     if not getattr(args, "quiet", False):
         for text in case.warnings:
             print(f"note: {text}", file=sys.stderr)
-    return case
+
+
+def add_cluster_arguments(p) -> None:
+    """--scheduler and --workers of the studies on Dask (sweep, refine, fit, fretting-map)."""
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run on an existing Dask scheduler, e.g. tcp://host:8786 "
+                        "(default: an embedded local cluster)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="worker processes of the embedded cluster (default: one per core)")
 
 
 def output(args, default: Path) -> Path:

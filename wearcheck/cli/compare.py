@@ -15,7 +15,8 @@ from wearcheck import registry
 from wearcheck.comparisons.present.compare_report import print_summary
 from wearcheck.studies.compare import compare
 from wearcheck.studies.sphere_sweep import SPHERE_RATIOS
-from ._common import add_case_arguments, load_case, output, print_json, verdict
+from ._common import (add_case_arguments, case_notes, load_case, output, print_json,
+                      verdict)
 from wearcheck.comparisons.analysis import diagnosis
 
 
@@ -71,6 +72,7 @@ def main(args) -> int:
                 edge=args.edge_study, sphere=args.sphere_sweep,
                 sphere_ratios=args.sphere_ratios, quiet=args.quiet,
                 render=not args.no_render)
+    case_notes(args, case)
     if args.json:
         print_json(verdict(m, out))
     elif not args.quiet:

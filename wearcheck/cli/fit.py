@@ -10,15 +10,6 @@ both bodies wearing. With 95 % intervals, each measurement's residual, the
 lab formula's K beside it and a warning when the residuals say the model does
 not fit (exit code 1, as a failed comparison). The CSV names its columns with
 units, e.g. ``cycles, D [um], ± D [um], track depth [um]`` (docs/fitting.md).
-
-Examples:
-
-    wearcheck fit my_ball.toml sheet.csv --fit wear.specific_rate
-    wearcheck fit ball_on_flat sheet.csv --fit wear.specific_rate --json
-    wearcheck fit my_ball.toml sheet.csv --fit wear.specific_rate \\
-        --fit wear.pressure_exponent --out runs/my-fit
-    wearcheck fit ball_on_flat_steel g133.csv --fit wear.specific_rate \\
-        --fit counterface.specific_rate --set bem.grid=64
 """
 
 from __future__ import annotations
@@ -29,12 +20,9 @@ import sys
 from pathlib import Path
 
 from wearcheck.cases import CaseError
-from wearcheck.comparisons.present.fit_report import text
 from wearcheck.outputs import check_output
 from wearcheck.rundir import jsonable
-from wearcheck.studies.fit import WARNING_STARTS, fit, write
-from ._common import add_case_arguments, load_case
-from .refine import add_cluster_arguments
+from ._common import add_case_arguments, add_cluster_arguments, case_notes, load_case
 
 
 def add_parser(sub):
@@ -74,6 +62,10 @@ def _exponents(text):
 
 
 def main(args) -> int:
+    # the study (scipy.optimize, asyncio) is imported here, not for --help
+    # (docs/performance.md, "Start-up")
+    from wearcheck.comparisons.present.fit_report import text
+    from wearcheck.studies.fit import WARNING_STARTS, fit, write
     case = load_case(args)
     if args.out is not None:
         check_output(args.out, "fit")   # before the runs: a path we may not write fails at once
@@ -83,6 +75,7 @@ def main(args) -> int:
                  scheduler=args.scheduler, workers=args.workers, quiet=args.quiet or args.json)
     if args.out is not None:
         write(result, args.out, data_path=args.measurements)
+    case_notes(args, case)
     for remark in result.warnings:
         warned = remark.startswith(WARNING_STARTS)
         print(f"warning: {remark}" if warned else f"note: {remark}",

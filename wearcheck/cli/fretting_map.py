@@ -11,12 +11,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from wearcheck.studies.distributed import fmt
-from wearcheck.studies.fretting_map import fretting_map
-
-from ._common import (add_case_arguments, add_json_argument, load_case, print_json, study_exit,
-                      varied)
-from .refine import add_cluster_arguments
+from ._common import (add_case_arguments, add_cluster_arguments, add_json_argument,
+                      case_notes, load_case, print_json, study_exit, varied)
 
 
 def add_parser(sub):
@@ -33,6 +29,10 @@ def add_parser(sub):
 
 
 def main(args) -> int:
+    # the study (scipy.optimize, asyncio) is imported here, not for --help
+    # (docs/performance.md, "Start-up")
+    from wearcheck.studies.distributed import fmt
+    from wearcheck.studies.fretting_map import fretting_map
     case = load_case(args)
     vary = varied(args)
     out = args.out or Path("runs") / f"{args.case.stem}-fretting-map"
@@ -43,6 +43,7 @@ def main(args) -> int:
         print(f"wearcheck fretting-map: interrupted; the runs finished are in {out}",
               file=sys.stderr)
         return 130
+    case_notes(args, case)
     if args.json:
         print_json(rows)
     else:

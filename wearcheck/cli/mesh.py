@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import sys
-from ._common import add_case_arguments, add_json_argument, load_case, print_json
+from ._common import (add_case_arguments, add_json_argument, case_notes, load_case,
+                      print_json)
 from wearcheck import meshes
 from wearcheck.cases import reference
 from wearcheck.outputs import check_output_file, write_file
@@ -40,6 +41,7 @@ def main(args) -> int:
         nodes += n_edges
     if args.out is not None:
         write_file(args.out, mesh.path, "mesh")
+    case_notes(args, case)
     a0 = reference.scales(case)["a0"]
     file = args.out if args.out is not None else mesh.path
     if args.json:

@@ -16,9 +16,9 @@ import sys
 from pathlib import Path
 
 from wearcheck import registry
-from wearcheck.studies.refine import refine, table
 
-from ._common import add_case_arguments, add_json_argument, load_case, print_json
+from ._common import (add_case_arguments, add_cluster_arguments, add_json_argument,
+                      case_notes, load_case, print_json)
 from . import Terminated
 
 
@@ -49,15 +49,6 @@ def add_parser(sub):
     return p
 
 
-def add_cluster_arguments(p) -> None:
-    """--scheduler and --workers, shared with ``wearcheck sweep``."""
-    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run on an existing Dask scheduler, e.g. tcp://host:8786 "
-                        "(default: an embedded local cluster)")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="worker processes of the embedded cluster (default: one per core)")
-
-
 def _int_list(text):
     values = [int(v) for v in text.split(",") if v.strip()]
     if not values or min(values) <= 0:
@@ -77,6 +68,9 @@ _float_list.__name__ = "comma-separated positive number"
 
 
 def main(args) -> int:
+    # the study (scipy.optimize, asyncio) is imported here, not for --help
+    # (docs/performance.md, "Start-up")
+    from wearcheck.studies.refine import refine, table
     case = load_case(args)
     out = args.out or Path("runs") / f"{args.case.stem}-refine"
     try:
@@ -90,6 +84,7 @@ def main(args) -> int:
               + ("the summary was written, the figures may be missing" if written
                  else "no summary was written"), file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
+    case_notes(args, case)
     if args.json:
         print_json(summary)
     else:

@@ -12,7 +12,7 @@ from wearcheck.resources import _estimator, check_export, check_memory
 from wearcheck.comparisons.present.progress import ProgressBar
 from wearcheck.rundir import write_run_files
 from wearcheck import registry
-from ._common import add_case_arguments, load_case, output, print_json
+from ._common import add_case_arguments, case_notes, load_case, output, print_json
 from wearcheck.extras import need
 from wearcheck.comparisons.present.vtk import export_run
 from wearcheck.cases import reference
@@ -61,6 +61,7 @@ def main(args) -> int:
         write_run_files(tmp, case, result, args.solver)
         if args.vtk:
             export_run(tmp, revolve=args.revolve)
+    case_notes(args, case)
     if not args.quiet:
         for text in result.info.get("warnings", []):   # the solver's remarks on the run
             print(f"note: {text}", file=sys.stderr)

@@ -11,14 +11,10 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from wearcheck.studies.distributed import fmt
 from wearcheck import registry
 
-from wearcheck.studies.sweep import sweep
-
-from ._common import (add_case_arguments, add_json_argument, load_case, print_json, study_exit,
-                      varied)
-from .refine import add_cluster_arguments
+from ._common import (add_case_arguments, add_cluster_arguments, add_json_argument,
+                      case_notes, load_case, print_json, study_exit, varied)
 from . import Terminated
 
 
@@ -38,6 +34,10 @@ def add_parser(sub):
 
 
 def main(args) -> int:
+    # the study (scipy.optimize, asyncio) is imported here, not for --help
+    # (docs/performance.md, "Start-up")
+    from wearcheck.studies.distributed import fmt
+    from wearcheck.studies.sweep import sweep
     case = load_case(args)
     vary = varied(args)
     out = args.out or Path("runs") / f"{args.case.stem}-sweep"
@@ -48,6 +48,7 @@ def main(args) -> int:
         print(f"wearcheck sweep: {'terminated' if isinstance(exc, Terminated) else 'interrupted'}"
               f"; the runs finished are in {out}, no sweep.csv was written", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
+    case_notes(args, case)
     if args.json:
         print_json(rows)
     else:

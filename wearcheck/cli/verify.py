@@ -20,7 +20,8 @@ from pathlib import Path
 
 from wearcheck import registry
 from wearcheck.external import parse_mapping
-from ._common import add_case_arguments, load_case, output, print_json, verdict
+from ._common import (add_case_arguments, case_notes, load_case, output, print_json,
+                      verdict)
 from wearcheck.comparisons.present.verify_report import print_summary
 from wearcheck.studies.verify import verify
 
@@ -54,6 +55,7 @@ def main(args) -> int:
     out = output(args, Path("runs") / f"verify-{args.case.stem}")
     m = verify(case, args.results, out, mapping=mapping,
                reference_solver=args.reference_solver, quiet=args.quiet)
+    case_notes(args, case)
     if args.json:
         print_json(verdict(m, out))
     elif not args.quiet:

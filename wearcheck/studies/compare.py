@@ -69,9 +69,16 @@ def choose_solvers(case, solvers=None, reference_solver=None) -> tuple[str, tupl
                               f"({', '.join(chosen) or 'none'})"
                               + (f"; it cannot run this case: {reason}" if reason else ""))
     if len(chosen) < 2:
+        if solvers:
+            raise cases.CaseError(f"a comparison needs two solvers; only {chosen[0]} was named "
+                                  "(those that can run this case: "
+                                  + ", ".join(registry.supporting(case)) + ")")
         why = "; ".join(f"{n}: {reason}" for n, reason in skipped_solvers(case, chosen).items())
-        raise cases.CaseError("a comparison needs two solvers that support the case; only "
-                              f"{', '.join(chosen) or 'none'} can ({why})")
+        # what is allowed first (the one solver, run alone), then why the others are not
+        alone = (f"only {chosen[0]} can: run it alone (wearcheck run --solver {chosen[0]}); "
+                 "the others cannot" if chosen else "none can")
+        raise cases.CaseError("a comparison needs two solvers that support the case; "
+                              f"{alone} ({why})")
     return ref, (ref,) + tuple(n for n in chosen if n != ref)
 
 
