@@ -33,6 +33,32 @@ def scar_radius(r, wear_depth, threshold: float = SCAR_THRESHOLD) -> float:
     return float(r[i] + frac * (r[i + 1] - r[i]))
 
 
+def scar_radii(r, wear_depths, threshold: float = SCAR_THRESHOLD) -> np.ndarray:
+    """:func:`scar_radius` of each row of ``wear_depths`` (rows × len(r)), at once."""
+    w = np.asarray(wear_depths, dtype=float)
+    r = np.asarray(r, dtype=float)
+    out = np.zeros(len(w))
+    if not w.size:
+        return out
+    wmax = w.max(axis=1)
+    worn = wmax > 0.0
+    if not worn.any():
+        return out
+    w, wmax = w[worn], wmax[worn]
+    level = threshold * wmax
+    n = w.shape[1]
+    # the last node at or above the level (a worn row has one: its maximum)
+    i = n - 1 - np.argmax((w >= level[:, None])[:, ::-1], axis=1)
+    inner = i + 1 < n
+    radius = r[i]
+    rows, j = np.flatnonzero(inner), i[inner]
+    wi, wn = w[rows, j], w[rows, j + 1]
+    frac = (wi - level[inner]) / (wi - wn)
+    radius[inner] = r[j] + frac * (r[j + 1] - r[j])
+    out[worn] = radius
+    return out
+
+
 @dataclass(frozen=True)
 class Item:
     """One output file, column, array or field: its name, unit ("" when

@@ -232,6 +232,39 @@ class BodyWatch:
                    "a sphere); the solvers take the bodies as half-spaces, valid for contacts "
                    "small and flat against them, so the results past this point are approximate")
 
+    def rows(self, s, contact_radius, scar_radius) -> None:
+        """The calls ``self(s[i], contact_radius[i], scar_radius[i])`` in order, with
+        their verdicts, for many recorded steps at once: the steps where nothing
+        happens are found together, and only the others called one by one."""
+        s = list(s)
+        contact = np.asarray(contact_radius, dtype=float)
+        scar = np.asarray(scar_radius, dtype=float)
+        i = 0
+        if s and not self.started:
+            self(s[0], contact[0], scar[0])
+            i = 1
+        end = None if self.end is None else self.end.radius * (1.0 + END_MARGIN) + self.spacing
+        while i < len(s):
+            c, w = contact[i:], scar[i:]
+            fc, fw = np.isfinite(c), np.isfinite(w)
+            seen = fc | fw
+            # the outer of the finite radii (NaN where neither is)
+            edge = np.where(fc & fw, np.maximum(c, w), np.where(fc, c, w))
+            event = np.zeros(len(c), dtype=bool)
+            if end is not None:
+                event[seen] |= edge[seen] > end
+            if not self.stretched and seen.any():
+                slope = profiles.slope(self.case.indenter, edge[seen], self.case.table)
+                event[seen] |= slope > HALF_SPACE_SLOPE
+            k = int(np.argmax(event)) if event.any() else len(c)
+            quiet = np.flatnonzero(seen[:k])
+            if len(quiet):
+                self.inside = (s[i + int(quiet[-1])], None)
+            if k == len(c):
+                return
+            self(s[i + k], contact[i + k], scar[i + k])
+            i += k + 1
+
     def _stop(self, s, cycle, what, edge):
         end, case = self.end, self.case
         at = f"the unworn {what}" if s == 0.0 else f"the {what}, at {self._at(s, cycle)},"

@@ -10,7 +10,7 @@ import numpy as np
 
 from wearcheck.cases import CaseError, RunResult, SolverError, profiles, programme, reference
 from wearcheck.cases import validity
-from wearcheck.cases.result import scar_radius
+from wearcheck.cases.result import scar_radii
 
 from wearcheck.numerics import stepping
 
@@ -132,31 +132,77 @@ def grow_domain(model: wear.Model, profile, arrays=()) -> tuple[wear.Model, list
     return new, out
 
 
+#: the recorder derives its rows' columns at once every FLUSH_ROWS rows, or fewer
+#: where the rows held would pass FLUSH_VALUES values (fine grids)
+FLUSH_ROWS = 64
+FLUSH_VALUES = 2 ** 21
+
+
 class _Recorder:
-    """History rows and stored stages of a run whose grid may grow."""
+    """History rows and stored stages of a run whose grid may grow.
+
+    A row holds its state's profile and pressure (each solve's own arrays, never
+    changed after it) until :meth:`flush` derives the worn volume, scar radius,
+    central wear and maximum pressure of the rows held, all on one grid, at once,
+    and calls ``watch`` on them in order (``watch.rows`` where it has it): at a
+    grid change, every :data:`FLUSH_ROWS` rows and at the end of the run (the
+    per-row numpy calls were most of the recording's time; the unworn state is
+    watched at once). A row past
+    the body's end is refused at most that many rows after it; :func:`run`
+    flushes before any error of the stepper, so the watch's refusal comes first,
+    as when each row was watched at once.
+    """
 
     def __init__(self, watch=None):
         self.hist = {k: [] for k in ("s", "force", "depth", "contact_radius", "wear_center",
                                      "wear_volume", "scar_radius", "max_pressure")}
         self.stages = []      # (s, x, f, p)
         self.watch = watch    # watch(s, contact_radius, scar_radius) per recorded step
+        self.model = None     # the grid of the rows held
+        self.held = []        # their (f, p)
+        self.limit = FLUSH_ROWS
 
     def __call__(self, model, st, s, stages):
         """Record ``st`` at s on ``model``'s grid; it completes ``stages`` stages."""
-        w = st.f - model.f0
+        if model is not self.model:
+            self.flush()
+            self.model = model
+            self.limit = max(1, min(FLUSH_ROWS, FLUSH_VALUES // len(model.x)))
         h = self.hist
         h["s"].append(s)
         h["force"].append(st.force)
         h["depth"].append(st.depth)
         h["contact_radius"].append(st.contact_radius)
-        h["wear_center"].append(w[0])
-        h["wear_volume"].append(transforms.volume(w, model.dt))
-        h["scar_radius"].append(scar_radius(model.x, w))
-        h["max_pressure"].append(float(np.max(st.p)))
-        if self.watch is not None:
-            self.watch(s, st.contact_radius, h["scar_radius"][-1])
+        self.held.append((st.f, st.p))
         for _ in range(stages):
             self.stages.append((s, model.x.copy(), st.f.copy(), st.p.copy()))
+        if len(self.held) >= self.limit or len(h["s"]) == 1:   # (the unworn state at once)
+            self.flush()
+
+    def flush(self):
+        """Derive the held rows' columns and watch them."""
+        held, model = self.held, self.model
+        if not held:
+            return
+        self.held = []
+        w = np.array([f for f, _ in held])
+        w -= model.f0
+        scar = scar_radii(model.x, w)
+        h = self.hist
+        h["wear_center"].extend(w[:, 0].tolist())
+        h["wear_volume"].extend(transforms.volume(w, model.dt).tolist())
+        h["scar_radius"].extend(scar.tolist())
+        h["max_pressure"].extend(np.array([p for _, p in held]).max(axis=1).tolist())
+        if self.watch is None:
+            return
+        n = len(held)
+        s, a = h["s"][-n:], h["contact_radius"][-n:]
+        rows = getattr(self.watch, "rows", None)
+        if rows is not None:
+            rows(s, a, scar)
+        else:
+            for args in zip(s, a, scar.tolist()):
+                self.watch(*args)
 
     def stage_arrays(self, profile, x):
         """Stages on one grid: the union of the stage grids (each exact on it).
@@ -475,8 +521,17 @@ def run(model: wear.Model, plan: stepping.Plan, progress=None, *, profile=None,
                           "raise mdr.elements or the load")
     problem = Wear(model, state, plan, profile=profile, check_oscillation=check_oscillation)
     rec = _Recorder(watch)
-    outcome = stepping.run(problem, state, plan,
-                           lambda st, s, stages: rec(problem.model, st, s, stages), progress)
+    try:
+        outcome = stepping.run(problem, state, plan,
+                               lambda st, s, stages: rec(problem.model, st, s, stages), progress)
+    except Exception:
+        # the rows not yet watched first: one past the body's end is the run's refusal
+        try:
+            rec.flush()
+        except Exception as refusal:
+            raise refusal from None
+        raise
+    rec.flush()
     model = problem.model
     counters = dict(stepping.info(outcome, plan), **problem.counters)
     counters.update(F_start=outcome.force_start, N=problem.N, domain=float(model.x[-1]))

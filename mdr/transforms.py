@@ -644,10 +644,14 @@ def pressure_force_weights(n: int) -> np.ndarray:
     return v
 
 
-def volume(w: np.ndarray, dt: float) -> float:
-    """∫ 2π r w dr = π ∫ w dt, exact for w linear in t."""
+def volume(w: np.ndarray, dt: float):
+    """∫ 2π r w dr = π ∫ w dt, exact for w linear in t.
+
+    ``w`` at the nodes, or one profile per row (2D): a float, or the rows' volumes.
+    """
     w = np.asarray(w, dtype=float)
-    return float(math.pi * dt * (w.sum() - 0.5 * (w[0] + w[-1])))
+    v = math.pi * dt * (w.sum(axis=-1) - 0.5 * (w[..., 0] + w[..., -1]))
+    return float(v) if w.ndim == 1 else v
 
 
 #: up to this size the compliance matrix is the product of its two dense

@@ -74,7 +74,7 @@ def bdf2_coefficients(h: float, h_prev: float | None) -> tuple[float, float, flo
     return (1.0 + w) ** 2 / (1.0 + 2.0 * w), -w * w / (1.0 + 2.0 * w), (1.0 + w) / (1.0 + 2.0 * w)
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Substep:
     """What a solve is within its step, for the solver's guesses and factorisations.
 
@@ -85,6 +85,8 @@ class Substep:
     the fixed step; not shortened to land on a stage), so a factorisation
     for it is worth keeping. ``start``: the accepted state the step starts
     from; ``full`` and ``half``: the solves of the doubled step made so far.
+    Not frozen: three are made a step, and a frozen dataclass's ``__init__``
+    takes three times as long (docs/performance.md).
     """
 
     kind: str
@@ -149,8 +151,8 @@ class Problem:
         return None
 
     def outside(self, state):
-        """Where a negative Richardson correction is dropped (an index for
-        ``array[index]``), or None: nowhere."""
+        """Where a negative Richardson correction is dropped (a slice of the
+        profile), or None: nowhere."""
         return None
 
 
@@ -356,7 +358,8 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
                 corr = problem.profile(two) - problem.profile(full)
                 where = problem.outside(two)
                 if where is not None:
-                    corr[where] = np.maximum(corr[where], 0.0)
+                    dropped = corr[where]
+                    np.maximum(dropped, 0.0, out=dropped)
                 out.time_error = max(out.time_error, err)
                 out.local_error_sum += err
                 out.largest_step = max(out.largest_step, hn)
@@ -382,7 +385,7 @@ def run(problem: Problem, state, plan: Plan, observe, progress=None) -> Outcome:
             state, corr, previous = _unpack(moved, previous)
             continue
         force = problem.measures(new)[0]
-        if not np.all(np.isfinite(problem.profile(new))) or not math.isfinite(force):
+        if not np.isfinite(problem.profile(new)).all() or not math.isfinite(force):
             raise SolverError("the wear run produced non-finite values; reduce sliding.step_hat")
         problem.accepted(state, new, hn)
         state, s = new, s_new
