@@ -51,9 +51,6 @@ ADAPTIVE_SOLVE_RTOL_MAX = 1e-7
 _FLOAT32_COUNTERS = ("gmres_float32_iterations", "gmres_float64_fallbacks")
 #: the solves' counters a run sums
 _COUNTERS = ("gmres_iterations", "contact_iterations") + _FLOAT32_COUNTERS
-#: grids finer than this check the contact beyond a window against a
-#: reference profile (wear.FarGap) instead of transforming the whole grid
-FAR_GAP_FROM = 2048
 
 #: what the MDR result of an ellipsoid is (info["approximate"] and info["warning"])
 ELLIPSOID_WARNING = ("the ellipsoid (radii R1, R2) is run as the paraboloid of "
@@ -312,9 +309,6 @@ class Wear(stepping.Problem):
         # their pressure guesses are not formed
         self.direct = wear.solves_directly(model) and model.exponent == 1.0 \
             and model.tangential == 0.0
-        # the 1D profile beyond the contact from a reference (fine grids: there the
-        # full transform of each contact iteration cost as much as a GMRES pass)
-        self.far_gap = wear.FarGap() if self.N > FAR_GAP_FROM else None
         # (a pressure exponent's Newton iteration settles to the solves' accuracy:
         # it keeps the accurate solves)
         self.solve_rtol = wear.ACCURATE_RTOL if not self.adaptive or model.exponent != 1.0 \
@@ -371,8 +365,7 @@ class Wear(stepping.Problem):
             exact = True
         try:
             return wear.implicit_step(model, origin, h, c, base, m_guess=guess,
-                                      system=self.system_for(hc, exact), p_guess=p_guess,
-                                      far_gap=self.far_gap)
+                                      system=self.system_for(hc, exact), p_guess=p_guess)
         except contact.DomainOutgrown:
             raise stepping.Regrid() from None
 
@@ -454,8 +447,6 @@ class Wear(stepping.Problem):
         self.systems = {}
         self.p_prev = None
         self.edges.reset()
-        if self.far_gap is not None:
-            self.far_gap = wear.FarGap()
         if self.h_sys is not None:
             self.system_for(self.h_sys)
         self.m_prev = state.m
