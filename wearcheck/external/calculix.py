@@ -62,9 +62,11 @@ def read(path: Path, mapping: dict) -> External:
     dat = dat if dat.is_file() else None
     spec = {"p": ("CONTACT.CPRESS", "pressure", 1.0)}
     kind, time_factor, axis, coord = "s", 1.0, "y", 1.0
+    given = {}     # wearcheck's name -> the --map item that named its block or set
     for key, value in mapping.items():
         name, _ = split_header(key)
         where = f"--map '{key}={value}'"
+        given[name] = where
         if name in ("axis", "r"):
             what, got = geometry_mapping(name, key, value, where)
             axis, coord = (got, coord) if what == "axis" else (axis, got)
@@ -78,9 +80,16 @@ def read(path: Path, mapping: dict) -> External:
             spec[name] = (value, quantity, parse_quantity(key, quantity, where)[1])
     notes = []
     source = frd or dat
+    # a quantity the user named is read from its file, never silently left out
+    for q, (needs, what) in {"wear": (frd, ".frd"), "f": (frd, ".frd"),
+                             "force": (dat, ".dat"), "depth": (dat, ".dat")}.items():
+        if q in given and needs is None:
+            raise CaseError(f"{given[q]}: no {what} file beside {source} (the {q} is read "
+                            f"from {path.with_suffix(what).name})")
     stages = []
     if frd is not None:
         nodes, blocks = read_frd(frd)
+        _check_blocks(frd, blocks, spec, given)
         stages = _frd_stages(frd, nodes, blocks, spec, axis, coord, time_factor, notes)
     blocks_dat = []
     if dat is not None:
@@ -102,6 +111,25 @@ def read(path: Path, mapping: dict) -> External:
 def _radius(coords: np.ndarray, axis: str, factor: float) -> np.ndarray:
     off = [i for i in range(3) if i != AXES[axis]]
     return np.hypot(coords[:, off[0]], coords[:, off[1]]) * factor
+
+
+def _check_blocks(frd, blocks, spec, given) -> None:
+    """Each block and component named with --map (p, wear, f) is in the .frd: one line
+    naming it and the blocks (or the block's components) the file has."""
+    have = {}
+    for b in blocks:
+        have.setdefault(b.name, b.components)
+    for q in ("p", "wear", "f"):
+        if q not in given:
+            continue
+        name, comp, _ = _target(spec[q][0], given[q])
+        if name not in have:
+            raise CaseError(f"{frd}: no block '{name}' ({given[q]}); its blocks: "
+                            f"{', '.join(sorted(have)) or 'none'}")
+        if comp is None or comp not in have[name]:
+            raise CaseError(f"{frd}: block {name} has no component "
+                            + (f"'{comp}'" if comp else "named") + f" ({given[q]}); its "
+                            f"components: {', '.join(have[name])}; --map {q}={name}.COMPONENT")
 
 
 def _frd_stages(frd, nodes, blocks, spec, axis, coord, time_factor, notes) -> list:
@@ -199,13 +227,19 @@ def _dat_history(dat, blocks, spec, axis, time_factor, notes, stages) -> dict:
         notes.append(f"{dat.name}: the force is |{('fx', 'fy', 'fz')[comp]}| of set {name}'s "
                      f"total" + (f" × {k:g}" if k != 1.0 else ""))
     elif dat is not None and "force" in spec:
+        printed = sorted({f"{b.quantity} of set {b.set}" if b.set else b.quantity
+                          for b in blocks})
         raise CaseError(f"{dat}: no 'total force' print (*NODE PRINT, NSET=SET, TOTALS=ONLY "
-                        "with RF) for --map force")
+                        f"with RF) for --map force={spec['force'][0]}; it prints: "
+                        f"{', '.join(printed) or 'nothing'}")
     if "depth" in spec:
         name, _, k = _target(spec["depth"][0], f"--map depth={spec['depth'][0]}")
         disp = [b for b in blocks if b.quantity == "displacements" and b.set == name]
         if not disp:
-            raise CaseError(f"{dat}: no displacements printed for set {name} (--map depth)")
+            printed = sorted({b.set for b in blocks if b.quantity == "displacements"})
+            raise CaseError(f"{dat}: no displacements printed for set {name} (--map depth="
+                            f"{spec['depth'][0]}); sets with displacements printed: "
+                            f"{', '.join(printed) or 'none'}")
         t = np.array([b.time for b in disp]) * time_factor
         d = np.array([abs(float(np.mean(b.values[:, comp]))) for b in disp]) * k \
             * spec["depth"][2]

@@ -171,9 +171,11 @@ def read(path: Path, mapping: dict) -> External:
     fields = {q: q for q in HISTORY_QUANTITIES}
     field_factor = {q: 1.0 for q in HISTORY_QUANTITIES}
     axis = "y"
+    given = {}     # wearcheck's name -> the --map item that named its array or field
     for key, value in mapping.items():
         name, _ = split_header(key)
         where = f"--map '{key}={value}'"
+        given[name] = f"--map '{key}={value}'"
         if name in ("axis", "r"):
             what, got = geometry_mapping(name, key, value, where)
             if what == "axis":
@@ -191,6 +193,7 @@ def read(path: Path, mapping: dict) -> External:
             field_factor[name] = parse_quantity(key, HISTORY_QUANTITIES[name], where)[1]
     notes = []
     stages, hist_rows = [], []
+    beside = path.parent / "history.csv"
     for time, file in series(path):
         where = str(file)
         if not file.is_file():
@@ -203,7 +206,9 @@ def read(path: Path, mapping: dict) -> External:
         if time_source != "time":
             time = _field(mesh, time_source)
             if time is None:
-                raise CaseError(f"{file}: no field data '{time_source}' for the distance")
+                raise CaseError(f"{file}: no field data '{time_source}' for the distance "
+                                f"({given[time_kind]}); its field data: "
+                                f"{', '.join(mesh.field_data) or 'none'}")
         elif time is None:
             time = _field(mesh, "s") if time_kind == "s" else None
             time = _field(mesh, "TimeValue") if time is None else time
@@ -219,6 +224,11 @@ def read(path: Path, mapping: dict) -> External:
         vals = {}
         for q in ("f", "wear", "p"):
             a = _array(mesh, names[q], where)
+            if a is None and q in given:
+                # an array the user named is never silently left out (a typo would
+                # leave the stage unjudged in that quantity)
+                raise CaseError(f"{file}: no point data '{names[q]}' ({given[q]}); its "
+                                f"point data: {', '.join(mesh.point_data) or 'none'}")
             vals[q] = None if a is None else a * factors[q]
         if vals["f"] is not None:
             vals["wear"] = None
@@ -245,15 +255,19 @@ def read(path: Path, mapping: dict) -> External:
         row = {}
         for q in HISTORY_QUANTITIES:
             v = _field(mesh, fields[q])
+            if v is None and q in given and not beside.is_file():
+                raise CaseError(f"{file}: no field data '{fields[q]}' ({given[q]}); its "
+                                f"field data: {', '.join(mesh.field_data) or 'none'}")
             row[q] = math.nan if v is None else v * field_factor[q]
         hist_rows.append((float(time), row, f"{file.name} field data"))
     stages.sort(key=lambda st: st.time)
     times = [st.time for st in stages]
     if len(set(times)) != len(times):
         raise CaseError(f"{path}: two data sets at the same time {times}")
-    beside = path.parent / "history.csv"
     if beside.is_file():
-        hist = read_dir(path.parent, {})
+        # a history quantity named with --map is a column of that history.csv
+        hist = read_dir(path.parent, {k: v for k, v in mapping.items()
+                                      if split_header(k)[0] in HISTORY_QUANTITIES})
         notes.append(f"history from {beside.name} beside {path.name}")
         return External(kind=hist.kind, history=hist.history, history_origin=hist.history_origin,
                         stages=stages, source=str(path), format="vtk", stage_kind=time_kind,

@@ -194,8 +194,12 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
                                    "own time-error estimate is info.time_error",
                                    time_error=err.get("estimate") if isinstance(err, dict)
                                    else None)
+    # each history row's difference against the tolerance, for the history figure
+    judged = verification.row_differences(
+        ref, hist, [q for q in verification.HISTORY_CHECKS if q not in pair["not_given"]],
+        scales=sc, depth=depth, tolerances=dataclasses.asdict(cmp))
     _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0,
-           reference_solver is None)
+           reference_solver is None, judged)
     return m
 
 
@@ -273,7 +277,8 @@ def _diagnosis(pair, factor, cmp, kind, slips) -> dict | None:
     return dict(factor=lam, reason="; ".join(reasons))
 
 
-def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, certified_ref):
+def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, certified_ref,
+           judged=None):
     prov = rundir.provenance(argv)
     out = Path(out)
     with outputs.atomic_directory(out, "comparison") as tmp:
@@ -283,7 +288,7 @@ def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, certif
                                extra_meta=extra)
         (tmp / RESULTS).mkdir()
         write_results(tmp / RESULTS, hist, stages, m["scales"]["s_hat_per_m"])
-        names = verify_figures.draw(tmp, case, m, run, hist, stages)
+        names = verify_figures.draw(tmp, case, m, run, hist, stages, judged)
         m["provenance"] = prov
         m["case_source"] = case.source
         m["seconds_total"] = time.perf_counter() - t0
