@@ -225,7 +225,8 @@ VERIFICATION_METRICS = (
     Item("checks", "", "the checks made (those of compare and wear_center, wear_volume, "
                        "depth, where given)"),
     Item("results", "", "source, format, distance (s, s_hat or cycles), given, not_given, "
-                        "history_rows, stages, mapping, notes (what the reader decided)"),
+                        "history_rows, stages, mapping, mapped (one line per --map item: what it "
+                        "read), notes (what the reader decided)"),
     Item("distance_factor", "", "factor (the λ on the user's distances that fits the "
                                 "reference best, within bounds), misfit, misfit_at_one, "
                                 "quantities, bounds, unit_misfits (the misfit at 1e-3, "

@@ -38,7 +38,8 @@ from wearcheck.calculix_files import dat_blocks, inp_nodes, read_frd
 from wearcheck.cases import CaseError
 from wearcheck.cases.tables import parse_quantity, split_header
 
-from . import AXES, DISTANCES, External, Stage, check_unused, geometry_mapping
+from . import (AXES, DISTANCES, External, Stage, check_unused, geometry_line,
+               geometry_mapping, map_item, unit_words)
 
 def _target(value: str, where: str) -> tuple[str, str | None, float]:
     """'BLOCK.COMPONENT*FACTOR' or 'SET*FACTOR' -> (name, component or None, factor)."""
@@ -66,7 +67,7 @@ def read(path: Path, mapping: dict) -> External:
     for key, value in mapping.items():
         name, _ = split_header(key)
         where = f"--map '{key}={value}'"
-        given[name] = where
+        given[name] = map_item(key, value)
         if name in ("axis", "r"):
             what, got = geometry_mapping(name, key, value, where)
             axis, coord = (got, coord) if what == "axis" else (axis, got)
@@ -105,7 +106,33 @@ def read(path: Path, mapping: dict) -> External:
     # the .frd prints a time with six digits, the .dat with seven: the same time
     return External(kind=kind, history=history, history_origin=origin, stages=stages,
                     source=str(source), format="calculix", stage_kind=kind, notes=notes,
-                    time_precision=1e-5)
+                    time_precision=1e-5, mapped=_mapped_lines(mapping, frd, dat))
+
+
+def _mapped_lines(mapping: dict, frd, dat) -> list[str]:
+    """One line per --map item: the block and component, node set or result times it
+    read, in which unit."""
+    out = []
+    for key, value in mapping.items():
+        name, item, unit = split_header(key)[0], map_item(key, value), unit_words(key)
+        target, comp, k = _target(value, item)
+        times = f" × {k:g}" if k != 1.0 else ""
+        if name in ("axis", "r"):
+            out.append(geometry_line((frd or dat).name, name, key, value))
+        elif name in DISTANCES:
+            out.append(f"{(frd or dat).name}: {name} read from the result times{unit} ({item})")
+        elif name == "p" and frd is None:
+            out.append(f"{dat.name}: p read from the contact prints (CSTR){unit} ({item})")
+        elif name in ("p", "wear", "f"):
+            out.append(f"{frd.name}: {name} read from block {target} component {comp}{times}"
+                       f"{unit} ({item})")
+        elif name == "force":
+            out.append(f"{dat.name}: force read from the total force of set {target}{times}"
+                       f"{unit} ({item})")
+        elif name == "depth":
+            out.append(f"{dat.name}: depth read from the displacements of set {target}"
+                       f"{times}{unit} ({item})")
+    return out
 
 
 def _radius(coords: np.ndarray, axis: str, factor: float) -> np.ndarray:

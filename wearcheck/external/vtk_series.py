@@ -35,7 +35,7 @@ from wearcheck.cases.tables import parse_quantity, split_header
 from wearcheck.extras import need
 
 from . import (AXES, DISTANCES, HISTORY_QUANTITIES, External, Stage, check_unused,
-               geometry_mapping)
+               geometry_line, geometry_mapping, map_item, unit_words)
 from .tables_dir import read as read_dir
 
 DEFAULT_ARRAYS = {"f": "f", "wear": "wear_depth", "p": "pressure"}
@@ -175,7 +175,7 @@ def read(path: Path, mapping: dict) -> External:
     for key, value in mapping.items():
         name, _ = split_header(key)
         where = f"--map '{key}={value}'"
-        given[name] = f"--map '{key}={value}'"
+        given[name] = map_item(key, value)
         if name in ("axis", "r"):
             what, got = geometry_mapping(name, key, value, where)
             if what == "axis":
@@ -194,6 +194,7 @@ def read(path: Path, mapping: dict) -> External:
     notes = []
     stages, hist_rows = [], []
     beside = path.parent / "history.csv"
+    arrays = set()      # the point data of every file, for what a --map displaced
     for time, file in series(path):
         where = str(file)
         if not file.is_file():
@@ -221,6 +222,7 @@ def read(path: Path, mapping: dict) -> External:
             pts = np.column_stack([pts, np.zeros(len(pts))])
         off = [i for i in range(3) if i != AXES[axis]]
         r = np.hypot(pts[:, off[0]], pts[:, off[1]])
+        arrays |= set(mesh.point_data)
         vals = {}
         for q in ("f", "wear", "p"):
             a = _array(mesh, names[q], where)
@@ -271,7 +273,8 @@ def read(path: Path, mapping: dict) -> External:
         notes.append(f"history from {beside.name} beside {path.name}")
         return External(kind=hist.kind, history=hist.history, history_origin=hist.history_origin,
                         stages=stages, source=str(path), format="vtk", stage_kind=time_kind,
-                        notes=notes + hist.notes)
+                        notes=notes + hist.notes,
+                        mapped=_mapped_lines(path, mapping, arrays, hist.mapped))
     hist_rows.sort(key=lambda t: t[0])
     history = {"time": np.array([t for t, _, _ in hist_rows])}
     origin = [o for _, _, o in hist_rows]
@@ -280,4 +283,31 @@ def read(path: Path, mapping: dict) -> External:
         if np.any(np.isfinite(v)):
             history[q] = v
     return External(kind=time_kind, history=history, history_origin=origin, stages=stages,
-                    source=str(path), format="vtk", stage_kind=time_kind, notes=notes)
+                    source=str(path), format="vtk", stage_kind=time_kind, notes=notes,
+                    mapped=_mapped_lines(path, mapping, arrays, None))
+
+
+def _mapped_lines(path: Path, mapping: dict, arrays: set, csv_lines) -> list[str]:
+    """One line per --map item: the point data, field data, timesteps or coordinates
+    it read, in which unit, and the default array it displaced. ``csv_lines``: the
+    lines of a history.csv beside the series (which the history quantities name)."""
+    out = []
+    for key, value in mapping.items():
+        name, item, unit = split_header(key)[0], map_item(key, value), unit_words(key)
+        if name in ("axis", "r"):
+            out.append(geometry_line(path.name, name, key, value))
+        elif name in KINDS:
+            default = DEFAULT_ARRAYS[name]
+            out.append(f"{path.name}: {name} read from point data '{value}'{unit} ({item})"
+                       + (f"; point data '{default}' not read"
+                          if default != value and default in arrays else ""))
+        elif name in DISTANCES:
+            what = ("the .pvd timesteps" if value == "time"
+                    else f"field data '{value}' of each file")
+            out.append(f"{path.name}: {name} read from {what}{unit} ({item})")
+        elif csv_lines is None:
+            out.append(f"{path.name}: {name} read from field data '{value}' of each "
+                       f"file{unit} ({item})")
+        else:
+            out += [line for line in csv_lines if f"({item})" in line]
+    return out

@@ -179,7 +179,8 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
                           given=[q for q in list(verification.HISTORY_CHECKS) + ["f", "p"]
                                  if q not in pair["not_given"]],
                           not_given=pair["not_given"], history_rows=len(hist["s"]),
-                          stages=len(stages), mapping=dict(mapping or {})),
+                          stages=len(stages), mapping=dict(mapping or {}),
+                          mapped=list(ext.mapped)),
              distance_factor=factor,
              diagnosis=_diagnosis(pair, factor, cmp, ext.kind, verification.stage_unit_slips(
                  ref, stages, lambda r: unworn_profile(case, r), depth, sc["p0"])))
