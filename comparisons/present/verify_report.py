@@ -181,8 +181,11 @@ def build_report(case, m, figure_names, prov) -> list:
                                     "your results (markers) at each judged stage.",
                 "fig_pressure.png": "Contact pressure p/p0 against r/a0: the reference (lines) "
                                     "and your results (markers).",
-                "history.png": "Force, contact radius, central wear and worn volume against "
-                               "ŝ: the reference (line) and your history rows (markers)."}
+                "history.png": "Force, contact radius, central wear and worn volume (and "
+                               "depth) against ŝ: the reference (line) and your history "
+                               "rows (markers); below each, every row's difference relative "
+                               "to the scale its check judges it against, in %, with the "
+                               "tolerance as a band and the failed rows as red crosses."}
     for name in figure_names:
         blocks.append(R.image(name, captions.get(name, name)))
     blocks += [R.heading("Provenance"),

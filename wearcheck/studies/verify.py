@@ -14,7 +14,8 @@ comparison):
     DIR/results/stages.csv         the user's stages as read, long form, in SI
     DIR/fig_profiles.png|pdf       f/d against r/a0: reference lines, the user's markers
     DIR/fig_pressure.png|pdf       p/p0 against r/a0
-    DIR/history.png|pdf            F/F0, a/a0, central wear and worn volume against ŝ
+    DIR/history.png|pdf            F/F0, a/a0, central wear and worn volume against ŝ, and
+                                   each row's difference against its tolerance band
     DIR/metrics.json, report.md, report.html, case.toml
 """
 
