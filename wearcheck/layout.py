@@ -201,7 +201,9 @@ VERIFICATION_FILES = (
     Item("fig_profiles.png/.pdf", "", "f/d against r/a0: the reference (lines), the results "
                                       "(markers), at each judged stage with a profile"),
     Item("fig_pressure.png/.pdf", "", "p/p0 against r/a0, the same"),
-    Item("history.png/.pdf", "", "F/F0, a/a0, w(0)/d and V/(π a0² d) against ŝ"),
+    Item("history.png/.pdf", "", "F/F0, a/a0, w(0)/d and V/(π a0² d) (and the depth) "
+                                 "against ŝ; below each, every row's difference relative "
+                                 "to its check's scale [%], the tolerance band, failed rows ×"),
     Item("metrics.json", "", "the verdict: the keys of VERIFICATION_METRICS"),
     Item("report.md/.html", "", "verdict, what was read, the reference and its band, the "
                                 "checks, per-stage metrics, figures, provenance"),
@@ -221,11 +223,15 @@ VERIFICATION_METRICS = (
                       "checks, stage_scales, checks, band (the reference's error relative to "
                       "each check's scale), passed), worst, checks_used, not_given, "
                       "not_judged (stages beyond the reference, stages without a history "
-                      "row), history (largest differences over all rows), passed"),
+                      "row), history (largest differences over all rows), rows (the rows "
+                      "between the stages: judged, failed, failed_rows {quantity: row "
+                      "indices from 0}, worst), passed; a stage's row is the history row "
+                      "judged at it (from 0, null when none)"),
     Item("checks", "", "the checks made (those of compare and wear_center, wear_volume, "
                        "depth, where given)"),
     Item("results", "", "source, format, distance (s, s_hat or cycles), given, not_given, "
-                        "history_rows, stages, mapping, notes (what the reader decided)"),
+                        "history_rows, stages, mapping, mapped (one line per --map item: what it "
+                        "read), notes (what the reader decided)"),
     Item("distance_factor", "", "factor (the λ on the user's distances that fits the "
                                 "reference best, within bounds), misfit, misfit_at_one, "
                                 "quantities, bounds, unit_misfits (the misfit at 1e-3, "

@@ -191,7 +191,7 @@ def judge(reference, history: dict, stages: list, *, case_stage_s, scales: dict,
             continue
         ref = {k: float(v[0]) for k, v in reference.history_at(s).items()}
         st = dict(index=len(out_stages), s=s, s_hat_reference=s * per_m, s_hat_solver=s * per_m,
-                  origin=where, reference=ref, results={}, checks={})
+                  origin=where, reference=ref, results={}, checks={}, row=sel["row"])
         checks = []
         row = sel["row"]
         if row is None and given:
@@ -296,7 +296,8 @@ def judge_rows(reference, history: dict, given, *, scales: dict, units: dict, to
 
     Returns
     -------
-    dict: ``judged`` (rows), ``failed`` (rows with a failed check), ``worst``
+    dict: ``judged`` (rows), ``failed`` (rows with a failed check), ``failed_rows``
+    {quantity: [row indices from 0 in ``history``]} (the rows that failed it), ``worst``
     {quantity: {value, tolerance, s, index, origin}} (value relative to the tolerance's
     scale, at the row where it uses the largest share of the tolerance; ``index`` from
     0 in ``history``, ``origin`` where it was read, e.g. "history.csv row 169" as a
@@ -306,7 +307,7 @@ def judge_rows(reference, history: dict, given, *, scales: dict, units: dict, to
     origin = history.get("origin")
     ref = reference.history_at(s)
     checks = [metrics.CHECK_BY_COLUMN[HISTORY_CHECKS[q]] for q in given]
-    judged, failed, worst = 0, 0, {}
+    judged, failed, worst, failed_rows = 0, 0, {}, {}
     for i in range(len(s)):
         if i in skip or not np.isfinite(s[i]) or not np.isfinite(ref["force"][i]):
             continue
@@ -329,6 +330,8 @@ def judge_rows(reference, history: dict, given, *, scales: dict, units: dict, to
             if b > CERTIFIED_SHARE * c["tolerance"] and not c["value"] > c["tolerance"] + b:
                 continue
             row_failed |= not c["passed"]
+            if not c["passed"]:
+                failed_rows.setdefault(name, []).append(i)
             used = c["value"] / c["tolerance"]
             if name not in worst or used > worst[name]["used"]:
                 worst[name] = dict(value=c["value"], tolerance=c["tolerance"], used=used,
@@ -338,7 +341,32 @@ def judge_rows(reference, history: dict, given, *, scales: dict, units: dict, to
                                    passed=c["passed"])
         judged += 1
         failed += int(row_failed)
-    return dict(judged=judged, failed=failed, worst=worst, passed=failed == 0)
+    return dict(judged=judged, failed=failed, failed_rows=failed_rows, worst=worst,
+                passed=failed == 0)
+
+
+def row_differences(reference, history: dict, given, *, scales: dict, depth: float,
+                    tolerances: dict) -> dict:
+    """Each given history quantity's signed difference from the reference at every
+    row, relative to the scale its check judges it against (the reference's own value
+    there, or the tolerance's floor where that is larger), as :func:`judge_rows` and
+    the stages judge it.
+
+    Returns {quantity: {"value": (n,) (user − reference) / scale, NaN where the
+    reference does not cover the row or the row leaves the quantity out,
+    "tolerance": the check's tolerance}}.
+    """
+    units = unit_scales(scales, depth)
+    s = np.asarray(history["s"], float)
+    ref = reference.history_at(s)
+    out = {}
+    for q in given:
+        c = metrics.CHECK_BY_COLUMN[HISTORY_CHECKS[q]]
+        r = np.asarray(ref[q], float)
+        scale = np.maximum(np.abs(r) / units[q], tolerances[c.floor])
+        value = (np.asarray(history[q], float) - r) / units[q] / scale
+        out[q] = dict(value=value, tolerance=float(tolerances[c.tolerance]))
+    return out
 
 
 def reached(history: dict, stages: list, case_stage_s, same: float = SAME_DISTANCE) -> dict:

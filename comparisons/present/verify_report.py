@@ -89,10 +89,14 @@ def build_report(case, m, figure_names, prov) -> list:
                       f"{res['history_rows']} history row(s), {res['stages']} stage(s)."
                       + (f" Mapping: {', '.join(f'{k}={v}' for k, v in res['mapping'].items())}."
                          if res["mapping"] else ""))]
+    mapped = res.get("mapped", [])
+    for line in mapped:
+        blocks.append(R.para(f"Mapped: {line}."))
     if res["not_given"]:
         blocks.append(R.para("Not given, so not judged: " + ", ".join(res["not_given"]) + "."))
     for note in res["notes"]:
-        blocks.append(R.para(f"Read: {note}."))
+        if note not in mapped:
+            blocks.append(R.para(f"Read: {note}."))
     for note in pair["not_judged"]:
         blocks.append(R.para(f"Not judged: {note}."))
     band = m.get("reference_band") or {}
@@ -177,8 +181,11 @@ def build_report(case, m, figure_names, prov) -> list:
                                     "your results (markers) at each judged stage.",
                 "fig_pressure.png": "Contact pressure p/p0 against r/a0: the reference (lines) "
                                     "and your results (markers).",
-                "history.png": "Force, contact radius, central wear and worn volume against "
-                               "ŝ: the reference (line) and your history rows (markers)."}
+                "history.png": "Force, contact radius, central wear and worn volume (and "
+                               "depth) against ŝ: the reference (line) and your history "
+                               "rows (markers); below each, every row's difference relative "
+                               "to the scale its check judges it against, in %, with the "
+                               "tolerance as a band and the failed rows as red crosses."}
     for name in figure_names:
         blocks.append(R.image(name, captions.get(name, name)))
     blocks += [R.heading("Provenance"),
@@ -209,8 +216,9 @@ def _unit_word(q) -> str:
 
 
 def print_summary(m, out, stream=None) -> None:
-    """A few lines for the terminal (default stderr): one per stage, the verdict, and
-    on a FAIL the failed checks and the likely cause."""
+    """A few lines for the terminal (default stderr): one per stage, the verdict, on a
+    FAIL the failed checks and the likely cause, then one line per --map item saying
+    what it read."""
     stream = sys.stderr if stream is None else stream
     pair = m["pairs"]["results"]
     print(f"results against {m['reference_title']} (differences relative to each stage's "
@@ -230,3 +238,7 @@ def print_summary(m, out, stream=None) -> None:
             print(f"  {line}", file=stream)
         if m.get("diagnosis"):
             print(f"most likely cause: {m['diagnosis']['reason']}", file=stream)
+    # which column, array or block each --map read: a verdict on a column the user did
+    # not mean (a friction force named 'force') must not look like one on theirs
+    for line in m["results"].get("mapped", []):
+        print(f"  {line}", file=stream)

@@ -76,6 +76,9 @@ class External:
     #: within it are the same time (a table's stages and history written with
     #: different digits; CalculiX's .frd and .dat)
     time_precision: float = 1e-6
+    #: what each ``--map`` item read, one line each ("history.csv: force read from
+    #: column 'Fn [N]' (--map force=Fn); column 'force [N]' not read"), in its order
+    mapped: list = field(default_factory=list)
 
     @property
     def given(self) -> list[str]:
@@ -143,6 +146,28 @@ def read(path: str | Path, mapping: dict | None = None) -> External:
                         "(and stages.csv), not the file")
     raise CaseError(f"results '{path}': unknown format '{suffix}'; a directory with "
                     "history.csv, a .pvd or .vtu file, or a CalculiX .frd or .dat file")
+
+
+def map_item(key: str, value: str) -> str:
+    """``--map force=Fn``, quoted as a shell needs it: ``--map 's [mm]=time'``."""
+    item = f"{key}={value}"
+    plain = all(c.isalnum() or c in "_.=*-+/:" for c in item)
+    return f"--map {item}" if plain else f"--map '{item}'"
+
+
+def unit_words(key: str) -> str:
+    """' in MPa' for a mapping key 'p [MPa]', '' without a unit."""
+    unit = split_header(key)[1]
+    return f" in {unit}" if unit else ""
+
+
+def geometry_line(source: str, name: str, key: str, value: str) -> str:
+    """What ``--map axis=...`` or ``--map 'r [mm]=points'`` decided, in one line."""
+    if name == "axis":
+        return (f"{source}: the radius is the distance from the {value.lower()} axis "
+                f"({map_item(key, value)})")
+    return (f"{source}: r is the points' distance from the axis, their coordinates read"
+            f"{unit_words(key) or ' in m'} ({map_item(key, value)})")
 
 
 #: the coordinate axes of a point's (x, y, z)

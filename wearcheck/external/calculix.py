@@ -38,7 +38,8 @@ from wearcheck.calculix_files import dat_blocks, inp_nodes, read_frd
 from wearcheck.cases import CaseError
 from wearcheck.cases.tables import parse_quantity, split_header
 
-from . import AXES, DISTANCES, External, Stage, check_unused, geometry_mapping
+from . import (AXES, DISTANCES, External, Stage, check_unused, geometry_line,
+               geometry_mapping, map_item, unit_words)
 
 def _target(value: str, where: str) -> tuple[str, str | None, float]:
     """'BLOCK.COMPONENT*FACTOR' or 'SET*FACTOR' -> (name, component or None, factor)."""
@@ -62,9 +63,11 @@ def read(path: Path, mapping: dict) -> External:
     dat = dat if dat.is_file() else None
     spec = {"p": ("CONTACT.CPRESS", "pressure", 1.0)}
     kind, time_factor, axis, coord = "s", 1.0, "y", 1.0
+    given = {}     # wearcheck's name -> the --map item that named its block or set
     for key, value in mapping.items():
         name, _ = split_header(key)
         where = f"--map '{key}={value}'"
+        given[name] = map_item(key, value)
         if name in ("axis", "r"):
             what, got = geometry_mapping(name, key, value, where)
             axis, coord = (got, coord) if what == "axis" else (axis, got)
@@ -78,9 +81,16 @@ def read(path: Path, mapping: dict) -> External:
             spec[name] = (value, quantity, parse_quantity(key, quantity, where)[1])
     notes = []
     source = frd or dat
+    # a quantity the user named is read from its file, never silently left out
+    for q, (needs, what) in {"wear": (frd, ".frd"), "f": (frd, ".frd"),
+                             "force": (dat, ".dat"), "depth": (dat, ".dat")}.items():
+        if q in given and needs is None:
+            raise CaseError(f"{given[q]}: no {what} file beside {source} (the {q} is read "
+                            f"from {path.with_suffix(what).name})")
     stages = []
     if frd is not None:
         nodes, blocks = read_frd(frd)
+        _check_blocks(frd, blocks, spec, given)
         stages = _frd_stages(frd, nodes, blocks, spec, axis, coord, time_factor, notes)
     blocks_dat = []
     if dat is not None:
@@ -96,12 +106,57 @@ def read(path: Path, mapping: dict) -> External:
     # the .frd prints a time with six digits, the .dat with seven: the same time
     return External(kind=kind, history=history, history_origin=origin, stages=stages,
                     source=str(source), format="calculix", stage_kind=kind, notes=notes,
-                    time_precision=1e-5)
+                    time_precision=1e-5, mapped=_mapped_lines(mapping, frd, dat))
+
+
+def _mapped_lines(mapping: dict, frd, dat) -> list[str]:
+    """One line per --map item: the block and component, node set or result times it
+    read, in which unit."""
+    out = []
+    for key, value in mapping.items():
+        name, item, unit = split_header(key)[0], map_item(key, value), unit_words(key)
+        target, comp, k = _target(value, item)
+        times = f" × {k:g}" if k != 1.0 else ""
+        if name in ("axis", "r"):
+            out.append(geometry_line((frd or dat).name, name, key, value))
+        elif name in DISTANCES:
+            out.append(f"{(frd or dat).name}: {name} read from the result times{unit} ({item})")
+        elif name == "p" and frd is None:
+            out.append(f"{dat.name}: p read from the contact prints (CSTR){unit} ({item})")
+        elif name in ("p", "wear", "f"):
+            out.append(f"{frd.name}: {name} read from block {target} component {comp}{times}"
+                       f"{unit} ({item})")
+        elif name == "force":
+            out.append(f"{dat.name}: force read from the total force of set {target}{times}"
+                       f"{unit} ({item})")
+        elif name == "depth":
+            out.append(f"{dat.name}: depth read from the displacements of set {target}"
+                       f"{times}{unit} ({item})")
+    return out
 
 
 def _radius(coords: np.ndarray, axis: str, factor: float) -> np.ndarray:
     off = [i for i in range(3) if i != AXES[axis]]
     return np.hypot(coords[:, off[0]], coords[:, off[1]]) * factor
+
+
+def _check_blocks(frd, blocks, spec, given) -> None:
+    """Each block and component named with --map (p, wear, f) is in the .frd: one line
+    naming it and the blocks (or the block's components) the file has."""
+    have = {}
+    for b in blocks:
+        have.setdefault(b.name, b.components)
+    for q in ("p", "wear", "f"):
+        if q not in given:
+            continue
+        name, comp, _ = _target(spec[q][0], given[q])
+        if name not in have:
+            raise CaseError(f"{frd}: no block '{name}' ({given[q]}); its blocks: "
+                            f"{', '.join(sorted(have)) or 'none'}")
+        if comp is None or comp not in have[name]:
+            raise CaseError(f"{frd}: block {name} has no component "
+                            + (f"'{comp}'" if comp else "named") + f" ({given[q]}); its "
+                            f"components: {', '.join(have[name])}; --map {q}={name}.COMPONENT")
 
 
 def _frd_stages(frd, nodes, blocks, spec, axis, coord, time_factor, notes) -> list:
@@ -199,13 +254,19 @@ def _dat_history(dat, blocks, spec, axis, time_factor, notes, stages) -> dict:
         notes.append(f"{dat.name}: the force is |{('fx', 'fy', 'fz')[comp]}| of set {name}'s "
                      f"total" + (f" × {k:g}" if k != 1.0 else ""))
     elif dat is not None and "force" in spec:
+        printed = sorted({f"{b.quantity} of set {b.set}" if b.set else b.quantity
+                          for b in blocks})
         raise CaseError(f"{dat}: no 'total force' print (*NODE PRINT, NSET=SET, TOTALS=ONLY "
-                        "with RF) for --map force")
+                        f"with RF) for --map force={spec['force'][0]}; it prints: "
+                        f"{', '.join(printed) or 'nothing'}")
     if "depth" in spec:
         name, _, k = _target(spec["depth"][0], f"--map depth={spec['depth'][0]}")
         disp = [b for b in blocks if b.quantity == "displacements" and b.set == name]
         if not disp:
-            raise CaseError(f"{dat}: no displacements printed for set {name} (--map depth)")
+            printed = sorted({b.set for b in blocks if b.quantity == "displacements"})
+            raise CaseError(f"{dat}: no displacements printed for set {name} (--map depth="
+                            f"{spec['depth'][0]}); sets with displacements printed: "
+                            f"{', '.join(printed) or 'none'}")
         t = np.array([b.time for b in disp]) * time_factor
         d = np.array([abs(float(np.mean(b.values[:, comp]))) for b in disp]) * k \
             * spec["depth"][2]

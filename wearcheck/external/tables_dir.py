@@ -26,7 +26,8 @@ import numpy as np
 from wearcheck.cases import CaseError
 from wearcheck.cases.tables import parse_quantity, read_table, split_header
 
-from . import DISTANCES, HISTORY_QUANTITIES, External, Stage, check_unused, time_columns
+from . import (DISTANCES, HISTORY_QUANTITIES, External, Stage, check_unused, map_item,
+               time_columns, unit_words)
 
 STAGE_COLUMNS = {"r": "length", "f": "length", "wear": "length", "p": "pressure"}
 #: names that give one quantity: a --map of one of them displaces the others' columns
@@ -76,17 +77,41 @@ def read(directory: Path, mapping: dict) -> External:
             history[q] = table[q]
     history["force"] = _magnitude(table, "force", notes)
     origin = [f"{hist_path.name} row {int(r)}" for r in table.rows]
-    stages, stage_kind = [], kind
+    stages, stage_kind, tables = [], kind, [table]
     if stages_path.is_file():
-        stages, stage_kind, more = read_stages(stages_path, aliases, units)
+        stages, stage_kind, more, stage_table = read_stages(stages_path, aliases, units)
         notes += more
+        tables.append(stage_table)
     else:
         for column, name in aliases.items():
             if name not in columns:
                 raise CaseError(f"--map {name}={column}: {stages_path} does not exist (the "
                                 f"stages' {name} is read from stages.csv)")
     return External(kind=kind, history=history, history_origin=origin, stages=stages,
-                    source=str(directory), format="csv", stage_kind=stage_kind, notes=notes)
+                    source=str(directory), format="csv", stage_kind=stage_kind, notes=notes,
+                    mapped=mapped_lines(tables, mapping))
+
+
+def mapped_lines(tables, mapping: dict) -> list[str]:
+    """One line per --map item: the tables and the column it was read from, in which
+    unit, and the columns of that name it displaced (as :func:`mapped_notes` says
+    them per table)."""
+    out = []
+    for key, column in mapping.items():
+        name = split_header(key)[0]
+        reads = [(t.path.name, t.headers[name],
+                  [c for c in t.ignored if split_header(c)[0] == name])
+                 for t in tables if name in t.headers]
+        if not reads:
+            continue
+        headers = {h for _, h, _ in reads}
+        where = (" and ".join(f for f, _, _ in reads) + f": {name} read from column "
+                 f"'{reads[0][1]}'" if len(headers) == 1 else
+                 f"{name} read from " + " and ".join(f"{f} column '{h}'" for f, h, _ in reads))
+        passed = [c for _, _, over in reads for c in over]
+        out.append(where + unit_words(key) + f" ({map_item(key, column)})"
+                   + "".join(f"; column '{c}' not read" for c in dict.fromkeys(passed)))
+    return out
 
 
 def mapped_notes(table, aliases: dict) -> list[str]:
@@ -133,9 +158,8 @@ def _check_increasing(t, table, kind) -> None:
         raise CaseError(f"{table.where(i, kind)}: negative distance {t[i]:g}")
 
 
-def read_stages(path: Path, aliases: dict, units: dict | None = None
-                ) -> tuple[list, str, list]:
-    """The long-form stages table: ([Stage], distance kind, notes)."""
+def read_stages(path: Path, aliases: dict, units: dict | None = None) -> tuple:
+    """The long-form stages table: ([Stage], distance kind, notes, the table read)."""
     columns = dict(DISTANCES, **STAGE_COLUMNS)
     table = read_table(path, columns, required=[tuple(DISTANCES), "r"], aliases=aliases,
                        units=units, groups=GROUPS)
@@ -187,4 +211,4 @@ def read_stages(path: Path, aliases: dict, units: dict | None = None
         stages.append(Stage(time=float(value), r=rr, f=col("f", has_f), p=col("p", has_p),
                             wear=col("wear", has_w),
                             origin=f"{path.name} rows {first}-{last}"))
-    return stages, kind, notes
+    return stages, kind, notes, table

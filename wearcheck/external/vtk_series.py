@@ -35,7 +35,7 @@ from wearcheck.cases.tables import parse_quantity, split_header
 from wearcheck.extras import need
 
 from . import (AXES, DISTANCES, HISTORY_QUANTITIES, External, Stage, check_unused,
-               geometry_mapping)
+               geometry_line, geometry_mapping, map_item, unit_words)
 from .tables_dir import read as read_dir
 
 DEFAULT_ARRAYS = {"f": "f", "wear": "wear_depth", "p": "pressure"}
@@ -171,9 +171,11 @@ def read(path: Path, mapping: dict) -> External:
     fields = {q: q for q in HISTORY_QUANTITIES}
     field_factor = {q: 1.0 for q in HISTORY_QUANTITIES}
     axis = "y"
+    given = {}     # wearcheck's name -> the --map item that named its array or field
     for key, value in mapping.items():
         name, _ = split_header(key)
         where = f"--map '{key}={value}'"
+        given[name] = map_item(key, value)
         if name in ("axis", "r"):
             what, got = geometry_mapping(name, key, value, where)
             if what == "axis":
@@ -191,6 +193,8 @@ def read(path: Path, mapping: dict) -> External:
             field_factor[name] = parse_quantity(key, HISTORY_QUANTITIES[name], where)[1]
     notes = []
     stages, hist_rows = [], []
+    beside = path.parent / "history.csv"
+    arrays = set()      # the point data of every file, for what a --map displaced
     for time, file in series(path):
         where = str(file)
         if not file.is_file():
@@ -203,7 +207,9 @@ def read(path: Path, mapping: dict) -> External:
         if time_source != "time":
             time = _field(mesh, time_source)
             if time is None:
-                raise CaseError(f"{file}: no field data '{time_source}' for the distance")
+                raise CaseError(f"{file}: no field data '{time_source}' for the distance "
+                                f"({given[time_kind]}); its field data: "
+                                f"{', '.join(mesh.field_data) or 'none'}")
         elif time is None:
             time = _field(mesh, "s") if time_kind == "s" else None
             time = _field(mesh, "TimeValue") if time is None else time
@@ -216,9 +222,15 @@ def read(path: Path, mapping: dict) -> External:
             pts = np.column_stack([pts, np.zeros(len(pts))])
         off = [i for i in range(3) if i != AXES[axis]]
         r = np.hypot(pts[:, off[0]], pts[:, off[1]])
+        arrays |= set(mesh.point_data)
         vals = {}
         for q in ("f", "wear", "p"):
             a = _array(mesh, names[q], where)
+            if a is None and q in given:
+                # an array the user named is never silently left out (a typo would
+                # leave the stage unjudged in that quantity)
+                raise CaseError(f"{file}: no point data '{names[q]}' ({given[q]}); its "
+                                f"point data: {', '.join(mesh.point_data) or 'none'}")
             vals[q] = None if a is None else a * factors[q]
         if vals["f"] is not None:
             vals["wear"] = None
@@ -245,19 +257,24 @@ def read(path: Path, mapping: dict) -> External:
         row = {}
         for q in HISTORY_QUANTITIES:
             v = _field(mesh, fields[q])
+            if v is None and q in given and not beside.is_file():
+                raise CaseError(f"{file}: no field data '{fields[q]}' ({given[q]}); its "
+                                f"field data: {', '.join(mesh.field_data) or 'none'}")
             row[q] = math.nan if v is None else v * field_factor[q]
         hist_rows.append((float(time), row, f"{file.name} field data"))
     stages.sort(key=lambda st: st.time)
     times = [st.time for st in stages]
     if len(set(times)) != len(times):
         raise CaseError(f"{path}: two data sets at the same time {times}")
-    beside = path.parent / "history.csv"
     if beside.is_file():
-        hist = read_dir(path.parent, {})
+        # a history quantity named with --map is a column of that history.csv
+        hist = read_dir(path.parent, {k: v for k, v in mapping.items()
+                                      if split_header(k)[0] in HISTORY_QUANTITIES})
         notes.append(f"history from {beside.name} beside {path.name}")
         return External(kind=hist.kind, history=hist.history, history_origin=hist.history_origin,
                         stages=stages, source=str(path), format="vtk", stage_kind=time_kind,
-                        notes=notes + hist.notes)
+                        notes=notes + hist.notes,
+                        mapped=_mapped_lines(path, mapping, arrays, hist.mapped))
     hist_rows.sort(key=lambda t: t[0])
     history = {"time": np.array([t for t, _, _ in hist_rows])}
     origin = [o for _, _, o in hist_rows]
@@ -266,4 +283,31 @@ def read(path: Path, mapping: dict) -> External:
         if np.any(np.isfinite(v)):
             history[q] = v
     return External(kind=time_kind, history=history, history_origin=origin, stages=stages,
-                    source=str(path), format="vtk", stage_kind=time_kind, notes=notes)
+                    source=str(path), format="vtk", stage_kind=time_kind, notes=notes,
+                    mapped=_mapped_lines(path, mapping, arrays, None))
+
+
+def _mapped_lines(path: Path, mapping: dict, arrays: set, csv_lines) -> list[str]:
+    """One line per --map item: the point data, field data, timesteps or coordinates
+    it read, in which unit, and the default array it displaced. ``csv_lines``: the
+    lines of a history.csv beside the series (which the history quantities name)."""
+    out = []
+    for key, value in mapping.items():
+        name, item, unit = split_header(key)[0], map_item(key, value), unit_words(key)
+        if name in ("axis", "r"):
+            out.append(geometry_line(path.name, name, key, value))
+        elif name in KINDS:
+            default = DEFAULT_ARRAYS[name]
+            out.append(f"{path.name}: {name} read from point data '{value}'{unit} ({item})"
+                       + (f"; point data '{default}' not read"
+                          if default != value and default in arrays else ""))
+        elif name in DISTANCES:
+            what = ("the .pvd timesteps" if value == "time"
+                    else f"field data '{value}' of each file")
+            out.append(f"{path.name}: {name} read from {what}{unit} ({item})")
+        elif csv_lines is None:
+            out.append(f"{path.name}: {name} read from field data '{value}' of each "
+                       f"file{unit} ({item})")
+        else:
+            out += [line for line in csv_lines if f"({item})" in line]
+    return out

@@ -14,7 +14,8 @@ comparison):
     DIR/results/stages.csv         the user's stages as read, long form, in SI
     DIR/fig_profiles.png|pdf       f/d against r/a0: reference lines, the user's markers
     DIR/fig_pressure.png|pdf       p/p0 against r/a0
-    DIR/history.png|pdf            F/F0, a/a0, central wear and worn volume against ŝ
+    DIR/history.png|pdf            F/F0, a/a0, central wear and worn volume against ŝ, and
+                                   each row's difference against its tolerance band
     DIR/metrics.json, report.md, report.html, case.toml
 """
 
@@ -179,7 +180,8 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
                           given=[q for q in list(verification.HISTORY_CHECKS) + ["f", "p"]
                                  if q not in pair["not_given"]],
                           not_given=pair["not_given"], history_rows=len(hist["s"]),
-                          stages=len(stages), mapping=dict(mapping or {})),
+                          stages=len(stages), mapping=dict(mapping or {}),
+                          mapped=list(ext.mapped)),
              distance_factor=factor,
              diagnosis=_diagnosis(pair, factor, cmp, ext.kind, verification.stage_unit_slips(
                  ref, stages, lambda r: unworn_profile(case, r), depth, sc["p0"])))
@@ -194,8 +196,12 @@ def verify(case, results, out, *, mapping=None, reference_solver=None, argv=None
                                    "own time-error estimate is info.time_error",
                                    time_error=err.get("estimate") if isinstance(err, dict)
                                    else None)
+    # each history row's difference against the tolerance, for the history figure
+    judged = verification.row_differences(
+        ref, hist, [q for q in verification.HISTORY_CHECKS if q not in pair["not_given"]],
+        scales=sc, depth=depth, tolerances=dataclasses.asdict(cmp))
     _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0,
-           reference_solver is None)
+           reference_solver is None, judged)
     return m
 
 
@@ -273,7 +279,8 @@ def _diagnosis(pair, factor, cmp, kind, slips) -> dict | None:
     return dict(factor=lam, reason="; ".join(reasons))
 
 
-def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, certified_ref):
+def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, certified_ref,
+           judged=None):
     prov = rundir.provenance(argv)
     out = Path(out)
     with outputs.atomic_directory(out, "comparison") as tmp:
@@ -283,7 +290,7 @@ def _write(out, case, m, ref_case, run, ref_name, hist, stages, argv, t0, certif
                                extra_meta=extra)
         (tmp / RESULTS).mkdir()
         write_results(tmp / RESULTS, hist, stages, m["scales"]["s_hat_per_m"])
-        names = verify_figures.draw(tmp, case, m, run, hist, stages)
+        names = verify_figures.draw(tmp, case, m, run, hist, stages, judged)
         m["provenance"] = prov
         m["case_source"] = case.source
         m["seconds_total"] = time.perf_counter() - t0
