@@ -485,8 +485,9 @@ class FarGap:
     0..M-1 only). Beyond it f differs from a reference profile f_ref, whose
     g_ref is known on the whole grid, by Δ = f - f_ref, and where Δ is zero
     from node M on, |to_1d(Δ)_i| <= b for every i >= M
-    (:func:`transforms.far_bound`). When min_{i>=M} g_ref_i - b >= d (to half
-    the tolerance, room for the round-off of g_ref), no node beyond the window
+    (:func:`transforms.far_bound`). When d - min_{i>=M} g_ref_i + b <= tol·d
+    less half the tolerance's size tol·|d|/2 (room for the round-off of g_ref;
+    a negative depth's threshold tol·d is below 0), no node beyond the window
     comes within the tolerance; otherwise g is computed on the whole grid and
     becomes the reference: a few full transforms a run instead of one per
     contact iteration (docs/performance.md, "The paper case as users run it").
@@ -506,7 +507,8 @@ class FarGap:
         return g
 
     def clears(self, f: np.ndarray, M: int, d: float, tol: float) -> bool:
-        """Whether the bound shows every node i >= M out of contact (d - g_i <= tol·d/2)."""
+        """Whether the bound shows every node i >= M out of contact, by half the
+        tolerance (d - g_i <= tol·d - tol·|d|/2)."""
         return self._clears(f, None, M, d, tol)
 
     def _clears(self, f, delta, M, d, tol) -> bool:
@@ -523,7 +525,11 @@ class FarGap:
             delta = f - f_ref
         if np.count_nonzero(delta[M:]):
             return False
-        return d - g_min[M] + transforms.far_bound(delta[:M]) <= 0.5 * tol * abs(d)
+        # every node i >= M then has d - g_i <= tol·d less half the tolerance's
+        # size: 0.5 tol d for d > 0, 1.5 tol d for a negative depth (whose
+        # threshold tol·d lies below 0)
+        limit = 0.5 * tol * d if d >= 0.0 else 1.5 * tol * d
+        return d - g_min[M] + transforms.far_bound(delta[:M]) <= limit
 
     def check(self, f: np.ndarray, n: int, d: float, tol: float):
         """The nodes i >= n that penetrate (d - g_i > tol·d; as i - n), and g from
