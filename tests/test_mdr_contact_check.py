@@ -225,11 +225,10 @@ def test_a_far_dip_of_a_table_profile(monkeypatch, tmp_path):
 
 @pytest.mark.filterwarnings("ignore::wearcheck.cases.errors.RunWarning")
 def test_regrids_on_the_solver_reference(monkeypatch):
-    # the solver's own reference (grids past FAR_GAP_FROM, here lowered to 100),
-    # started empty and replaced at each domain growth (the grid √2 wider in r,
-    # the same number of nodes: a stale reference would have the right length),
-    # on the shipped ball-on-flat case under force control, 300 elements
-    monkeypatch.setattr(solver, "FAR_GAP_FROM", 100)
+    # the reference the states carry, started by each grid's first state and
+    # replaced at each domain growth (the grid √2 wider in r, the same number of
+    # nodes: a stale reference would have the right length), on the shipped
+    # ball-on-flat case under force control, 300 elements
     case = cases.load(Path(cases.__file__).parent / "ball_on_flat.toml", ["mdr.elements=300"])
     a, b = run_both(monkeypatch, case)
     assert a.info["domain_growths"] >= 2
