@@ -781,8 +781,7 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap) -> S
             if m_new in tried and (m_new, m) not in seen:
                 seen.add((m_new, m))
             else:
-                raise SolverError(f"implicit wear step: the contact set did not settle "
-                                  f"(nodes {m} <-> {m_new}); reduce sliding.step_hat")
+                raise SolverError(_unsettled(model, m, m_new))
         m = m_new
     pp = np.zeros(N + 1)
     pp[:n] = p
@@ -805,6 +804,28 @@ def _implicit_solve(model, state, base, hc, S, system, m, p_guess, far_gap) -> S
                  contact_radius=contact.radius_between(float(g[0]), float(g[1]), d,
                                                        model.t[m], model.t[m + 1]),
                  m=m, stats=stats, dt=model.dt)
+
+
+def _unsettled(model: Model, m: int, m_new: int) -> str:
+    """Why the contact set of an implicit step did not settle, and what to do."""
+    text = f"implicit wear step: the contact set did not settle (nodes {m} <-> {m_new}"
+    lo, hi = sorted((m, m_new))
+    if hi - lo > max(UNSETTLED_NODES, UNSETTLED_SHARE * hi):
+        # an edge that jumps far is no step size's doing: the set that grows to
+        # take in a far penetrating ring is in tension in between, and the one
+        # that sheds the tension leaves the ring penetrating
+        a, b = (float(model.x[k]) for k in (lo, hi))
+        return (f"{text}, edges r = {a:.4g} m and {b:.4g} m): the profile touches in two "
+                f"separate regions (a ring or dip of the profile beyond the central "
+                f"contact), which the MDR's contact of one radius cannot represent; check "
+                f"indenter.profile (its table), or solve the case with the BEM (--solver bem)")
+    return f"{text}); reduce sliding.step_hat"
+
+
+#: an unsettled contact set whose edge jumps by more than this many nodes, and
+#: this share of its nodes, is two separate regions of contact, not a step too long
+UNSETTLED_NODES = 4
+UNSETTLED_SHARE = 0.1
 
 
 # -- explicit Euler: stability ----------------------------------------------

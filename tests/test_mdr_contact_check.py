@@ -9,6 +9,7 @@ depths placed at the threshold, against the transform of the whole grid.
 """
 
 import math
+import types
 from pathlib import Path
 
 import numpy as np
@@ -269,5 +270,16 @@ def test_a_far_ring_that_comes_into_contact(monkeypatch, tmp_path):
     a, b = outcomes
     if isinstance(a, str) or isinstance(b, str):
         assert a == b
+        # the refusal says why (two regions of contact), not "reduce the step"
+        assert "two separate regions" in a and "--solver bem" in a, a
     else:
         assert_same_history(a, b)
+
+
+def test_an_unsettled_edge_of_a_node_or_two_asks_for_a_shorter_step():
+    # the edge moving by a node or two (a step too long for nodal contact
+    # conditions) against jumping across a third of the contact (two regions)
+    model = types.SimpleNamespace(x=np.linspace(0.0, 1e-4, 401))
+    assert wear._unsettled(model, 200, 202).endswith("reduce sliding.step_hat")
+    far = wear._unsettled(model, 200, 60)
+    assert "two separate regions" in far and "r = 1.5e-05 m and 5e-05 m" in far
