@@ -207,6 +207,36 @@ def execute(base: cases.Case, changes: dict, solver: str, name: str,
 # --------------------------------------------------------------------------
 # On the client
 
+#: a study started at the top level of a script: Dask's worker processes (spawned)
+#: import the script that starts them, which would start the study again in each
+_UNGUARDED = ("a study on Dask (wearcheck.sweep, refine, fretting_map, fit) called from "
+              "a script must be called under `if __name__ == \"__main__\":` in {script}: "
+              "Dask's worker processes import the script that starts them (in a notebook "
+              "or the wearcheck command this is not needed)")
+
+
+def _script() -> str | None:
+    """The file of the running script if it has no ``__main__`` guard (None: a
+    notebook, the interpreter's prompt, ``python -c``, ``python -m``, or a script
+    that tests ``__name__``, as the ``wearcheck`` console script does)."""
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    if not path or getattr(main, "__spec__", None) is not None:
+        return None
+    try:
+        guarded = "__main__" in Path(path).read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return None
+    return None if guarded else str(path)
+
+
+def _importing_main_in_a_worker() -> bool:
+    """Whether this process is a spawned worker still importing its parent's script
+    (multiprocessing's own test, ``_check_not_importing_main``)."""
+    import multiprocessing
+    return bool(getattr(multiprocessing.current_process(), "_inheriting", False))
+
+
 class _Client:
     """A distributed Client on ``scheduler``, or on an embedded LocalCluster."""
 
@@ -234,6 +264,8 @@ class _Client:
                 raise
             return
         n = workers or max(1, min(os.cpu_count() or 1, n_tasks))
+        if _importing_main_in_a_worker():
+            raise cases.WearcheckError(_UNGUARDED.format(script=_script() or "your script"))
         # a task that kills its worker (out of memory, crash) is reported at once,
         # not retried on the next worker
         with dask.config.set({"distributed.scheduler.allowed-failures": 0}), \
@@ -241,9 +273,18 @@ class _Client:
             # without a dashboard the scheduler still serves /health on 127.0.0.1,
             # port 8787 or, when taken, another one: nothing to warn about
             warnings.filterwarnings("ignore", message="Port .* is already in use")
-            self.cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                        host="127.0.0.1", dashboard_address=None,
-                                        silence_logs=40)
+            try:
+                self.cluster = LocalCluster(n_workers=n, threads_per_worker=1,
+                                            processes=True, host="127.0.0.1",
+                                            dashboard_address=None, silence_logs=40)
+            except Exception as exc:   # noqa: BLE001 - distributed's RuntimeError and others
+                script = _script()
+                if script is None:
+                    raise
+                raise cases.WearcheckError(
+                    "the worker processes of Dask's local cluster failed to start ("
+                    f"{type(exc).__name__}: {exc}); " + _UNGUARDED.format(script=script)
+                ) from exc
         self.client = Client(self.cluster)
 
     def close(self, timeout: float | None = None):
