@@ -187,7 +187,11 @@ def execute(base: cases.Case, changes: dict, solver: str, name: str,
     except (ImportError, ValueError):
         out["worker"] = "local"
     t0, c0 = time.perf_counter(), time.process_time()
-    with _PeakRSS() as rss:
+    # a run's remarks are recorded in its result (meta.json's "warnings"); said as
+    # Python warnings here they reached the terminal once per run and worker,
+    # attributed to dask's task code
+    with _PeakRSS() as rss, warnings.catch_warnings():
+        warnings.simplefilter("ignore", cases.RunWarning)
         try:
             case = base.derive(changes) if changes else base
             check_memory(case, solver)  # this worker's memory, before allocating

@@ -1,6 +1,10 @@
-"""A study on Dask called at the top level of a script: Dask's worker processes
-import the script that starts them, which started the study again in each; the
-user got pages of multiprocessing tracebacks ending in "Nanny failed to start"."""
+"""What a study on Dask says when a script runs it: called at the top level of a
+script, Dask's worker processes import the script that starts them, which
+started the study again in each (pages of multiprocessing tracebacks ending in
+"Nanny failed to start"); the runs' remarks were said by every worker,
+attributed to dask's task code."""
+
+import json
 
 import subprocess
 import sys
@@ -43,3 +47,25 @@ def test_a_guarded_script_or_no_script_is_not_blamed(tmp_path, monkeypatch):
     # a notebook's or a prompt's __main__ has no file
     monkeypatch.setitem(sys.modules, "__main__", types.ModuleType("__main__"))
     assert distributed._script() is None
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_the_runs_remarks_are_in_their_runs_not_said_by_the_workers(tmp_path):
+    pytest.importorskip("distributed")
+    script = tmp_path / "my_sweep.py"
+    # the paper case passes the onset of yield: every run has that remark
+    script.write_text(
+        "import wearcheck\n"
+        "if __name__ == '__main__':\n"
+        "    case = wearcheck.load_case('paper', {'mdr.elements': 100, "
+        "'sliding.force_fraction': 0.5})\n"
+        "    rows = wearcheck.sweep(case, {'wear.mu': [0.2, 0.4]}, 'out', workers=1)\n"
+        "    print([r['status'] for r in rows])\n", encoding="utf-8")
+    run = subprocess.run([sys.executable, "-W", "ignore::UserWarning:__main__", str(script)],
+                         cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert "['ok', 'ok']" in run.stdout
+    assert "_task_spec" not in run.stderr and "onset of yield" not in run.stderr, run.stderr
+    for mu in ("0.2", "0.4"):
+        meta = json.loads((tmp_path / "out" / f"mdr-wear.mu-{mu}" / "meta.json").read_text())
+        assert any("onset of yield" in w for w in meta["warnings"])
