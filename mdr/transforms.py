@@ -464,7 +464,7 @@ def _direct_rows(L: int):
 
     Returns V with V[L - i, j] = c[i-1-j] for j < i and 0 for j >= i (a
     sliding-window view: no L×L matrix is stored), 2 sqrt(i) for i = 0..L,
-    the kernel's differences reversed, Dr[L-1-m] = c[m-1] - c[m] (m >= 1), and c.
+    and the kernel's differences reversed, Dr[L-1-m] = c[m-1] - c[m] (m >= 1).
     """
     c = abel_kernel(L)
     e = np.zeros(2 * L)
@@ -476,7 +476,7 @@ def _direct_rows(L: int):
     Dr = D[::-1].copy()
     for a in (two_sqrt, Dr):
         a.flags.writeable = False
-    return V, two_sqrt, Dr, c
+    return V, two_sqrt, Dr
 
 
 def to_1d_rows(f: np.ndarray, first: int, stop: int) -> np.ndarray:
@@ -487,7 +487,7 @@ def to_1d_rows(f: np.ndarray, first: int, stop: int) -> np.ndarray:
     (``f``: float64, at least ``stop`` nodes).
     """
     L = 1 << max(int(stop).bit_length(), 6)
-    V, two_sqrt, _, _ = _direct_rows(L)
+    V, two_sqrt, _ = _direct_rows(L)
     J = stop - 1
     if J <= 0:
         return f[first:stop].copy()
@@ -516,7 +516,7 @@ def far_bound(delta: np.ndarray) -> float:
     if M == 0:
         return 0.0
     L = 1 << max(int(M).bit_length(), 6)
-    _, _, Dr, _ = _direct_rows(L)
+    _, _, Dr = _direct_rows(L)
     return 2.0 * math.sqrt(M) * float(np.dot(Dr[L - M - 1:L - 1], np.abs(delta)))
 
 

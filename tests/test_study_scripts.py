@@ -15,17 +15,22 @@ import pytest
 from wearcheck.studies import distributed
 
 
+def _run_script(tmp_path, text):
+    """Write ``text`` as a script in tmp_path and run it there: (its path, the run)."""
+    script = tmp_path / "my_sweep.py"
+    script.write_text(text, encoding="utf-8")
+    return script, subprocess.run([sys.executable, str(script)], cwd=tmp_path,
+                                  capture_output=True, text=True, timeout=300)
+
+
 @pytest.mark.filterwarnings("ignore")
 def test_an_unguarded_script_is_told_to_guard_its_study(tmp_path):
     pytest.importorskip("distributed")
-    script = tmp_path / "my_sweep.py"
-    script.write_text(
+    script, run = _run_script(
+        tmp_path,
         "import wearcheck\n"
         "case = wearcheck.load_case('hertz', {'mdr.elements': 50})\n"
-        "wearcheck.sweep(case, {'wear.mu': [0.2, 0.4]}, 'out', workers=1)\n",
-        encoding="utf-8")
-    run = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True,
-                         text=True, timeout=300)
+        "wearcheck.sweep(case, {'wear.mu': [0.2, 0.4]}, 'out', workers=1)\n")
     assert run.returncode != 0
     last = run.stderr.strip().splitlines()[-1]
     assert last.startswith("wearcheck.cases.errors.WearcheckError:"), run.stderr[-3000:]
@@ -52,17 +57,15 @@ def test_a_guarded_script_or_no_script_is_not_blamed(tmp_path, monkeypatch):
 @pytest.mark.filterwarnings("ignore")
 def test_the_runs_remarks_are_in_their_runs_not_said_by_the_workers(tmp_path):
     pytest.importorskip("distributed")
-    script = tmp_path / "my_sweep.py"
     # the paper case passes the onset of yield: every run has that remark
-    script.write_text(
+    _, run = _run_script(
+        tmp_path,
         "import wearcheck\n"
         "if __name__ == '__main__':\n"
         "    case = wearcheck.load_case('paper', {'mdr.elements': 100, "
         "'sliding.force_fraction': 0.5})\n"
         "    rows = wearcheck.sweep(case, {'wear.mu': [0.2, 0.4]}, 'out', workers=1)\n"
-        "    print([r['status'] for r in rows])\n", encoding="utf-8")
-    run = subprocess.run([sys.executable, "-W", "ignore::UserWarning:__main__", str(script)],
-                         cwd=tmp_path, capture_output=True, text=True, timeout=300)
+        "    print([r['status'] for r in rows])\n")
     assert run.returncode == 0, run.stderr[-3000:]
     assert "['ok', 'ok']" in run.stdout
     assert "_task_spec" not in run.stderr and "onset of yield" not in run.stderr, run.stderr
